@@ -1,0 +1,112 @@
+//! Explicit Runge–Kutta methods, each a Butcher tableau.
+
+use super::{Method, Requirement, Scheme, Stepper};
+use crate::Error;
+use crate::system::System;
+
+/// A Butcher tableau with weights b over a common denominator, so that the update is
+/// y + (h / denominator) Σ bᵢ kᵢ, summed left to right.
+#[derive(Debug, Clone, Copy)]
+pub struct Tableau {
+    /// Nodes cᵢ.
+    pub c: &'static [f64],
+    /// Strictly lower triangular coefficients aᵢⱼ (row i has i entries).
+    pub a: &'static [&'static [f64]],
+    /// Weight numerators bᵢ.
+    pub b: &'static [f64],
+    /// Common denominator of the weights.
+    pub denominator: f64,
+}
+
+/// Explicit (forward) Euler: y + h f(t, y). Order 1, one evaluation per step.
+///
+/// # References
+/// E. Hairer, S. P. Nørsett, G. Wanner, *Solving ODEs I*, §I.7; paper §7.1, (110).
+pub static EULER: Method = Method {
+    name: "euler",
+    title: "explicit Euler",
+    order: 1,
+    requirement: Requirement::Any,
+    symplectic: false,
+    symmetric: false,
+    description: "explicit Euler, 1 evaluation per step; energy grows on oscillators",
+    reference: "Hairer, Norsett, Wanner, Solving ODEs I, §I.7; paper §7.1",
+    scheme: Scheme::ExplicitRk(&Tableau {
+        c: &[0.0],
+        a: &[&[]],
+        b: &[1.0],
+        denominator: 1.0,
+    }),
+};
+
+/// The classical fourth-order Runge–Kutta method. Order 4, four evaluations per step.
+///
+/// The paper's §7.2 misprints k₄ and drops k₄ from its code's update (ERRATA); this is the
+/// classical method.
+///
+/// # References
+/// E. Hairer, S. P. Nørsett, G. Wanner, *Solving ODEs I*, §II.1, Table 1.2 (left).
+pub static RK4: Method = Method {
+    name: "rk4",
+    title: "classical Runge-Kutta",
+    order: 4,
+    requirement: Requirement::Any,
+    symplectic: false,
+    symmetric: false,
+    description: "classical Runge-Kutta, 4 evaluations per step; slow secular energy drift",
+    reference: "Hairer, Norsett, Wanner, Solving ODEs I, §II.1, Table 1.2",
+    scheme: Scheme::ExplicitRk(&Tableau {
+        c: &[0.0, 1.0 / 2.0, 1.0 / 2.0, 1.0],
+        a: &[&[], &[1.0 / 2.0], &[0.0, 1.0 / 2.0], &[0.0, 0.0, 1.0]],
+        b: &[1.0, 2.0, 2.0, 1.0],
+        denominator: 6.0,
+    }),
+};
+
+/// Steps an explicit Runge–Kutta tableau; owns its stage buffers.
+#[derive(Debug, Clone)]
+pub struct ExplicitRk {
+    tableau: &'static Tableau,
+    k: Vec<f64>,
+    stage: Vec<f64>,
+}
+
+impl ExplicitRk {
+    /// A stepper for systems of dimension `dim`.
+    pub fn new(tableau: &'static Tableau, dim: usize) -> Self {
+        ExplicitRk {
+            tableau,
+            k: vec![0.0; tableau.b.len() * dim],
+            stage: vec![0.0; dim],
+        }
+    }
+}
+
+impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
+    fn step(&mut self, system: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
+        let tab = self.tableau;
+        let n = y.len();
+        for (i, (row, c)) in tab.a.iter().zip(tab.c).enumerate() {
+            let (done, rest) = self.k.split_at_mut(i * n);
+            for (j, s) in self.stage.iter_mut().enumerate() {
+                let mut acc = 0.0;
+                for (l, &a) in row.iter().enumerate() {
+                    if a != 0.0 {
+                        acc += a * done[l * n + j];
+                    }
+                }
+                *s = y[j] + h * acc;
+            }
+            system.rhs(t + c * h, &self.stage, &mut rest[..n]);
+        }
+        let scale = h / tab.denominator;
+        for (j, yj) in y.iter_mut().enumerate() {
+            let mut acc = tab.b[0] * self.k[j];
+            for (i, &b) in tab.b.iter().enumerate().skip(1) {
+                acc += b * self.k[i * n + j];
+            }
+            *yj += scale * acc;
+        }
+        Ok(())
+    }
+}

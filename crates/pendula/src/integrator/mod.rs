@@ -1,0 +1,94 @@
+//! Integration methods: descriptors ([`Method`]), the registry [`METHODS`], and the
+//! [`Stepper`] trait their steppers implement.
+//!
+//! A method is data: a `static` [`Method`] in its family's file (Butcher tableau, scheme)
+//! plus one line in [`METHODS`]. Steppers are built from descriptors, own their scratch
+//! buffers (allocated once), and allocate nothing per step.
+
+pub mod explicit_rk;
+pub mod partitioned;
+
+use crate::Error;
+
+/// Advances a state by one step.
+pub trait Stepper<S: ?Sized> {
+    /// Advances `y` from t to t + h in place.
+    fn step(&mut self, system: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error>;
+}
+
+/// What a method needs of a system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Requirement {
+    /// Any ODE y' = f(t, y).
+    Any,
+    /// A Hamiltonian form on (q, p); explicit when H is separable, implicit otherwise.
+    Hamiltonian,
+}
+
+impl Requirement {
+    /// The requirement in words, for `pendula list methods` and error messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Requirement::Any => "any ODE",
+            Requirement::Hamiltonian => {
+                "a Hamiltonian system (explicit if H = T(p) + V(q), implicit otherwise)"
+            }
+        }
+    }
+}
+
+/// How a method steps: the data its stepper is built from.
+#[derive(Debug, Clone, Copy)]
+pub enum Scheme {
+    /// An explicit Runge–Kutta method with this tableau.
+    ExplicitRk(&'static explicit_rk::Tableau),
+    /// A partitioned method on (q, p).
+    Partitioned(partitioned::Partition),
+}
+
+/// A method descriptor.
+#[derive(Debug, Clone, Copy)]
+pub struct Method {
+    /// Name used on the command line.
+    pub name: &'static str,
+    /// Name in the literature.
+    pub title: &'static str,
+    /// Order of the global error.
+    pub order: u32,
+    /// What it needs of the system.
+    pub requirement: Requirement,
+    /// Whether it preserves the symplectic form (on a Hamiltonian system).
+    pub symplectic: bool,
+    /// Whether it is symmetric (time-reversible).
+    pub symmetric: bool,
+    /// One line of description.
+    pub description: &'static str,
+    /// Where it is defined.
+    pub reference: &'static str,
+    /// The data its stepper is built from.
+    pub scheme: Scheme,
+}
+
+/// Every method pendula knows, in the order `pendula list methods` shows them.
+pub static METHODS: &[&Method] = &[
+    &explicit_rk::EULER,
+    &explicit_rk::RK4,
+    &partitioned::SYMPLECTIC_EULER,
+    &partitioned::VERLET,
+];
+
+/// Looks a method up by name.
+pub fn find(name: &str) -> Result<&'static Method, Error> {
+    METHODS
+        .iter()
+        .copied()
+        .find(|m| m.name == name)
+        .ok_or_else(|| Error::UnknownMethod {
+            name: name.to_owned(),
+            valid: METHODS
+                .iter()
+                .map(|m| m.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}

@@ -1,0 +1,241 @@
+//! Symplectic Euler and Störmer–Verlet on a Hamiltonian form (q, p).
+//!
+//! For a separable H = T(p) + V(t, q) both are explicit: they are the schemes of the
+//! paper's §8. For a non-separable H (the double pendulum) they are the partitioned
+//! Runge–Kutta methods that keep their symplecticity — symplectic Euler implicit in p, and
+//! the generalized leapfrog (the Lobatto IIIA–IIIB pair) — and their implicit stage
+//! equations are solved by fixed-point iteration to round-off. The paper's explicit
+//! schemes applied to (θ, ω) of the double pendulum are neither symplectic nor symmetric
+//! (ERRATA), so they are never used there.
+//!
+//! # References
+//! E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed., Springer
+//! 2006: §VI.3, (3.1) symplectic Euler and (3.4) Störmer–Verlet; §VIII.6 (fixed-point
+//! iteration of implicit stages and its stopping rule).
+
+use super::{Method, Requirement, Scheme, Stepper};
+use crate::Error;
+use crate::system::Hamiltonian;
+
+/// Which partitioned scheme.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Partition {
+    /// pₙ₊₁ = pₙ − h ∂H/∂q(qₙ, pₙ₊₁); qₙ₊₁ = qₙ + h ∂H/∂p(qₙ, pₙ₊₁).
+    SymplecticEuler,
+    /// p½ = pₙ − h/2 ∂H/∂q(qₙ, p½); qₙ₊₁ = qₙ + h/2 (∂H/∂p(qₙ, p½) + ∂H/∂p(qₙ₊₁, p½));
+    /// pₙ₊₁ = p½ − h/2 ∂H/∂q(qₙ₊₁, p½).
+    StormerVerlet,
+}
+
+/// Symplectic Euler (Euler–Cromer): order 1, symplectic, one force evaluation per step when
+/// H is separable.
+///
+/// Requirements: a Hamiltonian form; implicit in p when H is not separable.
+///
+/// # References
+/// Hairer, Lubich, Wanner, *Geometric Numerical Integration*, §VI.3, (3.1); paper §8.1.
+pub static SYMPLECTIC_EULER: Method = Method {
+    name: "symplectic-euler",
+    title: "symplectic Euler",
+    order: 1,
+    requirement: Requirement::Hamiltonian,
+    symplectic: true,
+    symmetric: false,
+    description: "symplectic Euler on (q, p): explicit if separable, implicit in p otherwise",
+    reference: "Hairer, Lubich, Wanner, Geometric Numerical Integration, §VI.3 (3.1); paper §8.1",
+    scheme: Scheme::Partitioned(Partition::SymplecticEuler),
+};
+
+/// Störmer–Verlet (velocity Verlet, leapfrog): order 2, symplectic and symmetric, one force
+/// evaluation per step when H is separable (the last one is reused; ERRATA on §8.3).
+///
+/// Requirements: a Hamiltonian form; the generalized (implicit) leapfrog when H is not
+/// separable.
+///
+/// # References
+/// Hairer, Lubich, Wanner, *Geometric Numerical Integration*, §VI.3, (3.4); paper §8.2.
+pub static VERLET: Method = Method {
+    name: "verlet",
+    title: "Stormer-Verlet",
+    order: 2,
+    requirement: Requirement::Hamiltonian,
+    symplectic: true,
+    symmetric: true,
+    description: "Stormer-Verlet on (q, p): velocity Verlet if separable, generalized leapfrog otherwise",
+    reference: "Hairer, Lubich, Wanner, Geometric Numerical Integration, §VI.3 (3.4); paper §8.2",
+    scheme: Scheme::Partitioned(Partition::StormerVerlet),
+};
+
+/// Iteration cap for the implicit stages; at h small enough for accuracy the iteration
+/// contracts by a factor ≲ 0.1 and needs 10–20 iterations.
+const MAX_ITERATIONS: usize = 100;
+
+/// Steps a [`Partition`] scheme; owns its buffers.
+#[derive(Debug, Clone)]
+pub struct PartitionedStepper {
+    scheme: Partition,
+    /// ∂H/∂q at (`cached_t`, q) from the end of the previous step (explicit path only).
+    force: Vec<f64>,
+    cached: Option<f64>,
+    cached_q: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    x: Vec<f64>,
+    next: Vec<f64>,
+}
+
+impl PartitionedStepper {
+    /// A stepper for a Hamiltonian form with `dof` degrees of freedom (dimension 2·dof).
+    pub fn new(scheme: Partition, dof: usize) -> Self {
+        let v = || vec![0.0; dof];
+        PartitionedStepper {
+            scheme,
+            force: v(),
+            cached: None,
+            cached_q: v(),
+            a: v(),
+            b: v(),
+            x: v(),
+            next: v(),
+        }
+    }
+
+    /// ∂H/∂q(t, q) of a separable H, reusing the value from the end of the last step when
+    /// (t, q) is unchanged (first same as last).
+    fn separable_force<H: Hamiltonian + ?Sized>(&mut self, h: &H, t: f64, q: &[f64], p: &[f64]) {
+        // The caller's t for this step and our t + h from the last may differ by rounding.
+        let same_t = self
+            .cached
+            .is_some_and(|c| (c - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1.0));
+        if !same_t || self.cached_q != q {
+            h.dh_dq(t, q, p, &mut self.force);
+        }
+    }
+
+    fn remember(&mut self, t: f64, q: &[f64]) {
+        self.cached = Some(t);
+        self.cached_q.copy_from_slice(q);
+    }
+
+    fn explicit<H: Hamiltonian + ?Sized>(&mut self, sys: &H, t: f64, h: f64, y: &mut [f64]) {
+        let n = y.len() / 2;
+        let (q, p) = y.split_at_mut(n);
+        self.separable_force(sys, t, q, p);
+        let kick = match self.scheme {
+            Partition::SymplecticEuler => h,
+            Partition::StormerVerlet => 0.5 * h,
+        };
+        for (pi, f) in p.iter_mut().zip(&self.force) {
+            *pi -= kick * f;
+        }
+        sys.dh_dp(t, q, p, &mut self.a);
+        for (qi, v) in q.iter_mut().zip(&self.a) {
+            *qi += h * v;
+        }
+        if self.scheme == Partition::StormerVerlet {
+            sys.dh_dq(t + h, q, p, &mut self.force);
+            for (pi, f) in p.iter_mut().zip(&self.force) {
+                *pi -= kick * f;
+            }
+            self.remember(t + h, q);
+        } else {
+            self.cached = None;
+        }
+    }
+
+    fn implicit<H: Hamiltonian + ?Sized>(
+        &mut self,
+        sys: &H,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<(), Error> {
+        let n = y.len() / 2;
+        let (q, p) = y.split_at_mut(n);
+        let kick = match self.scheme {
+            Partition::SymplecticEuler => h,
+            Partition::StormerVerlet => 0.5 * h,
+        };
+        // P = p − kick ∂H/∂q(t, q, P)
+        self.x.copy_from_slice(p);
+        let Self { x, next, a, .. } = self;
+        fixed_point(x, next, t, |x, out| {
+            sys.dh_dq(t, q, x, a);
+            for ((o, pi), f) in out.iter_mut().zip(p.iter()).zip(a.iter()) {
+                *o = pi - kick * f;
+            }
+        })?;
+        p.copy_from_slice(x);
+        match self.scheme {
+            Partition::SymplecticEuler => {
+                sys.dh_dp(t, q, p, &mut self.a);
+                for (qi, v) in q.iter_mut().zip(&self.a) {
+                    *qi += h * v;
+                }
+            }
+            Partition::StormerVerlet => {
+                // Q = q + h/2 (∂H/∂p(q, P) + ∂H/∂p(Q, P)), started from the explicit guess.
+                sys.dh_dp(t, q, p, &mut self.a);
+                let Self { x, next, a, b, .. } = self;
+                for ((xi, qi), v) in x.iter_mut().zip(q.iter()).zip(a.iter()) {
+                    *xi = qi + h * v;
+                }
+                fixed_point(x, next, t, |x, out| {
+                    sys.dh_dp(t + h, x, p, b);
+                    for (((o, qi), va), vb) in
+                        out.iter_mut().zip(q.iter()).zip(a.iter()).zip(b.iter())
+                    {
+                        *o = qi + kick * (va + vb);
+                    }
+                })?;
+                q.copy_from_slice(x);
+                sys.dh_dq(t + h, q, p, &mut self.a);
+                for (pi, f) in p.iter_mut().zip(&self.a) {
+                    *pi -= kick * f;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Solves x = G(x) by fixed-point iteration, `x` holding the starting guess. Stops when the
+/// update vanishes or stops shrinking at round-off level (Hairer, Lubich, Wanner §VIII.6).
+fn fixed_point(
+    x: &mut [f64],
+    next: &mut [f64],
+    t: f64,
+    mut g: impl FnMut(&[f64], &mut [f64]),
+) -> Result<(), Error> {
+    let mut previous = f64::INFINITY;
+    for _ in 0..MAX_ITERATIONS {
+        g(x, next);
+        let mut delta = 0.0_f64;
+        for (a, b) in x.iter().zip(next.iter()) {
+            delta = delta.max((a - b).abs() / (1.0 + b.abs()));
+        }
+        x.copy_from_slice(next);
+        if !delta.is_finite() {
+            break;
+        }
+        if delta <= f64::EPSILON || (delta >= previous && delta < 1e-12) {
+            return Ok(());
+        }
+        previous = delta;
+    }
+    Err(Error::NewtonDidNotConverge {
+        t,
+        iterations: MAX_ITERATIONS,
+    })
+}
+
+impl<H: Hamiltonian + ?Sized> Stepper<H> for PartitionedStepper {
+    fn step(&mut self, system: &H, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
+        if system.separable() {
+            self.explicit(system, t, h, y);
+            Ok(())
+        } else {
+            self.implicit(system, t, h, y)
+        }
+    }
+}

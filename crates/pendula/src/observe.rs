@@ -1,0 +1,164 @@
+//! Observers: who watches a run. The run loop shows each step to an [`Observer`], which may
+//! stop the run by returning [`ControlFlow::Break`]. Recording, thinning, energy tracking
+//! and early stopping are observers, composed with tuples.
+
+use std::ops::ControlFlow;
+
+/// One state of a run, as an observer sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample<'a> {
+    /// Steps taken so far (0 for the initial state).
+    pub step: u64,
+    /// Time, s.
+    pub t: f64,
+    /// State in the system's coordinates.
+    pub y: &'a [f64],
+    /// Whether this is the last step of the run.
+    pub last: bool,
+}
+
+/// Watches a run step by step.
+pub trait Observer {
+    /// Sees one state; `Break` ends the run early (as [`crate::Outcome::Stopped`]).
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()>;
+}
+
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        (**self).observe(sample)
+    }
+}
+
+impl<A: Observer, B: Observer> Observer for (A, B) {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        let a = self.0.observe(sample);
+        let b = self.1.observe(sample);
+        if a.is_break() || b.is_break() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+}
+
+/// Ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Ignore;
+
+impl Observer for Ignore {
+    fn observe(&mut self, _: &Sample<'_>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+}
+
+/// An observer from a closure.
+#[derive(Debug, Clone, Copy)]
+pub struct FromFn<F>(pub F);
+
+impl<F: FnMut(&Sample<'_>) -> ControlFlow<()>> Observer for FromFn<F> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        (self.0)(sample)
+    }
+}
+
+/// Passes on the initial state, every `n`-th step, and the last step.
+#[derive(Debug, Clone)]
+pub struct Every<O> {
+    /// Keep steps 0, n, 2n, …; n ≥ 1.
+    pub n: u64,
+    /// Who sees the kept steps.
+    pub inner: O,
+}
+
+impl<O: Observer> Observer for Every<O> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        if sample.step.is_multiple_of(self.n) || sample.last {
+            self.inner.observe(sample)
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+}
+
+/// Records (t, y) rows into one flat vector.
+#[derive(Debug, Clone, Default)]
+pub struct Recorder {
+    /// Rows of 1 + dim values each: t, then the state.
+    pub rows: Vec<f64>,
+}
+
+impl Observer for Recorder {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        self.rows.push(sample.t);
+        self.rows.extend_from_slice(sample.y);
+        ControlFlow::Continue(())
+    }
+}
+
+/// Energy statistics of a run, J.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EnergyStats {
+    /// Energy of the first state seen.
+    pub initial: f64,
+    /// Energy of the last state seen.
+    pub last: f64,
+    /// max |E(t) − E(0)| over the states seen.
+    pub max_abs_error: f64,
+}
+
+impl EnergyStats {
+    /// `max_abs_error / |initial|` (infinite or NaN when the initial energy is 0).
+    pub fn max_rel_error(&self) -> f64 {
+        self.max_abs_error / self.initial.abs()
+    }
+}
+
+/// Tracks the error of an energy function along a run.
+#[derive(Debug, Clone)]
+pub struct EnergyTracker<F> {
+    energy: F,
+    stats: Option<EnergyStats>,
+}
+
+impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
+    /// Tracks `energy(t, y)`.
+    pub fn new(energy: F) -> Self {
+        EnergyTracker {
+            energy,
+            stats: None,
+        }
+    }
+
+    /// Statistics so far (all zero before the first state).
+    pub fn stats(&self) -> EnergyStats {
+        self.stats.unwrap_or_default()
+    }
+}
+
+impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergyTracker<F> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        let e = (self.energy)(sample.t, sample.y);
+        let stats = self.stats.get_or_insert(EnergyStats {
+            initial: e,
+            last: e,
+            max_abs_error: 0.0,
+        });
+        stats.last = e;
+        stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
+        ControlFlow::Continue(())
+    }
+}
+
+/// Stops the run at the first state for which the predicate holds.
+#[derive(Debug, Clone)]
+pub struct StopWhen<F>(pub F);
+
+impl<F: FnMut(&Sample<'_>) -> bool> Observer for StopWhen<F> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        if (self.0)(sample) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+}

@@ -1,0 +1,360 @@
+//! The run loop: a [`Simulation`] drives a stepper over a system and shows every state to
+//! an observer; [`solve`] does the same for a catalogued [`Model`] and a [`Method`] chosen
+//! at run time.
+
+use std::cell::Cell;
+
+use crate::Error;
+use crate::integrator::explicit_rk::ExplicitRk;
+use crate::integrator::partitioned::PartitionedStepper;
+use crate::integrator::{Method, Scheme, Stepper};
+use crate::observe::{Observer, Sample};
+use crate::system::{Hamiltonian, Model, System};
+
+/// More steps than this is surely a mistake (10¹³ steps take days).
+const MAX_STEPS: f64 = 1e13;
+
+/// Where a run ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum End {
+    /// At this time, s; the last step is shortened to land on it exactly.
+    Time(f64),
+    /// After this many steps of size h.
+    Steps(u64),
+}
+
+/// A fixed-step run: start time, step size and end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSpec {
+    /// Start time t₀, s.
+    pub t0: f64,
+    /// Step size h, s.
+    pub h: f64,
+    /// Where the run ends.
+    pub end: End,
+}
+
+/// The steps a [`RunSpec`] takes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Schedule {
+    /// Number of steps.
+    pub steps: u64,
+    /// Size of the last step, s (h unless shortened to land on the end time).
+    pub last_h: f64,
+    /// Final time, s.
+    pub t_end: f64,
+}
+
+impl RunSpec {
+    /// Checks the values and works out the steps.
+    pub fn schedule(&self) -> Result<Schedule, Error> {
+        let invalid = |name: &str, value: f64, allowed| Error::InvalidValue {
+            name: name.to_owned(),
+            value,
+            allowed,
+        };
+        let h = self.h;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(invalid("dt", h, "the step size must be finite and > 0"));
+        }
+        if !self.t0.is_finite() {
+            return Err(invalid("t0", self.t0, "the start time must be finite"));
+        }
+        match self.end {
+            End::Steps(n) => {
+                if n == 0 {
+                    return Err(invalid("steps", 0.0, "the number of steps must be >= 1"));
+                }
+                Ok(Schedule {
+                    steps: n,
+                    last_h: h,
+                    t_end: self.t0 + n as f64 * h,
+                })
+            }
+            End::Time(t_end) => {
+                let span = t_end - self.t0;
+                if !(t_end.is_finite() && span > 0.0) {
+                    return Err(invalid(
+                        "t-end",
+                        t_end,
+                        "the end time must be finite and > 0",
+                    ));
+                }
+                let ratio = span / h;
+                if ratio > MAX_STEPS {
+                    return Err(invalid(
+                        "dt",
+                        h,
+                        "the step size gives more than 10^13 steps",
+                    ));
+                }
+                // A whole number of steps up to rounding (10/1e-3 = 9999.999…): keep every
+                // step at h, as a fixed-step user expects, and land on t_end exactly.
+                let whole = ratio.round();
+                if whole >= 1.0 && (ratio - whole).abs() <= 1e-9 * whole {
+                    return Ok(Schedule {
+                        steps: whole as u64,
+                        last_h: h,
+                        t_end,
+                    });
+                }
+                let steps = ratio.ceil().max(1.0);
+                let last_h = t_end - (self.t0 + (steps - 1.0) * h);
+                Ok(Schedule {
+                    steps: steps as u64,
+                    last_h,
+                    t_end,
+                })
+            }
+        }
+    }
+}
+
+/// How a run ended (failures are [`Error`]s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outcome {
+    /// It reached its end.
+    ReachedEnd {
+        /// Steps taken.
+        steps: u64,
+        /// Final time, s.
+        t: f64,
+    },
+    /// An observer stopped it.
+    Stopped {
+        /// Steps taken.
+        steps: u64,
+        /// Time of the last state, s.
+        t: f64,
+    },
+}
+
+impl Outcome {
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        match *self {
+            Outcome::ReachedEnd { steps, .. } | Outcome::Stopped { steps, .. } => steps,
+        }
+    }
+    /// Time of the last state, s.
+    pub fn t(&self) -> f64 {
+        match *self {
+            Outcome::ReachedEnd { t, .. } | Outcome::Stopped { t, .. } => t,
+        }
+    }
+}
+
+/// A fixed-step run of a system.
+#[derive(Debug, Clone, Copy)]
+pub struct Simulation<'a, S: ?Sized> {
+    /// What moves.
+    pub system: &'a S,
+    /// Start, step size and end.
+    pub spec: RunSpec,
+}
+
+impl<S: ?Sized> Simulation<'_, S> {
+    /// Advances `y` (the initial state on entry, the final state on return) with `stepper`,
+    /// showing the initial state and every step to `observer`.
+    ///
+    /// # Errors
+    /// An invalid [`RunSpec`]; [`Error::NonFinite`] at the first non-finite state; the
+    /// stepper's own errors.
+    pub fn run<St, O>(
+        &self,
+        stepper: &mut St,
+        y: &mut [f64],
+        observer: &mut O,
+    ) -> Result<Outcome, Error>
+    where
+        St: Stepper<S> + ?Sized,
+        O: Observer + ?Sized,
+    {
+        let Schedule {
+            steps,
+            last_h,
+            t_end,
+        } = self.spec.schedule()?;
+        let (t0, h) = (self.spec.t0, self.spec.h);
+        if y.iter().any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite { t: t0 });
+        }
+        let first = Sample {
+            step: 0,
+            t: t0,
+            y,
+            last: false,
+        };
+        if observer.observe(&first).is_break() {
+            return Ok(Outcome::Stopped { steps: 0, t: t0 });
+        }
+        for k in 1..=steps {
+            let last = k == steps;
+            // t from the step index, not by accumulation, so that it does not drift.
+            let t = t0 + (k - 1) as f64 * h;
+            stepper.step(self.system, t, if last { last_h } else { h }, y)?;
+            let t_next = if last { t_end } else { t0 + k as f64 * h };
+            if y.iter().any(|v| !v.is_finite()) {
+                return Err(Error::NonFinite { t: t_next });
+            }
+            if observer
+                .observe(&Sample {
+                    step: k,
+                    t: t_next,
+                    y,
+                    last,
+                })
+                .is_break()
+            {
+                return Ok(Outcome::Stopped {
+                    steps: k,
+                    t: t_next,
+                });
+            }
+        }
+        Ok(Outcome::ReachedEnd { steps, t: t_end })
+    }
+}
+
+/// What [`solve`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// How the run ended.
+    pub outcome: Outcome,
+    /// Right-hand-side evaluations: calls of f, or pairs of ∂H/∂q and ∂H/∂p evaluations.
+    pub rhs_evals: u64,
+    /// Final state, in the model's (position, velocity) coordinates.
+    pub state: Vec<f64>,
+}
+
+/// Runs `method` on `model` from `y0` (positions, velocities), showing every state to
+/// `observer` in the same coordinates.
+///
+/// Methods that need a Hamiltonian form run on (q, p): the state is converted before the
+/// run, and back for every observed state and at the end.
+///
+/// # Errors
+/// [`Error::UnmetRequirement`] when the model lacks what the method needs, and everything
+/// [`Simulation::run`] reports.
+pub fn solve<M: Model>(
+    model: &M,
+    method: &Method,
+    y0: &[f64],
+    spec: &RunSpec,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    let dim = model.dim();
+    assert_eq!(y0.len(), dim, "initial state of the wrong length");
+    match method.scheme {
+        Scheme::ExplicitRk(tableau) => {
+            let system = Counted::new(model);
+            let mut y = y0.to_vec();
+            let run = Simulation {
+                system: &system,
+                spec: *spec,
+            };
+            let outcome = run.run(&mut ExplicitRk::new(tableau, dim), &mut y, observer)?;
+            Ok(Report {
+                outcome,
+                rhs_evals: system.evaluations(),
+                state: y,
+            })
+        }
+        Scheme::Partitioned(partition) => {
+            let form = model
+                .hamiltonian_form()
+                .map_err(|reason| Error::UnmetRequirement {
+                    method: method.name,
+                    needs: method.requirement.describe(),
+                    reason,
+                    suggestion: "rk4",
+                })?;
+            let system = Counted::new(&form);
+            let mut z = vec![0.0; dim];
+            model.to_momenta(y0, &mut z);
+            let mut shown = ToVelocities {
+                model,
+                y: vec![0.0; dim],
+                inner: observer,
+            };
+            let run = Simulation {
+                system: &system,
+                spec: *spec,
+            };
+            let outcome = run.run(
+                &mut PartitionedStepper::new(partition, dim / 2),
+                &mut z,
+                &mut shown,
+            )?;
+            let mut y = vec![0.0; dim];
+            model.to_velocities(&z, &mut y);
+            Ok(Report {
+                outcome,
+                rhs_evals: system.evaluations(),
+                state: y,
+            })
+        }
+    }
+}
+
+/// Shows (q, p) states to an observer as (q, q').
+struct ToVelocities<'a, M> {
+    model: &'a M,
+    y: Vec<f64>,
+    inner: &'a mut dyn Observer,
+}
+
+impl<M: Model> Observer for ToVelocities<'_, M> {
+    fn observe(&mut self, sample: &Sample<'_>) -> std::ops::ControlFlow<()> {
+        self.model.to_velocities(sample.y, &mut self.y);
+        self.inner.observe(&Sample {
+            y: &self.y,
+            ..*sample
+        })
+    }
+}
+
+/// Counts a system's evaluations.
+struct Counted<'a, S: ?Sized> {
+    inner: &'a S,
+    rhs: Cell<u64>,
+    halves: Cell<u64>,
+}
+
+impl<'a, S: ?Sized> Counted<'a, S> {
+    fn new(inner: &'a S) -> Self {
+        Counted {
+            inner,
+            rhs: Cell::new(0),
+            halves: Cell::new(0),
+        }
+    }
+
+    fn evaluations(&self) -> u64 {
+        self.rhs.get() + self.halves.get().div_ceil(2)
+    }
+}
+
+impl<S: System + ?Sized> System for Counted<'_, S> {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.rhs.set(self.rhs.get() + 1);
+        self.inner.rhs(t, y, dydt);
+    }
+}
+
+impl<S: Hamiltonian + ?Sized> Hamiltonian for Counted<'_, S> {
+    fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        self.halves.set(self.halves.get() + 1);
+        self.inner.dh_dq(t, q, p, out);
+    }
+    fn dh_dp(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        self.halves.set(self.halves.get() + 1);
+        self.inner.dh_dp(t, q, p, out);
+    }
+    fn separable(&self) -> bool {
+        self.inner.separable()
+    }
+}

@@ -1,0 +1,279 @@
+//! The planar double pendulum: the paper's §6, Lagrangian form (matrix formalism (73)–(82))
+//! and Hamiltonian form ((87), (88), (108), (109)).
+
+use std::f64::consts::PI;
+
+use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+
+/// Two point masses on massless rigid rods, the second hung from the first.
+///
+/// State y = (θ₁, θ₂, ω₁, ω₂): angles from the downward vertical (rad) and angular
+/// velocities (rad/s). Its Hamiltonian (94) is not separable (the mass matrix depends on
+/// θ₁ − θ₂), so explicit splitting methods do not apply: symplectic methods run on
+/// [`DoublePendulumForm`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DoublePendulum {
+    /// Mass of the first bob m₁, kg.
+    pub m1: f64,
+    /// Mass of the second bob m₂, kg.
+    pub m2: f64,
+    /// Length of the first rod l₁, m.
+    pub l1: f64,
+    /// Length of the second rod l₂, m.
+    pub l2: f64,
+    /// Gravitational acceleration g, m/s².
+    pub g: f64,
+}
+
+/// Catalogue entry of [`DoublePendulum`].
+pub static INFO: SystemInfo = SystemInfo {
+    name: "double",
+    description: "double pendulum, Lagrangian (th1, th2, w1, w2) and Hamiltonian (th1, th2, p1, p2) forms (paper §6)",
+    parameters: &[
+        Quantity {
+            name: "m1",
+            unit: "kg",
+            default: 1.0,
+            domain: Domain::Positive,
+            description: "mass of the first bob",
+        },
+        Quantity {
+            name: "m2",
+            unit: "kg",
+            default: 1.0,
+            domain: Domain::Positive,
+            description: "mass of the second bob",
+        },
+        Quantity {
+            name: "l1",
+            unit: "m",
+            default: 1.0,
+            domain: Domain::Positive,
+            description: "length of the first rod",
+        },
+        Quantity {
+            name: "l2",
+            unit: "m",
+            default: 1.0,
+            domain: Domain::Positive,
+            description: "length of the second rod",
+        },
+        Quantity {
+            name: "g",
+            unit: "m/s^2",
+            default: 9.81,
+            domain: Domain::Positive,
+            description: "gravitational acceleration",
+        },
+    ],
+    state: &[
+        Quantity {
+            name: "theta1",
+            unit: "rad",
+            default: 120.0 * PI / 180.0,
+            domain: Domain::Real,
+            description: "angle of the first rod from the downward vertical",
+        },
+        Quantity {
+            name: "theta2",
+            unit: "rad",
+            default: -10.0 * PI / 180.0,
+            domain: Domain::Real,
+            description: "angle of the second rod from the downward vertical",
+        },
+        Quantity {
+            name: "omega1",
+            unit: "rad/s",
+            default: 0.0,
+            domain: Domain::Real,
+            description: "angular velocity of the first rod",
+        },
+        Quantity {
+            name: "omega2",
+            unit: "rad/s",
+            default: 0.0,
+            domain: Domain::Real,
+            description: "angular velocity of the second rod",
+        },
+    ],
+    build: |v| Box::new(DoublePendulum::from_values(v)),
+};
+
+/// The terms of the matrix formalism M(θ) θ'' + C + G = 0 (paper (73)–(75), with C the
+/// whole velocity vector as (74) defines it; see ERRATA on (70)/(71)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatrixForm {
+    /// Mass matrix M (73), kg m².
+    pub mass: [[f64; 2]; 2],
+    /// Velocity (Coriolis and centripetal) vector C (74), N m.
+    pub coriolis: [f64; 2],
+    /// Gravity vector G (75), N m.
+    pub gravity: [f64; 2],
+}
+
+impl DoublePendulum {
+    /// M, C and G at state y (paper (73)–(75)).
+    pub fn matrix_form(&self, y: &[f64]) -> MatrixForm {
+        let Self { m1, m2, l1, l2, g } = *self;
+        let (s, c) = (y[0] - y[1]).sin_cos();
+        let b = m2 * l1 * l2;
+        MatrixForm {
+            mass: [[l1 * l1 * (m1 + m2), b * c], [b * c, m2 * l2 * l2]],
+            coriolis: [b * y[3] * y[3] * s, -b * y[2] * y[2] * s],
+            gravity: [g * l1 * (m1 + m2) * y[0].sin(), m2 * g * l2 * y[1].sin()],
+        }
+    }
+
+    /// Generalized momenta p = M(θ) ω (paper (84) with the ERRATA's [θ̇₁, θ̇₂]), kg m²/s.
+    pub fn momenta(&self, y: &[f64]) -> [f64; 2] {
+        let Self { m1, m2, l1, l2, .. } = *self;
+        let c = (y[0] - y[1]).cos();
+        [
+            (m1 + m2) * l1 * l1 * y[2] + m2 * l1 * l2 * c * y[3],
+            m2 * l2 * l2 * y[3] + m2 * l1 * l2 * c * y[2],
+        ]
+    }
+
+    /// Kinetic energy T (43), J.
+    pub fn kinetic(&self, y: &[f64]) -> f64 {
+        let Self { m1, m2, l1, l2, .. } = *self;
+        let (w1, w2) = (y[2], y[3]);
+        0.5 * (m1 + m2) * l1 * l1 * w1 * w1
+            + 0.5 * m2 * l2 * l2 * w2 * w2
+            + m2 * l1 * l2 * w1 * w2 * (y[0] - y[1]).cos()
+    }
+
+    /// Potential energy V (46), J; zero when both rods are horizontal at the pivot's height.
+    pub fn potential(&self, theta1: f64, theta2: f64) -> f64 {
+        let Self { m1, m2, l1, l2, g } = *self;
+        -(m1 + m2) * g * l1 * theta1.cos() - m2 * g * l2 * theta2.cos()
+    }
+
+    /// Lagrangian L = T − V (47), J.
+    pub fn lagrangian(&self, y: &[f64]) -> f64 {
+        self.kinetic(y) - self.potential(y[0], y[1])
+    }
+
+    /// The Hamiltonian form with the same parameters.
+    pub fn form(&self) -> DoublePendulumForm {
+        DoublePendulumForm { pendulum: *self }
+    }
+}
+
+impl Model for DoublePendulum {
+    type Form = DoublePendulumForm;
+    const INFO: &'static SystemInfo = &INFO;
+
+    fn from_values(v: &Values) -> Self {
+        DoublePendulum {
+            m1: v.get("m1"),
+            m2: v.get("m2"),
+            l1: v.get("l1"),
+            l2: v.get("l2"),
+            g: v.get("g"),
+        }
+    }
+
+    fn hamiltonian_form(&self) -> Result<DoublePendulumForm, String> {
+        Ok(self.form())
+    }
+
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]) {
+        let p = self.momenta(y);
+        z[..2].copy_from_slice(&y[..2]);
+        z[2..4].copy_from_slice(&p);
+    }
+
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
+        let mut w = [0.0; 2];
+        self.form().dh_dp(0.0, &z[..2], &z[2..4], &mut w);
+        y[..2].copy_from_slice(&z[..2]);
+        y[2..4].copy_from_slice(&w);
+    }
+}
+
+impl System for DoublePendulum {
+    fn dim(&self) -> usize {
+        4
+    }
+
+    /// θ'' = −M⁻¹ (C + G) (paper (76), (81), (82)), with the first row of the matrix
+    /// equation divided by l₁ and the second by m₂ l₂. The expression order is the one
+    /// `shared/bench/SPEC.md` fixes, so that without FMA the result is bit-identical to the
+    /// benchmark peers.
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        let Self { m1, m2, l1, l2, g } = *self;
+        let (th1, th2, w1, w2) = (y[0], y[1], y[2], y[3]);
+        let d = th1 - th2;
+        let (sd, cd) = (d.sin(), d.cos());
+        let (s1, s2) = (th1.sin(), th2.sin());
+        let m11 = (m1 + m2) * l1;
+        let m12 = m2 * l2 * cd;
+        let m21 = l1 * cd;
+        let m22 = l2;
+        let r1 = -m2 * l2 * w2 * w2 * sd - (m1 + m2) * g * s1;
+        let r2 = l1 * w1 * w1 * sd - g * s2;
+        let det = m11 * m22 - m12 * m21;
+        dydt[0] = w1;
+        dydt[1] = w2;
+        dydt[2] = (r1 * m22 - m12 * r2) / det;
+        dydt[3] = (m11 * r2 - m21 * r1) / det;
+    }
+}
+
+impl Energy for DoublePendulum {
+    fn energy(&self, _t: f64, y: &[f64]) -> f64 {
+        self.kinetic(y) + self.potential(y[0], y[1])
+    }
+}
+
+/// The double pendulum on (θ₁, θ₂, p₁, p₂) (paper §6.5–6.8); H = T(θ, p) + V(θ) (94) is not
+/// separable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DoublePendulumForm {
+    /// The parameters.
+    pub pendulum: DoublePendulum,
+}
+
+impl System for DoublePendulumForm {
+    fn dim(&self) -> usize {
+        4
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        super::hamilton_rhs(self, t, y, dydt);
+    }
+}
+
+impl Hamiltonian for DoublePendulumForm {
+    /// ∂H/∂θ = −ṗ from (108) and (109).
+    fn dh_dq(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        let DoublePendulum { m1, m2, l1, l2, g } = self.pendulum;
+        let (s, c) = (q[0] - q[1]).sin_cos();
+        let d = m1 + m2 * s * s;
+        let (p1, p2) = (p[0], p[1]);
+        let bracket = m2 * c / (l1 * l1) * p1 * p1 - (m2 * c * c + (m1 + m2)) / (l1 * l2) * p1 * p2
+            + (m1 + m2) * c / (l2 * l2) * p2 * p2;
+        let coupling = s / (d * d) * bracket;
+        out[0] = -coupling + (m1 + m2) * g * l1 * q[0].sin();
+        out[1] = coupling + m2 * g * l2 * q[1].sin();
+    }
+
+    /// ∂H/∂p = θ̇ from (87) and (88).
+    fn dh_dp(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        let DoublePendulum { m1, m2, l1, l2, .. } = self.pendulum;
+        let (s, c) = (q[0] - q[1]).sin_cos();
+        let det = m2 * l1 * l1 * l2 * l2 * (m1 + m2 * s * s);
+        let b = m2 * l1 * l2 * c;
+        out[0] = (m2 * l2 * l2 * p[0] - b * p[1]) / det;
+        out[1] = (-b * p[0] + l1 * l1 * (m1 + m2) * p[1]) / det;
+    }
+}
+
+impl Energy for DoublePendulumForm {
+    /// H = ½ pᵀ M⁻¹ p + V (92)–(94), J.
+    fn energy(&self, t: f64, y: &[f64]) -> f64 {
+        let mut w = [0.0; 2];
+        self.dh_dp(t, &y[..2], &y[2..4], &mut w);
+        0.5 * (y[2] * w[0] + y[3] * w[1]) + self.pendulum.potential(y[0], y[1])
+    }
+}

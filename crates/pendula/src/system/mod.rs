@@ -1,0 +1,296 @@
+//! Physical systems: the [`System`] trait and its capabilities, and the [`CATALOGUE`].
+//!
+//! A system is a first-order ODE y' = f(t, y) ([`System`]). What else it offers is a
+//! separate small trait: [`Energy`] (its mechanical energy T + V) and [`Hamiltonian`]
+//! (its canonical form on (q, p), needed by symplectic methods). [`Model`] ties a catalogued
+//! system to its parameters and to its Hamiltonian form, and [`DynModel`] is its
+//! object-safe face for the command line.
+
+pub mod double;
+pub mod oscillator;
+pub mod pendulum;
+
+use crate::Error;
+use crate::integrator::Method;
+use crate::observe::Observer;
+use crate::simulate::{Report, RunSpec};
+
+/// A first-order ODE system y' = f(t, y).
+pub trait System {
+    /// Length of the state vector y.
+    fn dim(&self) -> usize;
+    /// Writes f(t, y) into `dydt`; both slices have length [`System::dim`].
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+}
+
+/// A system whose mechanical energy T + V can be evaluated, J.
+pub trait Energy: System {
+    /// Mechanical energy at (t, y), J. Conserved when the system is undamped and undriven.
+    fn energy(&self, t: f64, y: &[f64]) -> f64;
+}
+
+/// A system in canonical form: y = (q₁…qₙ, p₁…pₙ) and y' = (∂H/∂p, −∂H/∂q).
+///
+/// Symplectic methods need the two halves of the gradient separately: a "kick" uses
+/// ∂H/∂q and a "drift" uses ∂H/∂p. When [`Hamiltonian::separable`] is true
+/// (H = T(p) + V(t, q)), ∂H/∂q must not depend on p nor ∂H/∂p on q, and methods use their
+/// explicit form.
+pub trait Hamiltonian: System {
+    /// Writes ∂H/∂q at (t, q, p) into `out` (length n = dim/2).
+    fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]);
+    /// Writes ∂H/∂p at (t, q, p) into `out` (length n = dim/2).
+    fn dh_dp(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]);
+    /// True when H = T(p) + V(t, q).
+    fn separable(&self) -> bool {
+        false
+    }
+}
+
+/// Hamilton's equations y' = (∂H/∂p, −∂H/∂q), for implementing [`System::rhs`] of a
+/// [`Hamiltonian`] form.
+pub fn hamilton_rhs<H: Hamiltonian + ?Sized>(h: &H, t: f64, y: &[f64], dydt: &mut [f64]) {
+    let n = y.len() / 2;
+    let (q, p) = y.split_at(n);
+    let (dq, dp) = dydt.split_at_mut(n);
+    h.dh_dp(t, q, p, dq);
+    h.dh_dq(t, q, p, dp);
+    for v in dp.iter_mut() {
+        *v = -*v;
+    }
+}
+
+/// What values a parameter or state variable may take.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Domain {
+    /// Finite and > 0 (masses, lengths, g).
+    Positive,
+    /// Finite and ≥ 0 (damping, frequencies).
+    NonNegative,
+    /// Any finite value.
+    Real,
+    /// 0 or 1.
+    Flag,
+}
+
+impl Domain {
+    /// The domain in words, for error messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Domain::Positive => "must be finite and > 0",
+            Domain::NonNegative => "must be finite and >= 0",
+            Domain::Real => "must be finite",
+            Domain::Flag => "must be 0 or 1",
+        }
+    }
+
+    /// Whether `v` lies in the domain.
+    pub fn contains(self, v: f64) -> bool {
+        v.is_finite()
+            && match self {
+                Domain::Positive => v > 0.0,
+                Domain::NonNegative => v >= 0.0,
+                Domain::Real => true,
+                Domain::Flag => v == 0.0 || v == 1.0,
+            }
+    }
+}
+
+/// A named quantity of a system: a parameter or a state variable.
+#[derive(Debug, Clone, Copy)]
+pub struct Quantity {
+    /// Name used on the command line and in scenario files.
+    pub name: &'static str,
+    /// SI unit (`rad` for angles, which also accept a `deg` suffix on input).
+    pub unit: &'static str,
+    /// Value used when none is given.
+    pub default: f64,
+    /// Allowed values.
+    pub domain: Domain,
+    /// One line of description.
+    pub description: &'static str,
+}
+
+impl Quantity {
+    /// Whether this quantity is an angle (input may carry a `deg` suffix).
+    pub fn is_angle(&self) -> bool {
+        self.unit == "rad"
+    }
+}
+
+/// A catalogue entry: a system's name, its quantities, and how to build it.
+pub struct SystemInfo {
+    /// Name used on the command line.
+    pub name: &'static str,
+    /// One line of description.
+    pub description: &'static str,
+    /// Physical parameters, in a fixed order.
+    pub parameters: &'static [Quantity],
+    /// State variables (positions, then velocities), in the order of the state vector.
+    pub state: &'static [Quantity],
+    /// Builds the system from validated values.
+    pub build: fn(&Values) -> Box<dyn DynModel>,
+}
+
+impl std::fmt::Debug for SystemInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SystemInfo")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Every system pendula knows, in the order `pendula list systems` shows them.
+pub static CATALOGUE: &[&SystemInfo] = &[&oscillator::INFO, &pendulum::INFO, &double::INFO];
+
+/// Looks a system up by name.
+pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
+    CATALOGUE
+        .iter()
+        .copied()
+        .find(|s| s.name == name)
+        .ok_or_else(|| Error::UnknownSystem {
+            name: name.to_owned(),
+            valid: CATALOGUE
+                .iter()
+                .map(|s| s.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+impl SystemInfo {
+    /// Every quantity: parameters then state variables.
+    pub fn quantities(&self) -> impl Iterator<Item = &'static Quantity> + use<> {
+        let (p, s): (&'static [Quantity], &'static [Quantity]) = (self.parameters, self.state);
+        p.iter().chain(s.iter())
+    }
+
+    /// Looks up a parameter or state variable by name.
+    pub fn quantity(&self, name: &str) -> Result<&'static Quantity, Error> {
+        self.quantities()
+            .find(|q| q.name == name)
+            .ok_or_else(|| Error::UnknownName {
+                system: self.name,
+                name: name.to_owned(),
+                valid: self
+                    .quantities()
+                    .map(|q| q.name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
+    }
+
+    /// The catalogue's defaults with `settings` (name, value) applied in order, validated.
+    pub fn values(&'static self, settings: &[(String, f64)]) -> Result<Values, Error> {
+        let mut values: Vec<f64> = self.quantities().map(|q| q.default).collect();
+        for (name, value) in settings {
+            let index = self.quantities().position(|q| q.name == name);
+            let q = self.quantity(name)?;
+            if !q.domain.contains(*value) {
+                return Err(Error::InvalidValue {
+                    name: name.clone(),
+                    value: *value,
+                    allowed: q.domain.describe(),
+                });
+            }
+            values[index.expect("quantity() found it")] = *value;
+        }
+        Ok(Values { info: self, values })
+    }
+}
+
+/// Validated values of every parameter and initial-state variable of one system.
+#[derive(Debug, Clone)]
+pub struct Values {
+    info: &'static SystemInfo,
+    values: Vec<f64>,
+}
+
+impl Values {
+    /// The system these values belong to.
+    pub fn info(&self) -> &'static SystemInfo {
+        self.info
+    }
+
+    /// The value of a parameter or state variable.
+    ///
+    /// # Panics
+    /// If `name` is not one of the system's quantities: a programming error in a system file.
+    pub fn get(&self, name: &str) -> f64 {
+        let i = self.info.quantities().position(|q| q.name == name);
+        self.values[i.unwrap_or_else(|| panic!("{} has no quantity {name}", self.info.name))]
+    }
+
+    /// (name, value) of every parameter.
+    pub fn parameters(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
+        self.info
+            .parameters
+            .iter()
+            .zip(&self.values)
+            .map(|(q, v)| (q.name, *v))
+    }
+
+    /// The initial state vector, in the order of [`SystemInfo::state`].
+    pub fn initial_state(&self) -> &[f64] {
+        &self.values[self.info.parameters.len()..]
+    }
+
+    /// Builds the system.
+    pub fn build(&self) -> Box<dyn DynModel> {
+        (self.info.build)(self)
+    }
+}
+
+/// A catalogued system: built from [`Values`], with its Hamiltonian form when it has one.
+///
+/// The user-facing state is (positions, velocities); the Hamiltonian form's state is
+/// (positions, momenta), and the two conversions map between them.
+pub trait Model: System + Energy + Sized + 'static {
+    /// The canonical (q, p) form.
+    type Form: Hamiltonian + Energy;
+    /// Catalogue entry of this system.
+    const INFO: &'static SystemInfo;
+    /// Builds the system from validated values.
+    fn from_values(values: &Values) -> Self;
+    /// The Hamiltonian form, or why there is none (for example, damping).
+    fn hamiltonian_form(&self) -> Result<Self::Form, String>;
+    /// (q, q') → (q, p).
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]);
+    /// (q, p) → (q, q').
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]);
+}
+
+/// The object-safe face of a [`Model`], used where the system is chosen at run time.
+pub trait DynModel {
+    /// Catalogue entry.
+    fn info(&self) -> &'static SystemInfo;
+    /// Mechanical energy at (t, y), J.
+    fn energy(&self, t: f64, y: &[f64]) -> f64;
+    /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
+    /// (see [`crate::simulate::solve`]).
+    fn solve(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
+}
+
+impl<M: Model> DynModel for M {
+    fn info(&self) -> &'static SystemInfo {
+        M::INFO
+    }
+    fn energy(&self, t: f64, y: &[f64]) -> f64 {
+        Energy::energy(self, t, y)
+    }
+    fn solve(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        crate::simulate::solve(self, method, y0, spec, observer)
+    }
+}
