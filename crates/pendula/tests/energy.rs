@@ -1,0 +1,93 @@
+//! Long runs: on the double pendulum at h = 0.01 over 10⁶ steps, the symplectic methods
+//! keep the energy error bounded while explicit Euler and RK4 drift.
+//!
+//! The measure is max |E − E₀| over the last tenth of the run against the first tenth: a
+//! bounded error gives a ratio near 1, a linear drift a ratio near 10.
+
+use std::ops::ControlFlow;
+
+use pendula::integrator::{self, Method};
+use pendula::observe::{Observer, Sample};
+use pendula::system::DynModel;
+use pendula::{End, Error, RunSpec};
+
+use crate::support::values;
+
+const STEPS: u64 = 1_000_000;
+
+/// max |E − E₀| over the first and the last tenth of a run of `steps` steps.
+struct Tenths<'a> {
+    model: &'a dyn DynModel,
+    steps: u64,
+    e0: Option<f64>,
+    first: f64,
+    last: f64,
+}
+
+impl Observer for Tenths<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        let e = self.model.energy(s.t, s.y);
+        let err = (e - *self.e0.get_or_insert(e)).abs();
+        if s.step <= self.steps / 10 {
+            self.first = self.first.max(err);
+        }
+        if s.step >= self.steps - self.steps / 10 {
+            self.last = self.last.max(err);
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// (first-tenth error, last-tenth error) over `steps` steps of h = 0.01 from the default
+/// state (120°, −10°), or the run's error.
+fn tenths(method: &Method, steps: u64) -> Result<(f64, f64), Error> {
+    let values = values("double", &[]);
+    let model = values.build();
+    let mut obs = Tenths {
+        model: &*model,
+        steps,
+        e0: None,
+        first: 0.0,
+        last: 0.0,
+    };
+    let spec = RunSpec {
+        t0: 0.0,
+        h: 0.01,
+        end: End::Steps(steps),
+    };
+    model.solve(method, values.initial_state(), &spec, &mut obs)?;
+    eprintln!(
+        "{}: first tenth {:.3e} J, last tenth {:.3e} J",
+        method.name, obs.first, obs.last
+    );
+    Ok((obs.first, obs.last))
+}
+
+#[test]
+fn ref_symplectic_methods_keep_energy_bounded() {
+    for name in ["symplectic-euler", "verlet"] {
+        let (first, last) = tenths(integrator::find(name).unwrap(), STEPS).unwrap();
+        assert!(last <= 2.0 * first, "{name}: {first:e} then {last:e}");
+    }
+}
+
+#[test]
+fn ref_explicit_methods_drift() {
+    // RK4 loses energy at a steady rate over the whole run.
+    let (first, last) = tenths(&integrator::explicit_rk::RK4, STEPS).unwrap();
+    assert!(last > 5.0 * first, "rk4: {first:e} then {last:e}");
+    // Explicit Euler gains energy linearly over its first 10³ steps, then saturates near
+    // 100 J (from 0.149 J) once the pendulum whirls: over 10⁶ steps both tenths are already
+    // about a thousand times the initial energy and ~100 times Verlet's bounded error.
+    let (first, last) = tenths(&integrator::explicit_rk::EULER, 1000).unwrap();
+    assert!(
+        last > 5.0 * first,
+        "euler over 10^3 steps: {first:e} then {last:e}"
+    );
+    let (first, _) = tenths(&integrator::explicit_rk::EULER, STEPS).unwrap();
+    let (_, verlet) = tenths(integrator::find("verlet").unwrap(), STEPS).unwrap();
+    assert!(
+        first > 100.0 * verlet,
+        "euler {first:e} vs verlet {verlet:e}"
+    );
+}

@@ -1,0 +1,18 @@
+//! pendula's integration tests: one binary, one module per concern.
+//!
+//! Names state their evidence: `ref_*` tests check against an independent reference
+//! (closed forms, or mpmath at 30 digits: `reference/mpmath_reference.py`).
+
+// Reference values are pasted with the 20 digits mpmath printed, to keep their provenance plain.
+#![allow(clippy::excessive_precision)]
+
+mod alloc;
+mod architecture;
+mod conformance;
+mod energy;
+mod exact;
+mod formulations;
+mod schedule;
+mod special;
+mod support;
+mod symplectic;

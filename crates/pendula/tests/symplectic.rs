@@ -1,0 +1,131 @@
+//! The symplectic condition Φ'(z)ᵀ Ω Φ'(z) = Ω for one step of the symplectic methods on the
+//! double pendulum's (non-separable) Hamiltonian form, and time reversibility of the
+//! symmetric ones.
+
+use pendula::integrator::explicit_rk::{EULER, ExplicitRk};
+use pendula::integrator::partitioned::{Partition, PartitionedStepper};
+use pendula::integrator::{METHODS, Scheme, Stepper};
+use pendula::system::double::{DoublePendulum, DoublePendulumForm};
+
+const H: f64 = 0.01;
+
+fn form() -> DoublePendulumForm {
+    DoublePendulum {
+        m1: 1.0,
+        m2: 1.5,
+        l1: 1.0,
+        l2: 0.8,
+        g: 9.81,
+    }
+    .form()
+}
+
+/// States (θ₁, θ₂, p₁, p₂) to test at.
+const STATES: [[f64; 4]; 3] = [
+    [2.0, -0.2, 0.3, -0.4],
+    [0.4, 1.9, -2.5, 1.1],
+    [-1.2, 2.8, 4.0, 2.0],
+];
+
+fn step(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [f64; 4] {
+    let mut z = z;
+    stepper(&mut z);
+    z
+}
+
+/// Jacobian of the one-step map by 8th-order central differences: truncation below 1e-15
+/// at ε = 5e-3, round-off (and the implicit solver's tolerance) about 1e-13.
+fn jacobian(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [[f64; 4]; 4] {
+    const W: [f64; 4] = [4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0];
+    let eps = 5e-3;
+    let mut jac = [[0.0; 4]; 4];
+    for j in 0..4 {
+        for (k, w) in W.iter().enumerate() {
+            let d = (k + 1) as f64 * eps;
+            let (mut plus, mut minus) = (z, z);
+            plus[j] += d;
+            minus[j] -= d;
+            let (fp, fm) = (step(stepper, plus), step(stepper, minus));
+            for i in 0..4 {
+                jac[i][j] += w * (fp[i] - fm[i]) / eps;
+            }
+        }
+    }
+    jac
+}
+
+/// max |JᵀΩJ − Ω| with Ω = [[0, I], [−I, 0]].
+fn symplectic_defect(jac: &[[f64; 4]; 4]) -> f64 {
+    let omega = |i: usize, j: usize| match (i, j) {
+        (0, 2) | (1, 3) => 1.0,
+        (2, 0) | (3, 1) => -1.0,
+        _ => 0.0,
+    };
+    let mut worst = 0.0_f64;
+    for a in 0..4 {
+        for b in 0..4 {
+            let mut s = 0.0;
+            for i in 0..4 {
+                for j in 0..4 {
+                    s += jac[i][a] * omega(i, j) * jac[j][b];
+                }
+            }
+            worst = worst.max((s - omega(a, b)).abs());
+        }
+    }
+    worst
+}
+
+#[test]
+fn ref_symplectic_methods_preserve_the_symplectic_form() {
+    let sys = form();
+    for partition in [Partition::SymplecticEuler, Partition::StormerVerlet] {
+        let mut stepper = PartitionedStepper::new(partition, 2);
+        let mut advance = |z: &mut [f64; 4]| stepper.step(&sys, 0.0, H, z).unwrap();
+        for z in STATES {
+            let defect = symplectic_defect(&jacobian(&mut advance, z));
+            eprintln!("{partition:?} at {z:?}: defect {defect:.2e}");
+            assert!(defect < 1e-12, "{partition:?} at {z:?}: {defect:e}");
+        }
+    }
+}
+
+/// The same test fails for a non-symplectic method: it can tell the difference.
+#[test]
+fn ref_explicit_euler_is_not_symplectic() {
+    let sys = form();
+    let Scheme::ExplicitRk(tableau) = EULER.scheme else {
+        unreachable!()
+    };
+    let mut stepper = ExplicitRk::new(tableau, 4);
+    let mut advance = |z: &mut [f64; 4]| stepper.step(&sys, 0.0, H, z).unwrap();
+    let defect = symplectic_defect(&jacobian(&mut advance, STATES[0]));
+    assert!(defect > 1e-6, "{defect:e}");
+}
+
+/// Symmetric methods retrace their steps: Φ₋ₕ ∘ Φₕ = id up to round-off.
+#[test]
+fn symmetric_methods_are_time_reversible() {
+    let sys = form();
+    for method in METHODS.iter().filter(|m| m.symmetric) {
+        let Scheme::Partitioned(partition) = method.scheme else {
+            panic!("{}: no reversibility test for this family yet", method.name)
+        };
+        let mut stepper = PartitionedStepper::new(partition, 2);
+        for z0 in STATES {
+            let mut z = z0;
+            for _ in 0..100 {
+                stepper.step(&sys, 0.0, H, &mut z).unwrap();
+            }
+            for _ in 0..100 {
+                stepper.step(&sys, 0.0, -H, &mut z).unwrap();
+            }
+            let back = z
+                .iter()
+                .zip(&z0)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(back < 1e-12, "{}: {back:e}", method.name);
+        }
+    }
+}
