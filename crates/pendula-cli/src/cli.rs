@@ -1,0 +1,74 @@
+//! The command line as clap sees it: strings and numbers, nothing checked beyond syntax.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Simple, double and harmonic pendulums with verified, structure-preserving integrators.
+#[derive(Debug, Parser)]
+#[command(name = "pendula", version, about, after_help = EXIT_CODES)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
+step did not converge); 2 invalid input (arguments, values, scenario file, output path).";
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Integrate one system with one method and write its trajectory and a summary.
+    Simulate(Box<SimulateArgs>),
+    /// List the systems or the methods, with parameters, units, defaults and requirements.
+    List {
+        /// What to list.
+        what: ListWhat,
+    },
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ListWhat {
+    Systems,
+    Methods,
+}
+
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// System to integrate (see `pendula list systems`) [default: double].
+    pub system: Option<String>,
+    /// Integration method (see `pendula list methods`) [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s [default: 0.001].
+    #[arg(long, allow_hyphen_values = true, value_name = "H")]
+    pub dt: Option<String>,
+    /// End time, s; the last step is shortened to land on it [default: 10].
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "T",
+        conflicts_with = "steps"
+    )]
+    pub t_end: Option<String>,
+    /// Number of steps, instead of --t-end.
+    #[arg(long, allow_hyphen_values = true, value_name = "N")]
+    pub steps: Option<String>,
+    /// Set a parameter or initial-state variable, e.g. `--set theta1=120deg --set m2=2`.
+    /// Angles take a `deg` suffix (bare numbers are radians) or a `pi` suffix.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// TOML scenario with the same names (keys system, method, dt, t_end or steps, every,
+    /// out, summary, and a `[set]` table); flags override it.
+    #[arg(long, value_name = "FILE.toml")]
+    pub scenario: Option<PathBuf>,
+    /// Write every N-th step (and the last); 0 writes no trajectory [default: 1].
+    #[arg(long, allow_hyphen_values = true, value_name = "N")]
+    pub every: Option<String>,
+    /// Trajectory output: FILE.csv, FILE.npy, or `-` for CSV on stdout
+    /// [default: trajectory.csv].
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Write a JSON summary of the run here.
+    #[arg(long, value_name = "FILE.json")]
+    pub summary: Option<PathBuf>,
+}

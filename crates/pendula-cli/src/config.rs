@@ -1,0 +1,223 @@
+//! Validation: command-line strings and scenario files become a checked [`SimulateConfig`].
+//! Every error names the offending value and what is allowed.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use pendula::integrator::{self, Method};
+use pendula::system::{self, Quantity, SystemInfo, Values};
+use pendula::{End, RunSpec};
+use serde::Deserialize;
+
+use crate::cli::SimulateArgs;
+
+/// Default step size, s.
+const DEFAULT_DT: f64 = 1e-3;
+/// Default end time, s.
+const DEFAULT_T_END: f64 = 10.0;
+/// Default trajectory file.
+pub const DEFAULT_OUT: &str = "trajectory.csv";
+
+/// Where the trajectory goes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// CSV on standard output.
+    Stdout,
+    /// A CSV file.
+    Csv(PathBuf),
+    /// A NumPy .npy file (2-D float64).
+    Npy(PathBuf),
+}
+
+/// A validated `simulate` request.
+#[derive(Debug, Clone)]
+pub struct SimulateConfig {
+    pub values: Values,
+    pub method: &'static Method,
+    pub spec: RunSpec,
+    /// Write every n-th step; `None` writes no trajectory.
+    pub every: Option<u64>,
+    pub out: Option<Output>,
+    pub summary: Option<PathBuf>,
+}
+
+/// A scenario file: the same names as the flags.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Scenario {
+    system: Option<String>,
+    method: Option<String>,
+    dt: Option<f64>,
+    #[serde(alias = "t-end")]
+    t_end: Option<f64>,
+    steps: Option<u64>,
+    every: Option<u64>,
+    out: Option<PathBuf>,
+    summary: Option<PathBuf>,
+    #[serde(default)]
+    set: BTreeMap<String, toml::Value>,
+}
+
+fn read_scenario(path: &Path) -> Result<Scenario> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read scenario file {}", path.display()))?;
+    let scenario: Scenario = toml::from_str(&text)
+        .map_err(|e| anyhow!("invalid scenario file {}: {e}", path.display()))?;
+    if scenario.t_end.is_some() && scenario.steps.is_some() {
+        bail!(
+            "scenario file {} sets both t_end and steps; set one",
+            path.display()
+        );
+    }
+    Ok(scenario)
+}
+
+/// Marks the `deg` suffix (its factor is applied as (deg · π) / 180).
+const DEGREE: f64 = std::f64::consts::PI / 180.0;
+
+/// Parses a number: a float, optionally with a `deg` or `pi` suffix when `quantity` is an
+/// angle (`120deg`, `-0.5pi`, `pi`).
+pub fn parse_value(name: &str, text: &str, quantity: Option<&Quantity>) -> Result<f64> {
+    let t = text.trim();
+    let angle = quantity.is_some_and(|q| q.is_angle());
+    let pi = std::f64::consts::PI;
+    let (number, factor) = if let Some(n) = t.strip_suffix("deg") {
+        (n.trim(), DEGREE)
+    } else if let Some(n) = t.strip_suffix("pi") {
+        (n.trim().trim_end_matches('*'), pi)
+    } else {
+        (t, 1.0)
+    };
+    if factor != 1.0 && !angle {
+        let unit = quantity.map_or("", |q| q.unit);
+        bail!(
+            "invalid value `{text}` for `{name}`: the deg and pi suffixes are only for angles; `{name}` is in {unit}"
+        );
+    }
+    let value = match number {
+        "" | "+" if factor == pi => 1.0,
+        "-" if factor == pi => -1.0,
+        _ => number.parse::<f64>().map_err(|_| {
+            anyhow!(
+                "invalid value `{text}` for `{name}`: expected a number{}",
+                if angle {
+                    " (radians), or degrees with a deg suffix (120deg)"
+                } else {
+                    ""
+                }
+            )
+        })?,
+    };
+    // (deg · π) / 180, the same rounding as the catalogue's defaults and the benchmark spec.
+    Ok(if factor == DEGREE {
+        value * pi / 180.0
+    } else {
+        value * factor
+    })
+}
+
+fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f64> {
+    match value {
+        toml::Value::Float(f) => Ok(*f),
+        toml::Value::Integer(i) => Ok(*i as f64),
+        toml::Value::String(s) => parse_value(name, s, Some(quantity)),
+        other => bail!(
+            "invalid value {other} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\""
+        ),
+    }
+}
+
+fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
+    text.trim()
+        .parse()
+        .map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
+}
+
+/// Validates `simulate`'s arguments (and scenario file) into a [`SimulateConfig`].
+pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
+    let scenario = match &args.scenario {
+        Some(path) => read_scenario(path)?,
+        None => Scenario::default(),
+    };
+    let system_name = args
+        .system
+        .clone()
+        .or(scenario.system)
+        .unwrap_or_else(|| "double".into());
+    let info: &'static SystemInfo = system::find(&system_name)?;
+    let method = integrator::find(
+        args.method
+            .as_deref()
+            .or(scenario.method.as_deref())
+            .unwrap_or("rk4"),
+    )?;
+
+    let mut settings = Vec::new();
+    for (name, value) in &scenario.set {
+        let q = info.quantity(name)?;
+        settings.push((name.clone(), toml_value(name, value, q)?));
+    }
+    for item in &args.set {
+        let (name, text) = item.split_once('=').ok_or_else(|| {
+            anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg")
+        })?;
+        let name = name.trim();
+        let q = info.quantity(name)?;
+        settings.push((name.to_owned(), parse_value(name, text, Some(q))?));
+    }
+    let values = info.values(&settings)?;
+
+    let h = match &args.dt {
+        Some(text) => parse_number("--dt", text, "a step size in seconds")?,
+        None => scenario.dt.unwrap_or(DEFAULT_DT),
+    };
+    let end = match (&args.t_end, &args.steps) {
+        (Some(t), _) => End::Time(parse_number("--t-end", t, "an end time in seconds")?),
+        (None, Some(n)) => End::Steps(parse_number("--steps", n, "a whole number of steps >= 1")?),
+        (None, None) => match (scenario.t_end, scenario.steps) {
+            (_, Some(n)) => End::Steps(n),
+            (t, None) => End::Time(t.unwrap_or(DEFAULT_T_END)),
+        },
+    };
+    let spec = RunSpec { t0: 0.0, h, end };
+    spec.schedule()?;
+
+    let every = match &args.every {
+        Some(text) => parse_number("--every", text, "a whole number >= 0")?,
+        None => scenario.every.unwrap_or(1),
+    };
+    let every = (every > 0).then_some(every);
+    let out = match every {
+        None => None,
+        Some(_) => Some(output(
+            args.out
+                .clone()
+                .or(scenario.out)
+                .unwrap_or_else(|| DEFAULT_OUT.into()),
+        )?),
+    };
+    let summary = args.summary.clone().or(scenario.summary);
+    Ok(SimulateConfig {
+        values,
+        method,
+        spec,
+        every,
+        out,
+        summary,
+    })
+}
+
+fn output(path: PathBuf) -> Result<Output> {
+    if path.as_os_str() == "-" {
+        return Ok(Output::Stdout);
+    }
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("csv") => Ok(Output::Csv(path)),
+        Some("npy") => Ok(Output::Npy(path)),
+        _ => bail!(
+            "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout",
+            path.display()
+        ),
+    }
+}

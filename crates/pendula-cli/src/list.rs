@@ -1,0 +1,69 @@
+//! `pendula list systems|methods`: everything read from the library's registries.
+
+use std::io::Write;
+
+use anyhow::Result;
+use pendula::integrator::METHODS;
+use pendula::system::{CATALOGUE, Quantity};
+
+use crate::cli::ListWhat;
+
+fn show_default(q: &Quantity) -> String {
+    if q.is_angle() && q.default != 0.0 {
+        format!(
+            "{} ({}deg)",
+            q.default,
+            (q.default.to_degrees() * 1e9).round() / 1e9
+        )
+    } else {
+        format!("{}", q.default)
+    }
+}
+
+pub fn run(what: ListWhat) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    match what {
+        ListWhat::Systems => {
+            for (i, s) in CATALOGUE.iter().enumerate() {
+                if i > 0 {
+                    writeln!(out)?;
+                }
+                writeln!(out, "{}  {}", s.name, s.description)?;
+                for (title, list) in [("parameters", s.parameters), ("state", s.state)] {
+                    writeln!(out, "  {title}:")?;
+                    for q in list {
+                        writeln!(
+                            out,
+                            "    {:<16} {:<8} default {:<26} {}",
+                            q.name,
+                            q.unit,
+                            show_default(q),
+                            q.description
+                        )?;
+                    }
+                }
+            }
+        }
+        ListWhat::Methods => {
+            writeln!(
+                out,
+                "{:<17} {:>5}  {:<10} {:<9} requirement",
+                "method", "order", "symplectic", "symmetric"
+            )?;
+            for m in METHODS {
+                writeln!(
+                    out,
+                    "{:<17} {:>5}  {:<10} {:<9} {}",
+                    m.name,
+                    m.order,
+                    if m.symplectic { "yes" } else { "no" },
+                    if m.symmetric { "yes" } else { "no" },
+                    m.requirement.describe()
+                )?;
+                writeln!(out, "{:<17} {}", "", m.description)?;
+                writeln!(out, "{:<17} ref: {}", "", m.reference)?;
+            }
+        }
+    }
+    Ok(())
+}

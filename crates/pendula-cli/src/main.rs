@@ -1,0 +1,50 @@
+//! The `pendula` command: parse → validate → run → write.
+
+mod cli;
+mod config;
+mod list;
+mod output;
+mod simulate;
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use cli::{Cli, Command};
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Simulate(args) => simulate::run(args),
+        Command::List { what } => list::run(*what),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            if is_broken_pipe(&err) {
+                return ExitCode::SUCCESS;
+            }
+            let _ = writeln!(std::io::stderr(), "error: {err:#}");
+            ExitCode::from(exit_code(&err))
+        }
+    }
+}
+
+/// 1 when the computation itself failed, 2 for everything the user can fix in the input.
+fn exit_code(err: &anyhow::Error) -> u8 {
+    match err.downcast_ref::<pendula::Error>() {
+        Some(pendula::Error::NonFinite { .. } | pendula::Error::NewtonDidNotConverge { .. }) => 1,
+        _ => 2,
+    }
+}
+
+/// A reader that went away (`pendula simulate --out - | head`) is not an error.
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|e| {
+        e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+            || e.downcast_ref::<csv::Error>().is_some_and(|e| {
+                matches!(e.kind(), csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::BrokenPipe)
+            })
+    })
+}

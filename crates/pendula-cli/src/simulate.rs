@@ -1,0 +1,162 @@
+//! `pendula simulate`: one system, one method, a trajectory and a summary.
+
+use std::io::Write;
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+use anyhow::Result;
+use pendula::observe::{EnergyStats, Observer, Sample};
+use pendula::system::DynModel;
+use serde_json::{Map, Value, json};
+
+use crate::cli::SimulateArgs;
+use crate::config::{self, Output, SimulateConfig};
+use crate::output::{AtomicFile, Sink};
+
+/// Tracks energy at every step and writes the kept steps.
+struct Writer<'a> {
+    model: &'a dyn DynModel,
+    every: u64,
+    sink: Sink,
+    rows: u64,
+    energy: Option<EnergyStats>,
+    failure: Option<anyhow::Error>,
+}
+
+impl Observer for Writer<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        let e = self.model.energy(s.t, s.y);
+        let stats = self.energy.get_or_insert(EnergyStats {
+            initial: e,
+            last: e,
+            max_abs_error: 0.0,
+        });
+        stats.last = e;
+        stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
+        if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
+            let row = std::iter::once(s.t)
+                .chain(s.y.iter().copied())
+                .chain(std::iter::once(e));
+            if let Err(err) = self.sink.row(row) {
+                self.failure = Some(err);
+                return ControlFlow::Break(());
+            }
+            self.rows += 1;
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+pub fn run(args: &SimulateArgs) -> Result<()> {
+    let config = config::simulate(args)?;
+    let SimulateConfig {
+        values,
+        method,
+        spec,
+        every,
+        out,
+        summary,
+    } = &config;
+    let info = values.info();
+    // Open the outputs first: a path that cannot be written fails before the work.
+    let out_file = match out {
+        Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
+        _ => None,
+    };
+    let summary_file = summary
+        .as_deref()
+        .map(|p| AtomicFile::create(p, "--summary"))
+        .transpose()?;
+
+    let mut columns = vec!["t"];
+    columns.extend(info.state.iter().map(|q| q.name));
+    columns.push("energy");
+    let model = values.build();
+    let mut writer = Writer {
+        model: &*model,
+        every: every.unwrap_or(0),
+        sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
+        rows: 0,
+        energy: None,
+        failure: None,
+    };
+    let start = Instant::now();
+    let report = model.solve(method, values.initial_state(), spec, &mut writer);
+    let wall_s = start.elapsed().as_secs_f64();
+    if let Some(err) = writer.failure.take() {
+        return Err(err);
+    }
+    let report = report?;
+    let energy = writer.energy.unwrap_or_default();
+    let rows = writer.rows;
+    writer.sink.finish(out_file.as_ref())?;
+    if let Some(f) = out_file {
+        f.commit()?;
+    }
+
+    let t_end = report.outcome.t();
+    let mut final_state = Map::new();
+    final_state.insert("t".into(), json!(t_end));
+    for (q, v) in info.state.iter().zip(&report.state) {
+        final_state.insert(q.name.into(), json!(v));
+    }
+    let mut initial = Map::new();
+    for (q, v) in info.state.iter().zip(values.initial_state()) {
+        initial.insert(q.name.into(), json!(v));
+    }
+    let parameters: Map<String, Value> = values
+        .parameters()
+        .map(|(n, v)| (n.to_owned(), json!(v)))
+        .collect();
+    let steps = report.outcome.steps();
+    if let Some(f) = summary_file {
+        let doc = json!({
+            "system": info.name,
+            "method": method.name,
+            "parameters": parameters,
+            "initial": initial,
+            "dt": spec.h,
+            "steps": steps,
+            "rhs_evals": report.rhs_evals,
+            "t_end": t_end,
+            "final": final_state,
+            "energy": {
+                "initial": energy.initial,
+                "final": energy.last,
+                "max_abs_error": energy.max_abs_error,
+                "max_rel_error": energy.max_rel_error(),
+            },
+            "wall_s": wall_s,
+        });
+        let mut handle = f.handle()?;
+        serde_json::to_writer_pretty(&mut handle, &doc)?;
+        writeln!(handle)?;
+        f.commit()?;
+    }
+
+    let mut err = std::io::stderr().lock();
+    writeln!(
+        err,
+        "{} with {}: {steps} steps of {} s to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
+        info.name, method.name, spec.h, report.rhs_evals
+    )?;
+    writeln!(
+        err,
+        "energy: {:.12e} J -> {:.12e} J, max |dE| = {:.3e} J (relative {:.3e})",
+        energy.initial,
+        energy.last,
+        energy.max_abs_error,
+        energy.max_rel_error()
+    )?;
+    match out {
+        Some(Output::Csv(p) | Output::Npy(p)) => {
+            writeln!(err, "wrote {} ({rows} rows)", p.display())?
+        }
+        Some(Output::Stdout) => {}
+        None => writeln!(err, "no trajectory written (--every 0)")?,
+    }
+    if let Some(p) = summary {
+        writeln!(err, "wrote {}", p.display())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,406 @@
+//! The `pendula` binary end to end: outputs, and every invalid input with its message, exit
+//! code, and no file left behind.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+use tempfile::TempDir;
+
+fn pendula(dir: &Path) -> Command {
+    let mut cmd = Command::cargo_bin("pendula").unwrap();
+    cmd.current_dir(dir);
+    cmd
+}
+
+/// Files in `dir` (names), to check nothing was left behind.
+fn files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn default_run_writes_trajectory_csv() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .arg("simulate")
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("double with rk4: 10000 steps"));
+    let text = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,theta1,theta2,omega1,omega2,energy"));
+    let first: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(
+        first[..5],
+        [
+            0.0,
+            120f64 * std::f64::consts::PI / 180.0,
+            -10f64 * std::f64::consts::PI / 180.0,
+            0.0,
+            0.0
+        ]
+    );
+    assert_eq!(text.lines().count(), 1 + 10_001);
+    assert_eq!(text.lines().last().unwrap().split(',').next(), Some("10.0"));
+}
+
+#[test]
+fn summary_json_has_the_documented_keys() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args([
+            "simulate", "pendulum", "--method", "verlet", "--dt", "0.01", "--t-end", "2.005",
+        ])
+        .args([
+            "--set",
+            "theta=170deg",
+            "--every",
+            "0",
+            "--summary",
+            "s.json",
+        ])
+        .assert()
+        .success();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    for key in [
+        "system",
+        "method",
+        "parameters",
+        "dt",
+        "steps",
+        "rhs_evals",
+        "t_end",
+        "final",
+        "energy",
+        "wall_s",
+    ] {
+        assert!(s.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(s["system"], "pendulum");
+    assert_eq!(s["steps"], 201);
+    assert_eq!(s["t_end"], 2.005);
+    assert_eq!(s["final"]["t"], 2.005);
+    // Explicit Verlet reuses its last force: one evaluation per step, plus the first.
+    assert_eq!(s["rhs_evals"], 202);
+    for key in ["initial", "final", "max_abs_error", "max_rel_error"] {
+        assert!(s["energy"][key].is_f64(), "energy.{key}");
+    }
+    assert!(
+        !dir.path().join("trajectory.csv").exists(),
+        "--every 0 writes no trajectory"
+    );
+}
+
+#[test]
+fn npy_output_has_rows_and_columns() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args([
+            "simulate",
+            "oscillator",
+            "--steps",
+            "100",
+            "--every",
+            "10",
+            "--out",
+            "x.npy",
+        ])
+        .assert()
+        .success();
+    let a: ndarray::Array2<f64> = ndarray_npy::read_npy(dir.path().join("x.npy")).unwrap();
+    assert_eq!(a.shape(), &[11, 4]);
+    assert_eq!(a[[0, 1]], 1.0);
+    assert!((a[[10, 0]] - 0.1).abs() < 1e-15);
+}
+
+#[test]
+fn stdout_output_and_scenario_with_override() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(
+        dir.path().join("s.toml"),
+        "system = \"double\"\nmethod = \"verlet\"\ndt = 0.01\nsteps = 10\n[set]\ntheta1 = \"90deg\"\nm2 = 2\n",
+    )
+    .unwrap();
+    let out = pendula(dir.path())
+        .args([
+            "simulate",
+            "--scenario",
+            "s.toml",
+            "--set",
+            "m2=3",
+            "--steps",
+            "4",
+            "--out",
+            "-",
+            "--summary",
+            "s.json",
+        ])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let text = String::from_utf8(out).unwrap();
+    assert_eq!(text.lines().count(), 1 + 5);
+    assert!(
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("0.0,1.5707963267948966,-0.17453292519943295,0.0,0.0,")
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    assert_eq!(s["method"], "verlet");
+    assert_eq!(s["parameters"]["m2"], 3.0);
+    assert_eq!(s["steps"], 4);
+}
+
+#[test]
+fn list_shows_systems_and_methods() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args(["list", "systems"])
+        .assert()
+        .success()
+        .stdout(
+            predicate::str::contains("double")
+                .and(predicate::str::contains("m/s^2"))
+                .and(predicate::str::contains("120deg")),
+        );
+    pendula(dir.path())
+        .args(["list", "methods"])
+        .assert()
+        .success()
+        .stdout(
+            predicate::str::contains("symplectic-euler")
+                .and(predicate::str::contains("verlet"))
+                .and(predicate::str::contains("rk4")),
+        );
+}
+
+/// Runs `args` in an empty directory: exit code 2, the message contains every `needles`,
+/// and the directory is still empty.
+fn rejects(args: &[&str], needles: &[&str]) {
+    rejects_with(args, needles, 2, &[]);
+}
+
+fn rejects_with(args: &[&str], needles: &[&str], code: i32, setup: &[(&str, &str)]) {
+    let dir = TempDir::new().unwrap();
+    for (name, text) in setup {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let before = files(dir.path());
+    let assert = pendula(dir.path()).args(args).assert().code(code);
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
+    for needle in needles {
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: `{needle}` not in: {stderr}"
+        );
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(files(dir.path()), before, "{args:?} left files behind");
+}
+
+#[test]
+fn non_positive_length_and_mass() {
+    rejects(
+        &["simulate", "pendulum", "--set", "l=-1"],
+        &["-1", "`l`", "> 0"],
+    );
+    rejects(
+        &["simulate", "double", "--set", "m2=0"],
+        &["0", "`m2`", "> 0"],
+    );
+    rejects(
+        &["simulate", "double", "--set", "l1=-0.5", "--out", "x.csv"],
+        &["`l1`", "> 0"],
+    );
+}
+
+#[test]
+fn non_positive_dt_and_t_end() {
+    rejects(&["simulate", "--dt", "0"], &["dt", "> 0"]);
+    rejects(&["simulate", "--dt", "-0.1"], &["-0.1", "dt", "> 0"]);
+    rejects(&["simulate", "--t-end", "-5"], &["-5", "t-end", "> 0"]);
+    rejects(&["simulate", "--t-end", "0"], &["t-end", "> 0"]);
+    rejects(&["simulate", "--steps", "0"], &["steps", ">= 1"]);
+}
+
+#[test]
+fn nan_and_infinite_values() {
+    rejects(&["simulate", "--set", "m1=nan"], &["NaN", "`m1`", "finite"]);
+    rejects(
+        &["simulate", "--set", "theta1=inf"],
+        &["inf", "`theta1`", "finite"],
+    );
+    rejects(&["simulate", "--dt", "NaN"], &["NaN", "dt", "finite"]);
+    rejects(&["simulate", "--t-end", "inf"], &["inf", "t-end", "finite"]);
+}
+
+#[test]
+fn unknown_system_method_and_parameter_list_the_valid_names() {
+    rejects(
+        &["simulate", "triple"],
+        &["unknown system `triple`", "oscillator, pendulum, double"],
+    );
+    rejects(
+        &["simulate", "--method", "rk5"],
+        &[
+            "unknown method `rk5`",
+            "euler, rk4, symplectic-euler, verlet",
+        ],
+    );
+    rejects(
+        &["simulate", "double", "--set", "theta3=1"],
+        &["unknown name `theta3`", "m1, m2, l1, l2, g, theta1"],
+    );
+}
+
+#[test]
+fn unparsable_values() {
+    rejects(
+        &["simulate", "--set", "theta1=abc"],
+        &["`abc`", "theta1", "number", "deg"],
+    );
+    rejects(&["simulate", "--set", "theta1"], &["NAME=VALUE"]);
+    rejects(
+        &["simulate", "--set", "m1=2deg"],
+        &["`m1`", "only for angles", "kg"],
+    );
+    rejects(&["simulate", "--dt", "fast"], &["`fast`", "--dt"]);
+    rejects(&["simulate", "--steps", "1.5"], &["`1.5`", "--steps"]);
+    rejects(&["simulate", "--every", "-1"], &["`-1`", "--every"]);
+    rejects(
+        &["simulate", "--t-end", "1", "--steps", "3"],
+        &["cannot be used with"],
+    );
+}
+
+#[test]
+fn malformed_toml_names_its_line() {
+    rejects_with(
+        &["simulate", "--scenario", "bad.toml"],
+        &["bad.toml", "line 3"],
+        2,
+        &[("bad.toml", "system = \"double\"\ndt = 0.01\nt_end = = 4\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "typo.toml"],
+        &["typo.toml", "unknown field `tend`"],
+        2,
+        &[("typo.toml", "tend = 4\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "set.toml"],
+        &["`theta9`"],
+        2,
+        &[("set.toml", "[set]\ntheta9 = 1\n")],
+    );
+    rejects(
+        &["simulate", "--scenario", "missing.toml"],
+        &["missing.toml"],
+    );
+}
+
+#[test]
+fn unwritable_output_paths() {
+    rejects(
+        &["simulate", "--out", "no/such/dir/x.csv"],
+        &["--out", "no/such/dir/x.csv"],
+    );
+    rejects(
+        &["simulate", "--summary", "no/such/dir/s.json"],
+        &["--summary", "no/such/dir/s.json"],
+    );
+    rejects(&["simulate", "--out", "x.txt"], &["x.txt", ".csv, .npy"]);
+}
+
+#[test]
+fn output_path_that_is_a_directory() {
+    let dir = TempDir::new().unwrap();
+    std::fs::create_dir(dir.path().join("d.csv")).unwrap();
+    pendula(dir.path())
+        .args(["simulate", "--out", "d.csv"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("directory"));
+    assert_eq!(files(dir.path()), ["d.csv"]);
+}
+
+#[test]
+fn unmet_requirement_is_explained() {
+    rejects(
+        &[
+            "simulate",
+            "pendulum",
+            "--method",
+            "verlet",
+            "--set",
+            "damping=0.3",
+        ],
+        &["verlet", "Hamiltonian", "damping = 0.3", "try rk4"],
+    );
+}
+
+/// A run whose state overflows fails with exit code 1, names the time, and writes nothing.
+#[test]
+fn non_finite_state_names_the_time_and_leaves_no_file() {
+    rejects_with(
+        &[
+            "simulate",
+            "oscillator",
+            "--method",
+            "euler",
+            "--set",
+            "k=1e300",
+            "--dt",
+            "1",
+            "--out",
+            "x.csv",
+            "--summary",
+            "s.json",
+        ],
+        &["non-finite", "t = 3 s"],
+        1,
+        &[],
+    );
+}
+
+/// Existing data is not replaced by a failed run.
+#[test]
+fn failed_run_keeps_the_previous_file() {
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("x.csv"), "precious").unwrap();
+    pendula(dir.path())
+        .args([
+            "simulate",
+            "oscillator",
+            "--method",
+            "euler",
+            "--set",
+            "k=1e300",
+            "--dt",
+            "1",
+            "--out",
+            "x.csv",
+        ])
+        .assert()
+        .code(1);
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("x.csv")).unwrap(),
+        "precious"
+    );
+    assert_eq!(files(dir.path()), ["x.csv"]);
+}
