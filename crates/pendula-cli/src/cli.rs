@@ -43,12 +43,7 @@ pub struct SimulateArgs {
     #[arg(long, allow_hyphen_values = true, value_name = "H")]
     pub dt: Option<String>,
     /// End time, s; the last step is shortened to land on it [default: 10].
-    #[arg(
-        long,
-        allow_hyphen_values = true,
-        value_name = "T",
-        conflicts_with = "steps"
-    )]
+    #[arg(long, allow_hyphen_values = true, value_name = "T", conflicts_with = "steps")]
     pub t_end: Option<String>,
     /// Number of steps, instead of --t-end.
     #[arg(long, allow_hyphen_values = true, value_name = "N")]

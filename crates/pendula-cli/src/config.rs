@@ -62,13 +62,10 @@ struct Scenario {
 fn read_scenario(path: &Path) -> Result<Scenario> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read scenario file {}", path.display()))?;
-    let scenario: Scenario = toml::from_str(&text)
-        .map_err(|e| anyhow!("invalid scenario file {}: {e}", path.display()))?;
+    let scenario: Scenario =
+        toml::from_str(&text).map_err(|e| anyhow!("invalid scenario file {}: {e}", path.display()))?;
     if scenario.t_end.is_some() && scenario.steps.is_some() {
-        bail!(
-            "scenario file {} sets both t_end and steps; set one",
-            path.display()
-        );
+        bail!("scenario file {} sets both t_end and steps; set one", path.display());
     }
     Ok(scenario)
 }
@@ -101,20 +98,12 @@ pub fn parse_value(name: &str, text: &str, quantity: Option<&Quantity>) -> Resul
         _ => number.parse::<f64>().map_err(|_| {
             anyhow!(
                 "invalid value `{text}` for `{name}`: expected a number{}",
-                if angle {
-                    " (radians), or degrees with a deg suffix (120deg)"
-                } else {
-                    ""
-                }
+                if angle { " (radians), or degrees with a deg suffix (120deg)" } else { "" }
             )
         })?,
     };
     // (deg · π) / 180, the same rounding as the catalogue's defaults and the benchmark spec.
-    Ok(if factor == DEGREE {
-        value * pi / 180.0
-    } else {
-        value * factor
-    })
+    Ok(if factor == DEGREE { value * pi / 180.0 } else { value * factor })
 }
 
 fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f64> {
@@ -129,9 +118,7 @@ fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f6
 }
 
 fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
-    text.trim()
-        .parse()
-        .map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
+    text.trim().parse().map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
 }
 
 /// Validates `simulate`'s arguments (and scenario file) into a [`SimulateConfig`].
@@ -140,18 +127,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         Some(path) => read_scenario(path)?,
         None => Scenario::default(),
     };
-    let system_name = args
-        .system
-        .clone()
-        .or(scenario.system)
-        .unwrap_or_else(|| "double".into());
+    let system_name = args.system.clone().or(scenario.system).unwrap_or_else(|| "double".into());
     let info: &'static SystemInfo = system::find(&system_name)?;
-    let method = integrator::find(
-        args.method
-            .as_deref()
-            .or(scenario.method.as_deref())
-            .unwrap_or("rk4"),
-    )?;
+    let method = integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
 
     let mut settings = Vec::new();
     for (name, value) in &scenario.set {
@@ -159,9 +137,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         settings.push((name.clone(), toml_value(name, value, q)?));
     }
     for item in &args.set {
-        let (name, text) = item.split_once('=').ok_or_else(|| {
-            anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg")
-        })?;
+        let (name, text) = item
+            .split_once('=')
+            .ok_or_else(|| anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg"))?;
         let name = name.trim();
         let q = info.quantity(name)?;
         settings.push((name.to_owned(), parse_value(name, text, Some(q))?));
@@ -190,22 +168,10 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     let every = (every > 0).then_some(every);
     let out = match every {
         None => None,
-        Some(_) => Some(output(
-            args.out
-                .clone()
-                .or(scenario.out)
-                .unwrap_or_else(|| DEFAULT_OUT.into()),
-        )?),
+        Some(_) => Some(output(args.out.clone().or(scenario.out).unwrap_or_else(|| DEFAULT_OUT.into()))?),
     };
     let summary = args.summary.clone().or(scenario.summary);
-    Ok(SimulateConfig {
-        values,
-        method,
-        spec,
-        every,
-        out,
-        summary,
-    })
+    Ok(SimulateConfig { values, method, spec, every, out, summary })
 }
 
 fn output(path: PathBuf) -> Result<Output> {

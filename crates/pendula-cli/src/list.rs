@@ -10,11 +10,7 @@ use crate::cli::ListWhat;
 
 fn show_default(q: &Quantity) -> String {
     if q.is_angle() && q.default != 0.0 {
-        format!(
-            "{} ({}deg)",
-            q.default,
-            (q.default.to_degrees() * 1e9).round() / 1e9
-        )
+        format!("{} ({}deg)", q.default, (q.default.to_degrees() * 1e9).round() / 1e9)
     } else {
         format!("{}", q.default)
     }

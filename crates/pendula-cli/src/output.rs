@@ -36,25 +36,18 @@ impl AtomicFile {
             .suffix(".part")
             .tempfile_in(dir)
             .with_context(|| format!("cannot write {flag} {}", path.display()))?;
-        Ok(AtomicFile {
-            temp,
-            path: path.to_owned(),
-        })
+        Ok(AtomicFile { temp, path: path.to_owned() })
     }
 
     /// A second handle on the temporary file, for streaming into it.
     pub fn handle(&self) -> Result<File> {
-        self.temp
-            .reopen()
-            .with_context(|| format!("cannot write {}", self.path.display()))
+        self.temp.reopen().with_context(|| format!("cannot write {}", self.path.display()))
     }
 
     /// Renames the finished file into place.
     pub fn commit(self) -> Result<()> {
         let path = self.path;
-        self.temp
-            .persist(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        self.temp.persist(&path).with_context(|| format!("cannot write {}", path.display()))?;
         Ok(())
     }
 }
@@ -71,25 +64,16 @@ pub enum Sink {
 
 impl Sink {
     /// A sink for `output` with these column names; `file` is the open output file.
-    pub fn new(
-        output: Option<&Output>,
-        file: Option<&AtomicFile>,
-        columns: &[&str],
-    ) -> Result<Self> {
+    pub fn new(output: Option<&Output>, file: Option<&AtomicFile>, columns: &[&str]) -> Result<Self> {
         let writer: Box<dyn Write> = match output {
             None => return Ok(Sink::Discard),
             Some(Output::Npy(_)) => {
-                return Ok(Sink::Npy {
-                    rows: Vec::new(),
-                    columns: columns.len(),
-                });
+                return Ok(Sink::Npy { rows: Vec::new(), columns: columns.len() });
             }
             Some(Output::Stdout) => Box::new(std::io::stdout().lock()),
             Some(Output::Csv(_)) => Box::new(file.expect("a CSV file output has a file").handle()?),
         };
-        let mut csv = csv::WriterBuilder::new()
-            .buffer_capacity(1 << 16)
-            .from_writer(writer);
+        let mut csv = csv::WriterBuilder::new().buffer_capacity(1 << 16).from_writer(writer);
         csv.write_record(columns)?;
         Ok(Sink::Csv(Box::new(csv)))
     }

@@ -26,17 +26,11 @@ struct Writer<'a> {
 impl Observer for Writer<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
         let e = self.model.energy(s.t, s.y);
-        let stats = self.energy.get_or_insert(EnergyStats {
-            initial: e,
-            last: e,
-            max_abs_error: 0.0,
-        });
+        let stats = self.energy.get_or_insert(EnergyStats { initial: e, last: e, max_abs_error: 0.0 });
         stats.last = e;
         stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
         if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
-            let row = std::iter::once(s.t)
-                .chain(s.y.iter().copied())
-                .chain(std::iter::once(e));
+            let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
             if let Err(err) = self.sink.row(row) {
                 self.failure = Some(err);
                 return ControlFlow::Break(());
@@ -49,24 +43,14 @@ impl Observer for Writer<'_> {
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig {
-        values,
-        method,
-        spec,
-        every,
-        out,
-        summary,
-    } = &config;
+    let SimulateConfig { values, method, spec, every, out, summary } = &config;
     let info = values.info();
     // Open the outputs first: a path that cannot be written fails before the work.
     let out_file = match out {
         Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
         _ => None,
     };
-    let summary_file = summary
-        .as_deref()
-        .map(|p| AtomicFile::create(p, "--summary"))
-        .transpose()?;
+    let summary_file = summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
 
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
@@ -104,10 +88,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     for (q, v) in info.state.iter().zip(values.initial_state()) {
         initial.insert(q.name.into(), json!(v));
     }
-    let parameters: Map<String, Value> = values
-        .parameters()
-        .map(|(n, v)| (n.to_owned(), json!(v)))
-        .collect();
+    let parameters: Map<String, Value> = values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect();
     let steps = report.outcome.steps();
     if let Some(f) = summary_file {
         let doc = json!({
@@ -149,9 +130,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         energy.max_rel_error()
     )?;
     match out {
-        Some(Output::Csv(p) | Output::Npy(p)) => {
-            writeln!(err, "wrote {} ({rows} rows)", p.display())?
-        }
+        Some(Output::Csv(p) | Output::Npy(p)) => writeln!(err, "wrote {} ({rows} rows)", p.display())?,
         Some(Output::Stdout) => {}
         None => writeln!(err, "no trajectory written (--every 0)")?,
     }

@@ -34,21 +34,10 @@ fn default_run_writes_trajectory_csv() {
     let text = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t,theta1,theta2,omega1,omega2,energy"));
-    let first: Vec<f64> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let first: Vec<f64> = lines.next().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
     assert_eq!(
         first[..5],
-        [
-            0.0,
-            120f64 * std::f64::consts::PI / 180.0,
-            -10f64 * std::f64::consts::PI / 180.0,
-            0.0,
-            0.0
-        ]
+        [0.0, 120f64 * std::f64::consts::PI / 180.0, -10f64 * std::f64::consts::PI / 180.0, 0.0, 0.0]
     );
     assert_eq!(text.lines().count(), 1 + 10_001);
     assert_eq!(text.lines().last().unwrap().split(',').next(), Some("10.0"));
@@ -58,33 +47,15 @@ fn default_run_writes_trajectory_csv() {
 fn summary_json_has_the_documented_keys() {
     let dir = TempDir::new().unwrap();
     pendula(dir.path())
-        .args([
-            "simulate", "pendulum", "--method", "verlet", "--dt", "0.01", "--t-end", "2.005",
-        ])
-        .args([
-            "--set",
-            "theta=170deg",
-            "--every",
-            "0",
-            "--summary",
-            "s.json",
-        ])
+        .args(["simulate", "pendulum", "--method", "verlet", "--dt", "0.01", "--t-end", "2.005"])
+        .args(["--set", "theta=170deg", "--every", "0", "--summary", "s.json"])
         .assert()
         .success();
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
-    for key in [
-        "system",
-        "method",
-        "parameters",
-        "dt",
-        "steps",
-        "rhs_evals",
-        "t_end",
-        "final",
-        "energy",
-        "wall_s",
-    ] {
+    for key in
+        ["system", "method", "parameters", "dt", "steps", "rhs_evals", "t_end", "final", "energy", "wall_s"]
+    {
         assert!(s.get(key).is_some(), "missing {key}");
     }
     assert_eq!(s["system"], "pendulum");
@@ -96,26 +67,14 @@ fn summary_json_has_the_documented_keys() {
     for key in ["initial", "final", "max_abs_error", "max_rel_error"] {
         assert!(s["energy"][key].is_f64(), "energy.{key}");
     }
-    assert!(
-        !dir.path().join("trajectory.csv").exists(),
-        "--every 0 writes no trajectory"
-    );
+    assert!(!dir.path().join("trajectory.csv").exists(), "--every 0 writes no trajectory");
 }
 
 #[test]
 fn npy_output_has_rows_and_columns() {
     let dir = TempDir::new().unwrap();
     pendula(dir.path())
-        .args([
-            "simulate",
-            "oscillator",
-            "--steps",
-            "100",
-            "--every",
-            "10",
-            "--out",
-            "x.npy",
-        ])
+        .args(["simulate", "oscillator", "--steps", "100", "--every", "10", "--out", "x.npy"])
         .assert()
         .success();
     let a: ndarray::Array2<f64> = ndarray_npy::read_npy(dir.path().join("x.npy")).unwrap();
@@ -153,12 +112,7 @@ fn stdout_output_and_scenario_with_override() {
         .clone();
     let text = String::from_utf8(out).unwrap();
     assert_eq!(text.lines().count(), 1 + 5);
-    assert!(
-        text.lines()
-            .nth(1)
-            .unwrap()
-            .starts_with("0.0,1.5707963267948966,-0.17453292519943295,0.0,0.0,")
-    );
+    assert!(text.lines().nth(1).unwrap().starts_with("0.0,1.5707963267948966,-0.17453292519943295,0.0,0.0,"));
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
     assert_eq!(s["method"], "verlet");
@@ -169,24 +123,16 @@ fn stdout_output_and_scenario_with_override() {
 #[test]
 fn list_shows_systems_and_methods() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
-        .args(["list", "systems"])
-        .assert()
-        .success()
-        .stdout(
-            predicate::str::contains("double")
-                .and(predicate::str::contains("m/s^2"))
-                .and(predicate::str::contains("120deg")),
-        );
-    pendula(dir.path())
-        .args(["list", "methods"])
-        .assert()
-        .success()
-        .stdout(
-            predicate::str::contains("symplectic-euler")
-                .and(predicate::str::contains("verlet"))
-                .and(predicate::str::contains("rk4")),
-        );
+    pendula(dir.path()).args(["list", "systems"]).assert().success().stdout(
+        predicate::str::contains("double")
+            .and(predicate::str::contains("m/s^2"))
+            .and(predicate::str::contains("120deg")),
+    );
+    pendula(dir.path()).args(["list", "methods"]).assert().success().stdout(
+        predicate::str::contains("symplectic-euler")
+            .and(predicate::str::contains("verlet"))
+            .and(predicate::str::contains("rk4")),
+    );
 }
 
 /// Runs `args` in an empty directory: exit code 2, the message contains every `needles`,
@@ -204,10 +150,7 @@ fn rejects_with(args: &[&str], needles: &[&str], code: i32, setup: &[(&str, &str
     let assert = pendula(dir.path()).args(args).assert().code(code);
     let stderr = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
     for needle in needles {
-        assert!(
-            stderr.contains(needle),
-            "{args:?}: `{needle}` not in: {stderr}"
-        );
+        assert!(stderr.contains(needle), "{args:?}: `{needle}` not in: {stderr}");
     }
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(files(dir.path()), before, "{args:?} left files behind");
@@ -215,18 +158,9 @@ fn rejects_with(args: &[&str], needles: &[&str], code: i32, setup: &[(&str, &str
 
 #[test]
 fn non_positive_length_and_mass() {
-    rejects(
-        &["simulate", "pendulum", "--set", "l=-1"],
-        &["-1", "`l`", "> 0"],
-    );
-    rejects(
-        &["simulate", "double", "--set", "m2=0"],
-        &["0", "`m2`", "> 0"],
-    );
-    rejects(
-        &["simulate", "double", "--set", "l1=-0.5", "--out", "x.csv"],
-        &["`l1`", "> 0"],
-    );
+    rejects(&["simulate", "pendulum", "--set", "l=-1"], &["-1", "`l`", "> 0"]);
+    rejects(&["simulate", "double", "--set", "m2=0"], &["0", "`m2`", "> 0"]);
+    rejects(&["simulate", "double", "--set", "l1=-0.5", "--out", "x.csv"], &["`l1`", "> 0"]);
 }
 
 #[test]
@@ -241,26 +175,17 @@ fn non_positive_dt_and_t_end() {
 #[test]
 fn nan_and_infinite_values() {
     rejects(&["simulate", "--set", "m1=nan"], &["NaN", "`m1`", "finite"]);
-    rejects(
-        &["simulate", "--set", "theta1=inf"],
-        &["inf", "`theta1`", "finite"],
-    );
+    rejects(&["simulate", "--set", "theta1=inf"], &["inf", "`theta1`", "finite"]);
     rejects(&["simulate", "--dt", "NaN"], &["NaN", "dt", "finite"]);
     rejects(&["simulate", "--t-end", "inf"], &["inf", "t-end", "finite"]);
 }
 
 #[test]
 fn unknown_system_method_and_parameter_list_the_valid_names() {
-    rejects(
-        &["simulate", "triple"],
-        &["unknown system `triple`", "oscillator, pendulum, double"],
-    );
+    rejects(&["simulate", "triple"], &["unknown system `triple`", "oscillator, pendulum, double"]);
     rejects(
         &["simulate", "--method", "rk5"],
-        &[
-            "unknown method `rk5`",
-            "euler, rk4, symplectic-euler, verlet",
-        ],
+        &["unknown method `rk5`", "euler, rk4, symplectic-euler, verlet"],
     );
     rejects(
         &["simulate", "double", "--set", "theta3=1"],
@@ -270,22 +195,13 @@ fn unknown_system_method_and_parameter_list_the_valid_names() {
 
 #[test]
 fn unparsable_values() {
-    rejects(
-        &["simulate", "--set", "theta1=abc"],
-        &["`abc`", "theta1", "number", "deg"],
-    );
+    rejects(&["simulate", "--set", "theta1=abc"], &["`abc`", "theta1", "number", "deg"]);
     rejects(&["simulate", "--set", "theta1"], &["NAME=VALUE"]);
-    rejects(
-        &["simulate", "--set", "m1=2deg"],
-        &["`m1`", "only for angles", "kg"],
-    );
+    rejects(&["simulate", "--set", "m1=2deg"], &["`m1`", "only for angles", "kg"]);
     rejects(&["simulate", "--dt", "fast"], &["`fast`", "--dt"]);
     rejects(&["simulate", "--steps", "1.5"], &["`1.5`", "--steps"]);
     rejects(&["simulate", "--every", "-1"], &["`-1`", "--every"]);
-    rejects(
-        &["simulate", "--t-end", "1", "--steps", "3"],
-        &["cannot be used with"],
-    );
+    rejects(&["simulate", "--t-end", "1", "--steps", "3"], &["cannot be used with"]);
 }
 
 #[test]
@@ -308,22 +224,13 @@ fn malformed_toml_names_its_line() {
         2,
         &[("set.toml", "[set]\ntheta9 = 1\n")],
     );
-    rejects(
-        &["simulate", "--scenario", "missing.toml"],
-        &["missing.toml"],
-    );
+    rejects(&["simulate", "--scenario", "missing.toml"], &["missing.toml"]);
 }
 
 #[test]
 fn unwritable_output_paths() {
-    rejects(
-        &["simulate", "--out", "no/such/dir/x.csv"],
-        &["--out", "no/such/dir/x.csv"],
-    );
-    rejects(
-        &["simulate", "--summary", "no/such/dir/s.json"],
-        &["--summary", "no/such/dir/s.json"],
-    );
+    rejects(&["simulate", "--out", "no/such/dir/x.csv"], &["--out", "no/such/dir/x.csv"]);
+    rejects(&["simulate", "--summary", "no/such/dir/s.json"], &["--summary", "no/such/dir/s.json"]);
     rejects(&["simulate", "--out", "x.txt"], &["x.txt", ".csv, .npy"]);
 }
 
@@ -342,14 +249,7 @@ fn output_path_that_is_a_directory() {
 #[test]
 fn unmet_requirement_is_explained() {
     rejects(
-        &[
-            "simulate",
-            "pendulum",
-            "--method",
-            "verlet",
-            "--set",
-            "damping=0.3",
-        ],
+        &["simulate", "pendulum", "--method", "verlet", "--set", "damping=0.3"],
         &["verlet", "Hamiltonian", "damping = 0.3", "try rk4"],
     );
 }
@@ -398,9 +298,6 @@ fn failed_run_keeps_the_previous_file() {
         ])
         .assert()
         .code(1);
-    assert_eq!(
-        std::fs::read_to_string(dir.path().join("x.csv")).unwrap(),
-        "precious"
-    );
+    assert_eq!(std::fs::read_to_string(dir.path().join("x.csv")).unwrap(), "precious");
     assert_eq!(files(dir.path()), ["x.csv"]);
 }

@@ -33,11 +33,7 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
         let a = self.0.observe(sample);
         let b = self.1.observe(sample);
-        if a.is_break() || b.is_break() {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
+        if a.is_break() || b.is_break() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
     }
 }
 
@@ -123,10 +119,7 @@ pub struct EnergyTracker<F> {
 impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
     /// Tracks `energy(t, y)`.
     pub fn new(energy: F) -> Self {
-        EnergyTracker {
-            energy,
-            stats: None,
-        }
+        EnergyTracker { energy, stats: None }
     }
 
     /// Statistics so far (all zero before the first state).
@@ -138,11 +131,7 @@ impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
 impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergyTracker<F> {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
         let e = (self.energy)(sample.t, sample.y);
-        let stats = self.stats.get_or_insert(EnergyStats {
-            initial: e,
-            last: e,
-            max_abs_error: 0.0,
-        });
+        let stats = self.stats.get_or_insert(EnergyStats { initial: e, last: e, max_abs_error: 0.0 });
         stats.last = e;
         stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
         ControlFlow::Continue(())
@@ -155,10 +144,6 @@ pub struct StopWhen<F>(pub F);
 
 impl<F: FnMut(&Sample<'_>) -> bool> Observer for StopWhen<F> {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        if (self.0)(sample) {
-            ControlFlow::Break(())
-        } else {
-            ControlFlow::Continue(())
-        }
+        if (self.0)(sample) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
     }
 }

@@ -48,11 +48,8 @@ pub struct Schedule {
 impl RunSpec {
     /// Checks the values and works out the steps.
     pub fn schedule(&self) -> Result<Schedule, Error> {
-        let invalid = |name: &str, value: f64, allowed| Error::InvalidValue {
-            name: name.to_owned(),
-            value,
-            allowed,
-        };
+        let invalid =
+            |name: &str, value: f64, allowed| Error::InvalidValue { name: name.to_owned(), value, allowed };
         let h = self.h;
         if !(h.is_finite() && h > 0.0) {
             return Err(invalid("dt", h, "the step size must be finite and > 0"));
@@ -65,46 +62,26 @@ impl RunSpec {
                 if n == 0 {
                     return Err(invalid("steps", 0.0, "the number of steps must be >= 1"));
                 }
-                Ok(Schedule {
-                    steps: n,
-                    last_h: h,
-                    t_end: self.t0 + n as f64 * h,
-                })
+                Ok(Schedule { steps: n, last_h: h, t_end: self.t0 + n as f64 * h })
             }
             End::Time(t_end) => {
                 let span = t_end - self.t0;
                 if !(t_end.is_finite() && span > 0.0) {
-                    return Err(invalid(
-                        "t-end",
-                        t_end,
-                        "the end time must be finite and > 0",
-                    ));
+                    return Err(invalid("t-end", t_end, "the end time must be finite and > 0"));
                 }
                 let ratio = span / h;
                 if ratio > MAX_STEPS {
-                    return Err(invalid(
-                        "dt",
-                        h,
-                        "the step size gives more than 10^13 steps",
-                    ));
+                    return Err(invalid("dt", h, "the step size gives more than 10^13 steps"));
                 }
                 // A whole number of steps up to rounding (10/1e-3 = 9999.999…): keep every
                 // step at h, as a fixed-step user expects, and land on t_end exactly.
                 let whole = ratio.round();
                 if whole >= 1.0 && (ratio - whole).abs() <= 1e-9 * whole {
-                    return Ok(Schedule {
-                        steps: whole as u64,
-                        last_h: h,
-                        t_end,
-                    });
+                    return Ok(Schedule { steps: whole as u64, last_h: h, t_end });
                 }
                 let steps = ratio.ceil().max(1.0);
                 let last_h = t_end - (self.t0 + (steps - 1.0) * h);
-                Ok(Schedule {
-                    steps: steps as u64,
-                    last_h,
-                    t_end,
-                })
+                Ok(Schedule { steps: steps as u64, last_h, t_end })
             }
         }
     }
@@ -160,31 +137,17 @@ impl<S: ?Sized> Simulation<'_, S> {
     /// # Errors
     /// An invalid [`RunSpec`]; [`Error::NonFinite`] at the first non-finite state; the
     /// stepper's own errors.
-    pub fn run<St, O>(
-        &self,
-        stepper: &mut St,
-        y: &mut [f64],
-        observer: &mut O,
-    ) -> Result<Outcome, Error>
+    pub fn run<St, O>(&self, stepper: &mut St, y: &mut [f64], observer: &mut O) -> Result<Outcome, Error>
     where
         St: Stepper<S> + ?Sized,
         O: Observer + ?Sized,
     {
-        let Schedule {
-            steps,
-            last_h,
-            t_end,
-        } = self.spec.schedule()?;
+        let Schedule { steps, last_h, t_end } = self.spec.schedule()?;
         let (t0, h) = (self.spec.t0, self.spec.h);
         if y.iter().any(|v| !v.is_finite()) {
             return Err(Error::NonFinite { t: t0 });
         }
-        let first = Sample {
-            step: 0,
-            t: t0,
-            y,
-            last: false,
-        };
+        let first = Sample { step: 0, t: t0, y, last: false };
         if observer.observe(&first).is_break() {
             return Ok(Outcome::Stopped { steps: 0, t: t0 });
         }
@@ -197,19 +160,8 @@ impl<S: ?Sized> Simulation<'_, S> {
             if y.iter().any(|v| !v.is_finite()) {
                 return Err(Error::NonFinite { t: t_next });
             }
-            if observer
-                .observe(&Sample {
-                    step: k,
-                    t: t_next,
-                    y,
-                    last,
-                })
-                .is_break()
-            {
-                return Ok(Outcome::Stopped {
-                    steps: k,
-                    t: t_next,
-                });
+            if observer.observe(&Sample { step: k, t: t_next, y, last }).is_break() {
+                return Ok(Outcome::Stopped { steps: k, t: t_next });
             }
         }
         Ok(Outcome::ReachedEnd { steps, t: t_end })
@@ -249,50 +201,26 @@ pub fn solve<M: Model>(
         Scheme::ExplicitRk(tableau) => {
             let system = Counted::new(model);
             let mut y = y0.to_vec();
-            let run = Simulation {
-                system: &system,
-                spec: *spec,
-            };
+            let run = Simulation { system: &system, spec: *spec };
             let outcome = run.run(&mut ExplicitRk::new(tableau, dim), &mut y, observer)?;
-            Ok(Report {
-                outcome,
-                rhs_evals: system.evaluations(),
-                state: y,
-            })
+            Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
         }
         Scheme::Partitioned(partition) => {
-            let form = model
-                .hamiltonian_form()
-                .map_err(|reason| Error::UnmetRequirement {
-                    method: method.name,
-                    needs: method.requirement.describe(),
-                    reason,
-                    suggestion: "rk4",
-                })?;
+            let form = model.hamiltonian_form().map_err(|reason| Error::UnmetRequirement {
+                method: method.name,
+                needs: method.requirement.describe(),
+                reason,
+                suggestion: "rk4",
+            })?;
             let system = Counted::new(&form);
             let mut z = vec![0.0; dim];
             model.to_momenta(y0, &mut z);
-            let mut shown = ToVelocities {
-                model,
-                y: vec![0.0; dim],
-                inner: observer,
-            };
-            let run = Simulation {
-                system: &system,
-                spec: *spec,
-            };
-            let outcome = run.run(
-                &mut PartitionedStepper::new(partition, dim / 2),
-                &mut z,
-                &mut shown,
-            )?;
+            let mut shown = ToVelocities { model, y: vec![0.0; dim], inner: observer };
+            let run = Simulation { system: &system, spec: *spec };
+            let outcome = run.run(&mut PartitionedStepper::new(partition, dim / 2), &mut z, &mut shown)?;
             let mut y = vec![0.0; dim];
             model.to_velocities(&z, &mut y);
-            Ok(Report {
-                outcome,
-                rhs_evals: system.evaluations(),
-                state: y,
-            })
+            Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
         }
     }
 }
@@ -307,10 +235,7 @@ struct ToVelocities<'a, M> {
 impl<M: Model> Observer for ToVelocities<'_, M> {
     fn observe(&mut self, sample: &Sample<'_>) -> std::ops::ControlFlow<()> {
         self.model.to_velocities(sample.y, &mut self.y);
-        self.inner.observe(&Sample {
-            y: &self.y,
-            ..*sample
-        })
+        self.inner.observe(&Sample { y: &self.y, ..*sample })
     }
 }
 
@@ -323,11 +248,7 @@ struct Counted<'a, S: ?Sized> {
 
 impl<'a, S: ?Sized> Counted<'a, S> {
     fn new(inner: &'a S) -> Self {
-        Counted {
-            inner,
-            rhs: Cell::new(0),
-            halves: Cell::new(0),
-        }
+        Counted { inner, rhs: Cell::new(0), halves: Cell::new(0) }
     }
 
     fn evaluations(&self) -> u64 {

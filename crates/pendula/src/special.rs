@@ -44,8 +44,7 @@ pub fn carlson_rf(x: f64, y: f64, z: f64) -> f64 {
         if dx.abs().max(dy.abs()).max(dz.abs()) < 1e-3 {
             let e2 = dx * dy - dz * dz;
             let e3 = dx * dy * dz;
-            return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0)
-                / mu.sqrt();
+            return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / mu.sqrt();
         }
         let (sx, sy, sz) = (x.sqrt(), y.sqrt(), z.sqrt());
         let lambda = sx * (sy + sz) + sy * sz;
@@ -62,11 +61,7 @@ pub fn ellip_f(phi: f64, k: f64) -> f64 {
     let r = phi - turns * PI;
     let (s, c) = r.sin_cos();
     let partial = s * carlson_rf(c * c, 1.0 - k * k * s * s, 1.0);
-    if turns == 0.0 {
-        partial
-    } else {
-        partial + 2.0 * turns * ellip_k(k)
-    }
+    if turns == 0.0 { partial } else { partial + 2.0 * turns * ellip_k(k) }
 }
 
 /// Jacobi elliptic functions at argument u for modulus 0 ≤ |k| < 1.
@@ -103,10 +98,5 @@ pub fn jacobi(u: f64, k: f64) -> Jacobi {
         phi = 0.5 * (phi + (c[i] / a[i] * phi.sin()).asin());
     }
     let (sn, cn) = phi.sin_cos();
-    Jacobi {
-        am: phi,
-        sn,
-        cn,
-        dn: (1.0 - m * sn * sn).sqrt(),
-    }
+    Jacobi { am: phi, sn, cn, dn: (1.0 - m * sn * sn).sqrt() }
 }

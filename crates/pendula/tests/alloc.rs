@@ -54,11 +54,7 @@ fn allocations_during(f: impl FnOnce()) -> u64 {
 /// counting allocations.
 fn check<M: Model>(v: &Values) {
     let model = M::from_values(v);
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 1e-3,
-        end: End::Steps(100),
-    };
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Steps(100) };
     for method in METHODS {
         let mut y = v.initial_state().to_vec();
         let count = match method.scheme {
@@ -66,12 +62,7 @@ fn check<M: Model>(v: &Values) {
                 let mut stepper = ExplicitRk::new(t, y.len());
                 stepper.step(&model, 0.0, 1e-3, &mut y).unwrap();
                 allocations_during(|| {
-                    Simulation {
-                        system: &model,
-                        spec,
-                    }
-                    .run(&mut stepper, &mut y, &mut Ignore)
-                    .unwrap();
+                    Simulation { system: &model, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
                 })
             }
             Scheme::Partitioned(p) => {
@@ -79,31 +70,17 @@ fn check<M: Model>(v: &Values) {
                 let mut stepper = PartitionedStepper::new(p, y.len() / 2);
                 stepper.step(&form, 0.0, 1e-3, &mut y).unwrap();
                 allocations_during(|| {
-                    Simulation {
-                        system: &form,
-                        spec,
-                    }
-                    .run(&mut stepper, &mut y, &mut Ignore)
-                    .unwrap();
+                    Simulation { system: &form, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
                 })
             }
         };
-        assert_eq!(
-            count,
-            0,
-            "{} on {} allocated {count} times",
-            method.name,
-            M::INFO.name
-        );
+        assert_eq!(count, 0, "{} on {} allocated {count} times", method.name, M::INFO.name);
     }
 }
 
 #[test]
 fn steps_allocate_nothing() {
-    check::<Oscillator>(&values(
-        "oscillator",
-        &[("drive_amplitude", 0.5), ("drive_frequency", 2.0)],
-    ));
+    check::<Oscillator>(&values("oscillator", &[("drive_amplitude", 0.5), ("drive_frequency", 2.0)]));
     check::<Pendulum>(&values("pendulum", &[]));
     check::<DoublePendulum>(&values("double", &[]));
 }

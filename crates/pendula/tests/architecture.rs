@@ -10,10 +10,7 @@ fn architecture_paths_exist() {
     for (i, piece) in text.split('`').enumerate() {
         // Odd pieces are inside backticks; paths are the ones with a slash and no spaces.
         if i % 2 == 1 && piece.contains('/') && !piece.contains(' ') && !piece.contains("::") {
-            assert!(
-                root.join(piece).exists(),
-                "ARCHITECTURE.md names `{piece}`, which does not exist"
-            );
+            assert!(root.join(piece).exists(), "ARCHITECTURE.md names `{piece}`, which does not exist");
             checked += 1;
         }
     }

@@ -1,6 +1,7 @@
 //! Every method × every reference problem: the measured order of convergence equals the
 //! declared order. Methods enrol by being in `METHODS`; problems are listed here.
 
+use pendula::Error;
 use pendula::integrator::{METHODS, Method, Requirement};
 use pendula::system::oscillator::Oscillator;
 use pendula::system::pendulum::Pendulum;
@@ -24,6 +25,11 @@ fn problems() -> Vec<Problem> {
     let osc = values("oscillator", &[("x", 1.0), ("v", 0.5)]);
     let o = Oscillator::from_values(&osc);
     let (x, v) = o.exact(10.0, 1.0, 0.5);
+    let drive = [("x", 1.0), ("v", 0.5), ("drive_amplitude", 0.5), ("drive_frequency", 1.7)];
+    let driven = values("oscillator", &drive);
+    let (xd, vd) = Oscillator::from_values(&driven).exact(10.0, 1.0, 0.5);
+    let damped = values("oscillator", &[drive.as_slice(), &[("c", 0.3)]].concat());
+    let (xc, vc) = Oscillator::from_values(&damped).exact(10.0, 1.0, 0.5);
     let pend = values("pendulum", &[("theta", 1.0), ("omega", 0.0)]);
     let (th, w) = Pendulum::from_values(&pend).exact(5.0, 1.0, 0.0).unwrap();
     let deg = std::f64::consts::PI / 180.0;
@@ -37,6 +43,23 @@ fn problems() -> Vec<Problem> {
             high_order_h: Some([0.1, 0.05, 0.025, 0.0125]),
         },
         Problem {
+            name: "driven oscillator (closed form)",
+            values: driven,
+            t_end: 10.0,
+            reference: vec![xd, vd],
+            low_order_h: [0.02, 0.01, 0.005, 0.0025],
+            high_order_h: Some([0.1, 0.05, 0.025, 0.0125]),
+        },
+        Problem {
+            // Not Hamiltonian: the symplectic methods must refuse it.
+            name: "damped driven oscillator (closed form)",
+            values: damped,
+            t_end: 10.0,
+            reference: vec![xc, vc],
+            low_order_h: [0.02, 0.01, 0.005, 0.0025],
+            high_order_h: Some([0.1, 0.05, 0.025, 0.0125]),
+        },
+        Problem {
             name: "pendulum at 1 rad (Jacobi elliptic solution)",
             values: pend,
             t_end: 5.0,
@@ -46,10 +69,7 @@ fn problems() -> Vec<Problem> {
         },
         Problem {
             name: "double pendulum A (mpmath Taylor, 30 digits)",
-            values: values(
-                "double",
-                &[("theta1", 120.0 * deg), ("theta2", -10.0 * deg)],
-            ),
+            values: values("double", &[("theta1", 120.0 * deg), ("theta2", -10.0 * deg)]),
             t_end: 2.0,
             reference: vec![
                 1.1528016719796439749,
@@ -89,31 +109,24 @@ fn problems() -> Vec<Problem> {
     ]
 }
 
+/// The fitted order, or `None` when the problem has no step range for this order or the
+/// method does not apply to it (only an unmet requirement may say so).
 fn measured_order(problem: &Problem, method: &Method) -> Option<f64> {
-    let hs = if method.order <= 2 {
-        problem.low_order_h
-    } else {
-        problem.high_order_h?
-    };
-    let errors: Vec<f64> = hs
-        .iter()
-        .map(|&h| {
-            max_diff(
-                &final_state(&problem.values, method, h, problem.t_end),
-                &problem.reference,
-            )
-        })
-        .collect();
+    let hs = if method.order <= 2 { problem.low_order_h } else { problem.high_order_h? };
+    let mut errors = Vec::new();
+    for h in hs {
+        match final_state(&problem.values, method, h, problem.t_end) {
+            Ok(state) => errors.push(max_diff(&state, &problem.reference)),
+            Err(Error::UnmetRequirement { .. }) if method.requirement != Requirement::Any => return None,
+            Err(e) => panic!("{} on {}: {e}", method.name, problem.name),
+        }
+    }
     let order = fitted_order(&hs, &errors);
     eprintln!(
         "{:<17} on {:<48} errors {} -> order {order:.3}",
         method.name,
         problem.name,
-        errors
-            .iter()
-            .map(|e| format!("{e:.3e}"))
-            .collect::<Vec<_>>()
-            .join(" ")
+        errors.iter().map(|e| format!("{e:.3e}")).collect::<Vec<_>>().join(" ")
     );
     Some(order)
 }
@@ -137,10 +150,11 @@ fn ref_measured_order_equals_declared_order() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
-    assert!(
-        measured >= 4 * METHODS.len() - 1,
-        "only {measured} pairs measured"
-    );
+    // Every pair but the ones explained as skipped: order > 2 on problem A, and the
+    // Hamiltonian methods on the damped oscillator.
+    let hamiltonian = METHODS.iter().filter(|m| m.requirement == Requirement::Hamiltonian).count();
+    let high = METHODS.iter().filter(|m| m.order > 2).count();
+    assert_eq!(measured, problems().len() * METHODS.len() - high - hamiltonian);
 }
 
 /// Σ b = 1 and the row sums of A equal c, for every Runge–Kutta tableau.
@@ -152,11 +166,7 @@ fn tableaus_are_consistent() {
             let sum: f64 = t.b.iter().sum::<f64>() / t.denominator;
             assert!((sum - 1.0).abs() < 1e-15, "{}: Σb = {sum}", method.name);
             for (row, c) in t.a.iter().zip(t.c) {
-                assert!(
-                    (row.iter().sum::<f64>() - c).abs() < 1e-15,
-                    "{}",
-                    method.name
-                );
+                assert!((row.iter().sum::<f64>() - c).abs() < 1e-15, "{}", method.name);
             }
             assert_eq!(t.a.len(), t.b.len());
             assert_eq!(method.requirement, Requirement::Any);

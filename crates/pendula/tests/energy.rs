@@ -43,23 +43,10 @@ impl Observer for Tenths<'_> {
 fn tenths(method: &Method, steps: u64) -> Result<(f64, f64), Error> {
     let values = values("double", &[]);
     let model = values.build();
-    let mut obs = Tenths {
-        model: &*model,
-        steps,
-        e0: None,
-        first: 0.0,
-        last: 0.0,
-    };
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 0.01,
-        end: End::Steps(steps),
-    };
+    let mut obs = Tenths { model: &*model, steps, e0: None, first: 0.0, last: 0.0 };
+    let spec = RunSpec { t0: 0.0, h: 0.01, end: End::Steps(steps) };
     model.solve(method, values.initial_state(), &spec, &mut obs)?;
-    eprintln!(
-        "{}: first tenth {:.3e} J, last tenth {:.3e} J",
-        method.name, obs.first, obs.last
-    );
+    eprintln!("{}: first tenth {:.3e} J, last tenth {:.3e} J", method.name, obs.first, obs.last);
     Ok((obs.first, obs.last))
 }
 
@@ -80,14 +67,8 @@ fn ref_explicit_methods_drift() {
     // 100 J (from 0.149 J) once the pendulum whirls: over 10⁶ steps both tenths are already
     // about a thousand times the initial energy and ~100 times Verlet's bounded error.
     let (first, last) = tenths(&integrator::explicit_rk::EULER, 1000).unwrap();
-    assert!(
-        last > 5.0 * first,
-        "euler over 10^3 steps: {first:e} then {last:e}"
-    );
+    assert!(last > 5.0 * first, "euler over 10^3 steps: {first:e} then {last:e}");
     let (first, _) = tenths(&integrator::explicit_rk::EULER, STEPS).unwrap();
     let (_, verlet) = tenths(integrator::find("verlet").unwrap(), STEPS).unwrap();
-    assert!(
-        first > 100.0 * verlet,
-        "euler {first:e} vs verlet {verlet:e}"
-    );
+    assert!(first > 100.0 * verlet, "euler {first:e} vs verlet {verlet:e}");
 }

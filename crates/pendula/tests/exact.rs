@@ -5,13 +5,7 @@ use pendula::system::oscillator::{Oscillator, Regime};
 use pendula::system::pendulum::Pendulum;
 
 fn oscillator(c: f64, f: f64, w: f64) -> Oscillator {
-    Oscillator {
-        m: 2.0,
-        k: 8.0,
-        c,
-        drive_amplitude: f,
-        drive_frequency: w,
-    }
+    Oscillator { m: 2.0, k: 8.0, c, drive_amplitude: f, drive_frequency: w }
 }
 
 /// The exact solution satisfies m x'' + c x' + k x = F cos(Ω t), v = x', and the initial
@@ -33,10 +27,7 @@ fn ref_oscillator_solves_its_ode() {
         let o = oscillator(c, f, w);
         assert_eq!(o.regime(), regime);
         let (x, v) = o.exact(0.0, x0, v0);
-        assert!(
-            (x - x0).abs() < 1e-15 && (v - v0).abs() < 1e-15,
-            "c={c} f={f} w={w}"
-        );
+        assert!((x - x0).abs() < 1e-15 && (v - v0).abs() < 1e-15, "c={c} f={f} w={w}");
         let e = 1e-4;
         for t in [0.3, 1.7, 4.2] {
             let (xm, _) = o.exact(t - e, x0, v0);
@@ -46,10 +37,7 @@ fn ref_oscillator_solves_its_ode() {
             let ddx = (xp - 2.0 * x + xm) / (e * e);
             assert!((dx - v).abs() < 1e-7, "v = x' at c={c} t={t}");
             let residual = o.m * ddx + o.c * v + o.k * x - f * (w * t).cos();
-            assert!(
-                residual.abs() < 1e-5,
-                "residual {residual} at c={c} f={f} w={w} t={t}"
-            );
+            assert!(residual.abs() < 1e-5, "residual {residual} at c={c} f={f} w={w} t={t}");
         }
     }
 }
@@ -80,42 +68,14 @@ const PENDULUM: Pendulum = Pendulum {
 #[test]
 fn ref_pendulum_exact_solution() {
     for (th0, w0, t, want) in [
-        (
-            60.0,
-            0.0,
-            1.3,
-            [-0.83949406409888873323, 1.8146654343314863416],
-        ),
-        (
-            170.0,
-            0.0,
-            2.5,
-            [-2.9646401419693288368, 0.09110448365875616632],
-        ),
-        (
-            30.0,
-            -2.0,
-            0.7,
-            [-0.83962745813802492483, -0.33112552074010137716],
-        ),
-        (
-            10.0,
-            7.0,
-            1.1,
-            [5.229244143880671479, 6.2748120417297432517],
-        ),
+        (60.0, 0.0, 1.3, [-0.83949406409888873323, 1.8146654343314863416]),
+        (170.0, 0.0, 2.5, [-2.9646401419693288368, 0.09110448365875616632]),
+        (30.0, -2.0, 0.7, [-0.83962745813802492483, -0.33112552074010137716]),
+        (10.0, 7.0, 1.1, [5.229244143880671479, 6.2748120417297432517]),
     ] {
         let (th, w) = PENDULUM.exact(t, f64::to_radians(th0), w0).unwrap();
-        assert!(
-            (th - want[0]).abs() < 1e-12,
-            "theta0={th0}: {th} vs {}",
-            want[0]
-        );
-        assert!(
-            (w - want[1]).abs() < 1e-12,
-            "theta0={th0}: {w} vs {}",
-            want[1]
-        );
+        assert!((th - want[0]).abs() < 1e-12, "theta0={th0}: {th} vs {}", want[0]);
+        assert!((w - want[1]).abs() < 1e-12, "theta0={th0}: {w} vs {}", want[1]);
     }
 }
 

@@ -12,8 +12,13 @@ use pendula::{End, RunSpec, Simulation};
 use proptest::prelude::*;
 
 fn pendulum() -> impl Strategy<Value = DoublePendulum> {
-    (0.2..5.0, 0.2..5.0, 0.2..3.0, 0.2..3.0, 1.0..20.0)
-        .prop_map(|(m1, m2, l1, l2, g)| DoublePendulum { m1, m2, l1, l2, g })
+    (0.2..5.0, 0.2..5.0, 0.2..3.0, 0.2..3.0, 1.0..20.0).prop_map(|(m1, m2, l1, l2, g)| DoublePendulum {
+        m1,
+        m2,
+        l1,
+        l2,
+        g,
+    })
 }
 
 fn state() -> impl Strategy<Value = [f64; 4]> {
@@ -94,41 +99,18 @@ proptest! {
 /// enough that the two discretizations differ by less than 1e-12.
 #[test]
 fn ref_lagrangian_and_hamiltonian_forms_agree_over_10_s() {
-    let sys = DoublePendulum {
-        m1: 1.0,
-        m2: 1.0,
-        l1: 1.0,
-        l2: 1.0,
-        g: 9.81,
-    };
+    let sys = DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
     let form = sys.form();
-    let Scheme::ExplicitRk(tableau) = RK4.scheme else {
-        unreachable!()
-    };
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 2e-4,
-        end: End::Time(10.0),
-    };
+    let Scheme::ExplicitRk(tableau) = RK4.scheme else { unreachable!() };
+    let spec = RunSpec { t0: 0.0, h: 2e-4, end: End::Time(10.0) };
     let mut y = [0.5, -0.3, 0.0, 0.0];
     let mut z = [0.0; 4];
     sys.to_momenta(&y, &mut z);
-    Simulation { system: &sys, spec }
-        .run(&mut ExplicitRk::new(tableau, 4), &mut y, &mut Ignore)
-        .unwrap();
-    Simulation {
-        system: &form,
-        spec,
-    }
-    .run(&mut ExplicitRk::new(tableau, 4), &mut z, &mut Ignore)
-    .unwrap();
+    Simulation { system: &sys, spec }.run(&mut ExplicitRk::new(tableau, 4), &mut y, &mut Ignore).unwrap();
+    Simulation { system: &form, spec }.run(&mut ExplicitRk::new(tableau, 4), &mut z, &mut Ignore).unwrap();
     let mut back = [0.0; 4];
     sys.to_velocities(&z, &mut back);
-    let diff = y
-        .iter()
-        .zip(&back)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let diff = y.iter().zip(&back).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     eprintln!("Lagrangian vs Hamiltonian after 10 s: {diff:.2e}");
     assert!(diff < 2e-12, "{diff:e}");
 }

@@ -8,13 +8,7 @@ use crate::support::values;
 
 #[test]
 fn whole_number_of_steps_keeps_every_step_at_h() {
-    let s = RunSpec {
-        t0: 0.0,
-        h: 1e-3,
-        end: End::Time(10.0),
-    }
-    .schedule()
-    .unwrap();
+    let s = RunSpec { t0: 0.0, h: 1e-3, end: End::Time(10.0) }.schedule().unwrap();
     assert_eq!((s.steps, s.last_h, s.t_end), (10_000, 1e-3, 10.0));
 }
 
@@ -23,14 +17,8 @@ fn last_step_is_shortened_to_land_on_t_end() {
     let v = values("oscillator", &[]);
     let model = v.build();
     let mut rec = Recorder::default();
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 0.3,
-        end: End::Time(1.0),
-    };
-    let report = model
-        .solve(&EULER, v.initial_state(), &spec, &mut rec)
-        .unwrap();
+    let spec = RunSpec { t0: 0.0, h: 0.3, end: End::Time(1.0) };
+    let report = model.solve(&EULER, v.initial_state(), &spec, &mut rec).unwrap();
     assert_eq!(report.outcome, Outcome::ReachedEnd { steps: 4, t: 1.0 });
     let times: Vec<f64> = rec.rows.chunks(3).map(|r| r[0]).collect();
     assert_eq!(times.len(), 5);
@@ -41,46 +29,11 @@ fn last_step_is_shortened_to_land_on_t_end() {
 #[test]
 fn invalid_specs_are_errors() {
     for (spec, name) in [
-        (
-            RunSpec {
-                t0: 0.0,
-                h: 0.0,
-                end: End::Time(1.0),
-            },
-            "dt",
-        ),
-        (
-            RunSpec {
-                t0: 0.0,
-                h: f64::NAN,
-                end: End::Time(1.0),
-            },
-            "dt",
-        ),
-        (
-            RunSpec {
-                t0: 0.0,
-                h: 0.1,
-                end: End::Time(-1.0),
-            },
-            "t-end",
-        ),
-        (
-            RunSpec {
-                t0: 0.0,
-                h: 0.1,
-                end: End::Time(f64::INFINITY),
-            },
-            "t-end",
-        ),
-        (
-            RunSpec {
-                t0: 0.0,
-                h: 0.1,
-                end: End::Steps(0),
-            },
-            "steps",
-        ),
+        (RunSpec { t0: 0.0, h: 0.0, end: End::Time(1.0) }, "dt"),
+        (RunSpec { t0: 0.0, h: f64::NAN, end: End::Time(1.0) }, "dt"),
+        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(-1.0) }, "t-end"),
+        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(f64::INFINITY) }, "t-end"),
+        (RunSpec { t0: 0.0, h: 0.1, end: End::Steps(0) }, "steps"),
     ] {
         match spec.schedule() {
             Err(Error::InvalidValue { name: n, .. }) => assert_eq!(n, name),
@@ -93,20 +46,8 @@ fn invalid_specs_are_errors() {
 #[test]
 fn non_finite_state_is_an_error_with_its_time() {
     let v = values("oscillator", &[("k", 1e300)]);
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 1.0,
-        end: End::Time(100.0),
-    };
-    let err = v
-        .build()
-        .solve(
-            &EULER,
-            v.initial_state(),
-            &spec,
-            &mut pendula::observe::Ignore,
-        )
-        .unwrap_err();
+    let spec = RunSpec { t0: 0.0, h: 1.0, end: End::Time(100.0) };
+    let err = v.build().solve(&EULER, v.initial_state(), &spec, &mut pendula::observe::Ignore).unwrap_err();
     // x₁ = 1, v₁ = −1e300; x₂ = 1 − 1e300, v₂ = −2e300; then k x₂ overflows.
     assert_eq!(err, Error::NonFinite { t: 3.0 });
 }
@@ -115,18 +56,9 @@ fn non_finite_state_is_an_error_with_its_time() {
 fn observer_can_stop_the_run() {
     let v = values("pendulum", &[]);
     let mut stop = StopWhen(|s: &pendula::observe::Sample<'_>| s.y[0] < 0.0);
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 1e-3,
-        end: End::Time(10.0),
-    };
-    let report = v
-        .build()
-        .solve(&EULER, v.initial_state(), &spec, &mut stop)
-        .unwrap();
-    let Outcome::Stopped { t, .. } = report.outcome else {
-        panic!("{report:?}")
-    };
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Time(10.0) };
+    let report = v.build().solve(&EULER, v.initial_state(), &spec, &mut stop).unwrap();
+    let Outcome::Stopped { t, .. } = report.outcome else { panic!("{report:?}") };
     // A quarter of the exact period at 60° (0.5401 s).
     assert!((t - 0.540).abs() < 0.01, "{t}");
 }
@@ -134,26 +66,11 @@ fn observer_can_stop_the_run() {
 #[test]
 fn unmet_requirement_names_method_and_reason() {
     let v = values("pendulum", &[("damping", 0.5)]);
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 1e-3,
-        end: End::Time(1.0),
-    };
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Time(1.0) };
     let verlet = pendula::integrator::find("verlet").unwrap();
-    let err = v
-        .build()
-        .solve(
-            verlet,
-            v.initial_state(),
-            &spec,
-            &mut pendula::observe::Ignore,
-        )
-        .unwrap_err();
+    let err = v.build().solve(verlet, v.initial_state(), &spec, &mut pendula::observe::Ignore).unwrap_err();
     let msg = err.to_string();
-    assert!(
-        msg.contains("verlet") && msg.contains("damping = 0.5") && msg.contains("rk4"),
-        "{msg}"
-    );
+    assert!(msg.contains("verlet") && msg.contains("damping = 0.5") && msg.contains("rk4"), "{msg}");
 }
 
 /// RK4 on the double pendulum from (120°, −10°) at h = 1e-3 to t = 10 s reproduces the C
@@ -162,11 +79,7 @@ fn unmet_requirement_names_method_and_reason() {
 #[test]
 fn ref_rk4_matches_the_benchmark_c_reference() {
     let v = values("double", &[]);
-    let spec = RunSpec {
-        t0: 0.0,
-        h: 1e-3,
-        end: End::Time(10.0),
-    };
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Time(10.0) };
     let report = v
         .build()
         .solve(
@@ -176,17 +89,8 @@ fn ref_rk4_matches_the_benchmark_c_reference() {
             &mut pendula::observe::Ignore,
         )
         .unwrap();
-    let reference = [
-        -0.80261226093658078,
-        -2.4815017590829602,
-        -1.9522459590552914,
-        -2.3287480204624753,
-    ];
-    if cfg!(all(
-        target_os = "linux",
-        target_env = "gnu",
-        target_arch = "x86_64"
-    )) {
+    let reference = [-0.80261226093658078, -2.4815017590829602, -1.9522459590552914, -2.3287480204624753];
+    if cfg!(all(target_os = "linux", target_env = "gnu", target_arch = "x86_64")) {
         assert_eq!(report.state, reference);
     } else {
         // Another libm rounds sin/cos differently; chaos amplifies that to ~1e-11 by t = 10 s.

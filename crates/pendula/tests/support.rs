@@ -3,7 +3,7 @@
 use pendula::integrator::Method;
 use pendula::observe::Ignore;
 use pendula::system::{self, Values};
-use pendula::{End, RunSpec};
+use pendula::{End, Error, RunSpec};
 
 /// Validated values of a catalogued system with some settings.
 pub fn values(system: &str, settings: &[(&str, f64)]) -> Values {
@@ -13,25 +13,15 @@ pub fn values(system: &str, settings: &[(&str, f64)]) -> Values {
 }
 
 /// Final state of `method` on the catalogued system from its initial values.
-pub fn final_state(values: &Values, method: &Method, h: f64, t_end: f64) -> Vec<f64> {
+pub fn final_state(values: &Values, method: &Method, h: f64, t_end: f64) -> Result<Vec<f64>, Error> {
     let model = values.build();
-    let spec = RunSpec {
-        t0: 0.0,
-        h,
-        end: End::Time(t_end),
-    };
-    model
-        .solve(method, values.initial_state(), &spec, &mut Ignore)
-        .unwrap()
-        .state
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
+    Ok(model.solve(method, values.initial_state(), &spec, &mut Ignore)?.state)
 }
 
 /// Largest absolute componentwise difference.
 pub fn max_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
 
 /// Least-squares slope of ln(error) against ln(h).

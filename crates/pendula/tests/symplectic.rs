@@ -10,22 +10,11 @@ use pendula::system::double::{DoublePendulum, DoublePendulumForm};
 const H: f64 = 0.01;
 
 fn form() -> DoublePendulumForm {
-    DoublePendulum {
-        m1: 1.0,
-        m2: 1.5,
-        l1: 1.0,
-        l2: 0.8,
-        g: 9.81,
-    }
-    .form()
+    DoublePendulum { m1: 1.0, m2: 1.5, l1: 1.0, l2: 0.8, g: 9.81 }.form()
 }
 
 /// States (θ₁, θ₂, p₁, p₂) to test at.
-const STATES: [[f64; 4]; 3] = [
-    [2.0, -0.2, 0.3, -0.4],
-    [0.4, 1.9, -2.5, 1.1],
-    [-1.2, 2.8, 4.0, 2.0],
-];
+const STATES: [[f64; 4]; 3] = [[2.0, -0.2, 0.3, -0.4], [0.4, 1.9, -2.5, 1.1], [-1.2, 2.8, 4.0, 2.0]];
 
 fn step(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [f64; 4] {
     let mut z = z;
@@ -94,9 +83,7 @@ fn ref_symplectic_methods_preserve_the_symplectic_form() {
 #[test]
 fn ref_explicit_euler_is_not_symplectic() {
     let sys = form();
-    let Scheme::ExplicitRk(tableau) = EULER.scheme else {
-        unreachable!()
-    };
+    let Scheme::ExplicitRk(tableau) = EULER.scheme else { unreachable!() };
     let mut stepper = ExplicitRk::new(tableau, 4);
     let mut advance = |z: &mut [f64; 4]| stepper.step(&sys, 0.0, H, z).unwrap();
     let defect = symplectic_defect(&jacobian(&mut advance, STATES[0]));
@@ -120,11 +107,7 @@ fn symmetric_methods_are_time_reversible() {
             for _ in 0..100 {
                 stepper.step(&sys, 0.0, -H, &mut z).unwrap();
             }
-            let back = z
-                .iter()
-                .zip(&z0)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let back = z.iter().zip(&z0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             assert!(back < 1e-12, "{}: {back:e}", method.name);
         }
     }

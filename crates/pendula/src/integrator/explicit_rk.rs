@@ -31,12 +31,7 @@ pub static EULER: Method = Method {
     symmetric: false,
     description: "explicit Euler, 1 evaluation per step; energy grows on oscillators",
     reference: "Hairer, Norsett, Wanner, Solving ODEs I, §I.7; paper §7.1",
-    scheme: Scheme::ExplicitRk(&Tableau {
-        c: &[0.0],
-        a: &[&[]],
-        b: &[1.0],
-        denominator: 1.0,
-    }),
+    scheme: Scheme::ExplicitRk(&Tableau { c: &[0.0], a: &[&[]], b: &[1.0], denominator: 1.0 }),
 };
 
 /// The classical fourth-order Runge–Kutta method. Order 4, four evaluations per step.
@@ -74,11 +69,7 @@ pub struct ExplicitRk {
 impl ExplicitRk {
     /// A stepper for systems of dimension `dim`.
     pub fn new(tableau: &'static Tableau, dim: usize) -> Self {
-        ExplicitRk {
-            tableau,
-            k: vec![0.0; tableau.b.len() * dim],
-            stage: vec![0.0; dim],
-        }
+        ExplicitRk { tableau, k: vec![0.0; tableau.b.len() * dim], stage: vec![0.0; dim] }
     }
 }
 

@@ -70,25 +70,13 @@ pub struct Method {
 }
 
 /// Every method pendula knows, in the order `pendula list methods` shows them.
-pub static METHODS: &[&Method] = &[
-    &explicit_rk::EULER,
-    &explicit_rk::RK4,
-    &partitioned::SYMPLECTIC_EULER,
-    &partitioned::VERLET,
-];
+pub static METHODS: &[&Method] =
+    &[&explicit_rk::EULER, &explicit_rk::RK4, &partitioned::SYMPLECTIC_EULER, &partitioned::VERLET];
 
 /// Looks a method up by name.
 pub fn find(name: &str) -> Result<&'static Method, Error> {
-    METHODS
-        .iter()
-        .copied()
-        .find(|m| m.name == name)
-        .ok_or_else(|| Error::UnknownMethod {
-            name: name.to_owned(),
-            valid: METHODS
-                .iter()
-                .map(|m| m.name)
-                .collect::<Vec<_>>()
-                .join(", "),
-        })
+    METHODS.iter().copied().find(|m| m.name == name).ok_or_else(|| Error::UnknownMethod {
+        name: name.to_owned(),
+        valid: METHODS.iter().map(|m| m.name).collect::<Vec<_>>().join(", "),
+    })
 }

@@ -104,9 +104,7 @@ impl PartitionedStepper {
     /// (t, q) is unchanged (first same as last).
     fn separable_force<H: Hamiltonian + ?Sized>(&mut self, h: &H, t: f64, q: &[f64], p: &[f64]) {
         // The caller's t for this step and our t + h from the last may differ by rounding.
-        let same_t = self
-            .cached
-            .is_some_and(|c| (c - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1.0));
+        let same_t = self.cached.is_some_and(|c| (c - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(1.0));
         if !same_t || self.cached_q != q {
             h.dh_dq(t, q, p, &mut self.force);
         }
@@ -182,9 +180,7 @@ impl PartitionedStepper {
                 }
                 fixed_point(x, next, t, |x, out| {
                     sys.dh_dp(t + h, x, p, b);
-                    for (((o, qi), va), vb) in
-                        out.iter_mut().zip(q.iter()).zip(a.iter()).zip(b.iter())
-                    {
+                    for (((o, qi), va), vb) in out.iter_mut().zip(q.iter()).zip(a.iter()).zip(b.iter()) {
                         *o = qi + kick * (va + vb);
                     }
                 })?;
@@ -223,10 +219,7 @@ fn fixed_point(
         }
         previous = delta;
     }
-    Err(Error::NewtonDidNotConverge {
-        t,
-        iterations: MAX_ITERATIONS,
-    })
+    Err(Error::NewtonDidNotConverge { t, iterations: MAX_ITERATIONS })
 }
 
 impl<H: Hamiltonian + ?Sized> Stepper<H> for PartitionedStepper {

@@ -128,10 +128,7 @@ impl DoublePendulum {
     pub fn momenta(&self, y: &[f64]) -> [f64; 2] {
         let Self { m1, m2, l1, l2, .. } = *self;
         let c = (y[0] - y[1]).cos();
-        [
-            (m1 + m2) * l1 * l1 * y[2] + m2 * l1 * l2 * c * y[3],
-            m2 * l2 * l2 * y[3] + m2 * l1 * l2 * c * y[2],
-        ]
+        [(m1 + m2) * l1 * l1 * y[2] + m2 * l1 * l2 * c * y[3], m2 * l2 * l2 * y[3] + m2 * l1 * l2 * c * y[2]]
     }
 
     /// Kinetic energy T (43), J.
@@ -165,13 +162,7 @@ impl Model for DoublePendulum {
     const INFO: &'static SystemInfo = &INFO;
 
     fn from_values(v: &Values) -> Self {
-        DoublePendulum {
-            m1: v.get("m1"),
-            m2: v.get("m2"),
-            l1: v.get("l1"),
-            l2: v.get("l2"),
-            g: v.get("g"),
-        }
+        DoublePendulum { m1: v.get("m1"), m2: v.get("m2"), l1: v.get("l1"), l2: v.get("l2"), g: v.get("g") }
     }
 
     fn hamiltonian_form(&self) -> Result<DoublePendulumForm, String> {

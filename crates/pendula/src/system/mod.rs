@@ -133,9 +133,7 @@ pub struct SystemInfo {
 
 impl std::fmt::Debug for SystemInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SystemInfo")
-            .field("name", &self.name)
-            .finish_non_exhaustive()
+        f.debug_struct("SystemInfo").field("name", &self.name).finish_non_exhaustive()
     }
 }
 
@@ -144,18 +142,10 @@ pub static CATALOGUE: &[&SystemInfo] = &[&oscillator::INFO, &pendulum::INFO, &do
 
 /// Looks a system up by name.
 pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
-    CATALOGUE
-        .iter()
-        .copied()
-        .find(|s| s.name == name)
-        .ok_or_else(|| Error::UnknownSystem {
-            name: name.to_owned(),
-            valid: CATALOGUE
-                .iter()
-                .map(|s| s.name)
-                .collect::<Vec<_>>()
-                .join(", "),
-        })
+    CATALOGUE.iter().copied().find(|s| s.name == name).ok_or_else(|| Error::UnknownSystem {
+        name: name.to_owned(),
+        valid: CATALOGUE.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
+    })
 }
 
 impl SystemInfo {
@@ -167,17 +157,11 @@ impl SystemInfo {
 
     /// Looks up a parameter or state variable by name.
     pub fn quantity(&self, name: &str) -> Result<&'static Quantity, Error> {
-        self.quantities()
-            .find(|q| q.name == name)
-            .ok_or_else(|| Error::UnknownName {
-                system: self.name,
-                name: name.to_owned(),
-                valid: self
-                    .quantities()
-                    .map(|q| q.name)
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            })
+        self.quantities().find(|q| q.name == name).ok_or_else(|| Error::UnknownName {
+            system: self.name,
+            name: name.to_owned(),
+            valid: self.quantities().map(|q| q.name).collect::<Vec<_>>().join(", "),
+        })
     }
 
     /// The catalogue's defaults with `settings` (name, value) applied in order, validated.
@@ -223,11 +207,7 @@ impl Values {
 
     /// (name, value) of every parameter.
     pub fn parameters(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
-        self.info
-            .parameters
-            .iter()
-            .zip(&self.values)
-            .map(|(q, v)| (q.name, *v))
+        self.info.parameters.iter().zip(&self.values).map(|(q, v)| (q.name, *v))
     }
 
     /// The initial state vector, in the order of [`SystemInfo::state`].

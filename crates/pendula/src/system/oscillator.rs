@@ -25,13 +25,7 @@ pub static INFO: SystemInfo = SystemInfo {
     name: "oscillator",
     description: "harmonic oscillator m x'' + c x' + k x = F cos(W t) (paper §2)",
     parameters: &[
-        Quantity {
-            name: "m",
-            unit: "kg",
-            default: 1.0,
-            domain: Domain::Positive,
-            description: "mass",
-        },
+        Quantity { name: "m", unit: "kg", default: 1.0, domain: Domain::Positive, description: "mass" },
         Quantity {
             name: "k",
             unit: "N/m",
@@ -62,20 +56,8 @@ pub static INFO: SystemInfo = SystemInfo {
         },
     ],
     state: &[
-        Quantity {
-            name: "x",
-            unit: "m",
-            default: 1.0,
-            domain: Domain::Real,
-            description: "displacement",
-        },
-        Quantity {
-            name: "v",
-            unit: "m/s",
-            default: 0.0,
-            domain: Domain::Real,
-            description: "velocity",
-        },
+        Quantity { name: "x", unit: "m", default: 1.0, domain: Domain::Real, description: "displacement" },
+        Quantity { name: "v", unit: "m/s", default: 0.0, domain: Domain::Real, description: "velocity" },
     ],
     build: |v| Box::new(Oscillator::from_values(v)),
 };
@@ -160,17 +142,9 @@ impl Oscillator {
             let (s, c) = (w0 * t).sin_cos();
             return (a * t * s, a * (s + w0 * t * c), 0.0, 0.0);
         }
-        let SteadyState {
-            amplitude,
-            phase_lag,
-        } = self.steady_state();
+        let SteadyState { amplitude, phase_lag } = self.steady_state();
         let (s, c) = (w * t - phase_lag).sin_cos();
-        (
-            amplitude * c,
-            -amplitude * w * s,
-            amplitude * phase_lag.cos(),
-            amplitude * w * phase_lag.sin(),
-        )
+        (amplitude * c, -amplitude * w * s, amplitude * phase_lag.cos(), amplitude * w * phase_lag.sin())
     }
 
     /// Free motion x'' + 2γ x' + ω₀² x = 0 from (x₀, v₀), γ = c/(2m):
@@ -215,10 +189,7 @@ impl Model for Oscillator {
 
     fn hamiltonian_form(&self) -> Result<OscillatorForm, String> {
         if self.c != 0.0 {
-            return Err(format!(
-                "the oscillator with damping c = {} is not Hamiltonian",
-                self.c
-            ));
+            return Err(format!("the oscillator with damping c = {} is not Hamiltonian", self.c));
         }
         Ok(OscillatorForm { oscillator: *self })
     }

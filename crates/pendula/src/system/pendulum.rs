@@ -34,20 +34,8 @@ pub static INFO: SystemInfo = SystemInfo {
     name: "pendulum",
     description: "simple pendulum th'' = -(g/l) sin th - b th' + A cos(W t) (paper §3, §5)",
     parameters: &[
-        Quantity {
-            name: "m",
-            unit: "kg",
-            default: 1.0,
-            domain: Domain::Positive,
-            description: "bob mass",
-        },
-        Quantity {
-            name: "l",
-            unit: "m",
-            default: 1.0,
-            domain: Domain::Positive,
-            description: "rod length",
-        },
+        Quantity { name: "m", unit: "kg", default: 1.0, domain: Domain::Positive, description: "bob mass" },
+        Quantity { name: "l", unit: "m", default: 1.0, domain: Domain::Positive, description: "rod length" },
         Quantity {
             name: "g",
             unit: "m/s^2",
@@ -147,11 +135,7 @@ impl Pendulum {
             let k = k2.sqrt();
             let u_start = ellip_f((half / k).clamp(-1.0, 1.0).asin(), k);
             // sn is the same at u and 2K − u, cn changes sign: pick the branch whose cn has ω₀'s sign.
-            let u0 = if omega0 < 0.0 {
-                2.0 * ellip_k(k) - u_start
-            } else {
-                u_start
-            };
+            let u0 = if omega0 < 0.0 { 2.0 * ellip_k(k) - u_start } else { u_start };
             let j = jacobi(u0 + wn * t, k);
             Some((offset + 2.0 * (k * j.sn).asin(), 2.0 * k * wn * j.cn))
         } else if k2 > 1.0 {
@@ -171,11 +155,7 @@ impl Pendulum {
 
     fn potential(&self, theta: f64) -> f64 {
         let mgl = self.m * self.g * self.l;
-        if self.linear {
-            mgl * (0.5 * theta * theta - 1.0)
-        } else {
-            -mgl * theta.cos()
-        }
+        if self.linear { mgl * (0.5 * theta * theta - 1.0) } else { -mgl * theta.cos() }
     }
 
     fn drive(&self, t: f64) -> f64 {
@@ -205,10 +185,7 @@ impl Model for Pendulum {
 
     fn hamiltonian_form(&self) -> Result<PendulumForm, String> {
         if self.damping != 0.0 {
-            return Err(format!(
-                "the pendulum with damping = {} is not Hamiltonian",
-                self.damping
-            ));
+            return Err(format!("the pendulum with damping = {} is not Hamiltonian", self.damping));
         }
         Ok(PendulumForm { pendulum: *self })
     }
