@@ -6,7 +6,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Simple, double and harmonic pendulums with verified, structure-preserving integrators.
 #[derive(Debug, Parser)]
-#[command(name = "pendula", version, about, after_help = EXIT_CODES)]
+#[command(name = "pendula", version, after_help = EXIT_CODES)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,

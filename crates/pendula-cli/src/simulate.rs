@@ -5,8 +5,7 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
-use pendula::observe::{EnergyStats, Observer, Sample};
-use pendula::system::DynModel;
+use pendula::observe::{EnergyTracker, Observer, Sample};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
@@ -14,21 +13,17 @@ use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, Sink};
 
 /// Tracks energy at every step and writes the kept steps.
-struct Writer<'a> {
-    model: &'a dyn DynModel,
+struct Writer<F> {
+    energy: EnergyTracker<F>,
     every: u64,
     sink: Sink,
     rows: u64,
-    energy: Option<EnergyStats>,
     failure: Option<anyhow::Error>,
 }
 
-impl Observer for Writer<'_> {
+impl<F: FnMut(f64, &[f64]) -> f64> Observer for Writer<F> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = self.model.energy(s.t, s.y);
-        let stats = self.energy.get_or_insert(EnergyStats { initial: e, last: e, max_abs_error: 0.0 });
-        stats.last = e;
-        stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
+        let e = self.energy.track(s.t, s.y);
         if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
             let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
             if let Err(err) = self.sink.row(row) {
@@ -57,11 +52,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     columns.push("energy");
     let model = values.build();
     let mut writer = Writer {
-        model: &*model,
+        energy: EnergyTracker::new(|t, y: &[f64]| model.energy(t, y)),
         every: every.unwrap_or(0),
         sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
         rows: 0,
-        energy: None,
         failure: None,
     };
     let start = Instant::now();
@@ -71,7 +65,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         return Err(err);
     }
     let report = report?;
-    let energy = writer.energy.unwrap_or_default();
+    let energy = writer.energy.stats();
     let rows = writer.rows;
     writer.sink.finish(out_file.as_ref())?;
     if let Some(f) = out_file {

@@ -122,6 +122,15 @@ impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
         EnergyTracker { energy, stats: None }
     }
 
+    /// Evaluates the energy at (t, y), adds it to the statistics, and returns it.
+    pub fn track(&mut self, t: f64, y: &[f64]) -> f64 {
+        let e = (self.energy)(t, y);
+        let stats = self.stats.get_or_insert(EnergyStats { initial: e, last: e, max_abs_error: 0.0 });
+        stats.last = e;
+        stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
+        e
+    }
+
     /// Statistics so far (all zero before the first state).
     pub fn stats(&self) -> EnergyStats {
         self.stats.unwrap_or_default()
@@ -130,10 +139,7 @@ impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
 
 impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergyTracker<F> {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        let e = (self.energy)(sample.t, sample.y);
-        let stats = self.stats.get_or_insert(EnergyStats { initial: e, last: e, max_abs_error: 0.0 });
-        stats.last = e;
-        stats.max_abs_error = stats.max_abs_error.max((e - stats.initial).abs());
+        self.track(sample.t, sample.y);
         ControlFlow::Continue(())
     }
 }
