@@ -39,6 +39,7 @@
 //! vertical, y up), g = 9.81 m/s² by default. Abbreviations: t time, h step size, y state,
 //! q positions, p momenta, rhs right-hand side f(t, y), H Hamiltonian.
 
+pub mod analysis;
 pub mod error;
 pub mod integrator;
 pub mod observe;

@@ -7,6 +7,7 @@
 #![allow(clippy::excessive_precision)]
 
 mod alloc;
+mod analysis;
 mod architecture;
 mod conformance;
 mod energy;

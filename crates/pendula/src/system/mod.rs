@@ -238,6 +238,11 @@ pub trait Model: System + Energy + Sized + 'static {
     fn to_momenta(&self, y: &[f64], z: &mut [f64]);
     /// (q, p) → (q, q').
     fn to_velocities(&self, z: &[f64], y: &mut [f64]);
+    /// The exact state at time t from `y0` at t = 0, written into `y`, when a closed form
+    /// exists for these parameters; false otherwise.
+    fn exact(&self, _t: f64, _y0: &[f64], _y: &mut [f64]) -> bool {
+        false
+    }
 }
 
 /// The object-safe face of a [`Model`], used where the system is chosen at run time.
@@ -246,6 +251,10 @@ pub trait DynModel {
     fn info(&self) -> &'static SystemInfo;
     /// Mechanical energy at (t, y), J.
     fn energy(&self, t: f64, y: &[f64]) -> f64;
+    /// The right-hand side f(t, y) of the (position, velocity) form.
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+    /// The exact state at t from `y0` at t = 0, if a closed form exists (see [`Model::exact`]).
+    fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>>;
     /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
     /// (see [`crate::simulate::solve`]).
     fn solve(
@@ -263,6 +272,13 @@ impl<M: Model> DynModel for M {
     }
     fn energy(&self, t: f64, y: &[f64]) -> f64 {
         Energy::energy(self, t, y)
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        System::rhs(self, t, y, dydt);
+    }
+    fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>> {
+        let mut y = vec![0.0; y0.len()];
+        Model::exact(self, t, y0, &mut y).then_some(y)
     }
     fn solve(
         &self,

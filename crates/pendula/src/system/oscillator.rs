@@ -203,6 +203,11 @@ impl Model for Oscillator {
         y[0] = z[0];
         y[1] = z[1] / self.m;
     }
+
+    fn exact(&self, t: f64, y0: &[f64], y: &mut [f64]) -> bool {
+        (y[0], y[1]) = Oscillator::exact(self, t, y0[0], y0[1]);
+        true
+    }
 }
 
 impl System for Oscillator {

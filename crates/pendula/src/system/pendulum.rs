@@ -199,6 +199,16 @@ impl Model for Pendulum {
         y[0] = z[0];
         y[1] = z[1] / (self.m * self.l * self.l);
     }
+
+    fn exact(&self, t: f64, y0: &[f64], y: &mut [f64]) -> bool {
+        match Pendulum::exact(self, t, y0[0], y0[1]) {
+            Some((theta, omega)) => {
+                (y[0], y[1]) = (theta, omega);
+                true
+            }
+            None => false,
+        }
+    }
 }
 
 impl System for Pendulum {

@@ -1,0 +1,12 @@
+//! Analyses of runs: convergence order, energy error and drift, largest stable step, and
+//! periods from zero crossings. Each works on any catalogued model and method.
+
+pub mod convergence;
+pub mod energy;
+pub mod period;
+pub mod stability;
+
+pub use convergence::{OrderFit, Reference, convergence_errors, fit_order, reference_state};
+pub use energy::{EnergySeries, drift_rate, envelope};
+pub use period::{Direction, ZeroCrossings, measure_period};
+pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

@@ -1,0 +1,87 @@
+//! The largest stable step of a method on a problem, by bisection.
+
+use std::ops::ControlFlow;
+
+use crate::integrator::Method;
+use crate::observe::{Observer, Sample};
+use crate::system::DynModel;
+use crate::{End, Error, RunSpec};
+
+/// When a run counts as stable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilityCriterion {
+    /// Length of the test run, s.
+    pub t_end: f64,
+    /// Largest allowed |E − E₀| / |E₀| (absolute, J, when E₀ = 0) at any step.
+    pub max_rel_energy_error: f64,
+}
+
+/// Stops a run as soon as the energy error exceeds the bound.
+struct Guard<'a> {
+    model: &'a dyn DynModel,
+    bound: f64,
+    e0: Option<f64>,
+    exceeded: bool,
+}
+
+impl Observer for Guard<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        let e = self.model.energy(s.t, s.y);
+        let e0 = *self.e0.get_or_insert(e);
+        let scale = if e0 == 0.0 { 1.0 } else { e0.abs() };
+        if ((e - e0) / scale).abs() > self.bound {
+            self.exceeded = true;
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// Whether `method` at step `h` stays finite with a bounded energy error.
+pub fn is_stable(
+    model: &dyn DynModel,
+    method: &Method,
+    y0: &[f64],
+    h: f64,
+    criterion: &StabilityCriterion,
+) -> Result<bool, Error> {
+    let mut guard = Guard { model, bound: criterion.max_rel_energy_error, e0: None, exceeded: false };
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(criterion.t_end) };
+    match model.solve(method, y0, &spec, &mut guard) {
+        Ok(_) => Ok(!guard.exceeded),
+        Err(Error::NonFinite { .. } | Error::NewtonDidNotConverge { .. }) => Ok(false),
+        Err(e) => Err(e),
+    }
+}
+
+/// The largest step in [`h_min`, `h_max`] at which the run is stable, by bisection in log h
+/// to 1% (`None` if even `h_min` is unstable; `h_max` if it is stable).
+///
+/// Stability is not always monotone in h (a method can be stable again at a larger step in
+/// a resonance window); bisection finds one boundary between a stable `h_min` and an
+/// unstable `h_max`.
+pub fn largest_stable_step(
+    model: &dyn DynModel,
+    method: &Method,
+    y0: &[f64],
+    h_min: f64,
+    h_max: f64,
+    criterion: &StabilityCriterion,
+) -> Result<Option<f64>, Error> {
+    if !is_stable(model, method, y0, h_min, criterion)? {
+        return Ok(None);
+    }
+    if is_stable(model, method, y0, h_max, criterion)? {
+        return Ok(Some(h_max));
+    }
+    let (mut lo, mut hi) = (h_min, h_max);
+    while hi / lo > 1.01 {
+        let mid = (lo * hi).sqrt();
+        if is_stable(model, method, y0, mid, criterion)? {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(Some(lo))
+}
