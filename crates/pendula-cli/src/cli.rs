@@ -19,6 +19,20 @@ step did not converge); 2 invalid input (arguments, values, scenario file, outpu
 pub enum Command {
     /// Integrate one system with one method and write its trajectory and a summary.
     Simulate(Box<SimulateArgs>),
+    /// Compare methods on one problem: energy error, trajectories, phase portraits, cost.
+    Compare(Box<crate::commands::compare::CompareArgs>),
+    /// Global error against step size, with the fitted order of each method.
+    Convergence(Box<crate::commands::convergence::ConvergenceArgs>),
+    /// The largest stable step of each method.
+    Stability(Box<crate::commands::stability::StabilityArgs>),
+    /// The simple pendulum's period against amplitude: simulated, exact and small-angle.
+    Period(Box<crate::commands::period::PeriodArgs>),
+    /// The oscillator's damping regimes and forced resonance, exact and simulated.
+    OscillatorRegimes(Box<crate::commands::regimes::RegimesArgs>),
+    /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
+    Animate(Box<crate::commands::animate::AnimateArgs>),
+    /// The paper's whole numerical study as one self-contained HTML page.
+    Report(Box<crate::commands::report::ReportArgs>),
     /// List the systems or the methods, with parameters, units, defaults and requirements.
     List {
         /// What to list.

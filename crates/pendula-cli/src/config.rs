@@ -117,7 +117,28 @@ fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f6
     }
 }
 
-fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
+/// Parses `--set NAME=VALUE` items against a system's quantities.
+pub fn parse_settings(info: &SystemInfo, items: &[String]) -> Result<Vec<(String, f64)>> {
+    items
+        .iter()
+        .map(|item| {
+            let (name, text) = item
+                .split_once('=')
+                .ok_or_else(|| anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg"))?;
+            let name = name.trim();
+            let q = info.quantity(name)?;
+            Ok((name.to_owned(), parse_value(name, text, Some(q))?))
+        })
+        .collect()
+}
+
+/// An optional floating-point flag: parsed when given, `default` otherwise.
+pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
+    text.map_or(Ok(default), |t| parse_number(flag, t, expected))
+}
+
+/// Parses a number given to `flag`, naming the flag and what was expected on failure.
+pub fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
     text.trim().parse().map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
 }
 
@@ -136,14 +157,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         let q = info.quantity(name)?;
         settings.push((name.clone(), toml_value(name, value, q)?));
     }
-    for item in &args.set {
-        let (name, text) = item
-            .split_once('=')
-            .ok_or_else(|| anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg"))?;
-        let name = name.trim();
-        let q = info.quantity(name)?;
-        settings.push((name.to_owned(), parse_value(name, text, Some(q))?));
-    }
+    settings.extend(parse_settings(info, &args.set)?);
     let values = info.values(&settings)?;
 
     let h = match &args.dt {

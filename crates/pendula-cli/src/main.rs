@@ -1,10 +1,12 @@
 //! The `pendula` command: parse → validate → run → write.
 
 mod cli;
+mod commands;
 mod config;
 mod list;
 mod output;
 mod simulate;
+mod study;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -17,6 +19,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::Compare(args) => commands::compare::run(args),
+        Command::Convergence(args) => commands::convergence::run(args),
+        Command::Stability(args) => commands::stability::run(args),
+        Command::Period(args) => commands::period::run(args),
+        Command::OscillatorRegimes(args) => commands::regimes::run(args),
+        Command::Animate(args) => commands::animate::run(args),
+        Command::Report(args) => commands::report::run(args),
         Command::List { what } => list::run(*what),
     };
     match result {

@@ -31,17 +31,24 @@ impl AtomicFile {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
-        let temp = tempfile::Builder::new()
-            .prefix(".pendula-")
-            .suffix(".part")
-            .tempfile_in(dir)
-            .with_context(|| format!("cannot write {flag} {}", path.display()))?;
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".pendula-").suffix(".part");
+        // Results are for reading: rw-r--r-- (less the umask), not the temporary file's 0600.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+        let temp =
+            builder.tempfile_in(dir).with_context(|| format!("cannot write {flag} {}", path.display()))?;
         Ok(AtomicFile { temp, path: path.to_owned() })
     }
 
     /// A second handle on the temporary file, for streaming into it.
     pub fn handle(&self) -> Result<File> {
         self.temp.reopen().with_context(|| format!("cannot write {}", self.path.display()))
+    }
+
+    /// The temporary file's path, for external writers (ffmpeg).
+    pub fn temp_path(&self) -> &Path {
+        self.temp.path()
     }
 
     /// Renames the finished file into place.

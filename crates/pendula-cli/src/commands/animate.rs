@@ -1,0 +1,194 @@
+//! `pendula animate`: rods, bobs, a fading trail, the time and an energy gauge, as GIF or
+//! MP4; `--compare DELTA` adds a second pendulum started DELTA radians away (paper §1:
+//! sensitivity to initial conditions).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use pendula::integrator;
+use pendula::observe::{Every, Recorder};
+use pendula::{End, RunSpec};
+use pendula_viz::{Animation, Snapshot};
+
+use crate::config::{f64_arg, parse_value};
+use crate::output::AtomicFile;
+use crate::study;
+
+#[derive(Debug, Clone, Args)]
+pub struct AnimateArgs {
+    /// System: pendulum or double [default: double].
+    pub system: Option<String>,
+    /// Integration method [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s [default: 0.001].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// Length of the animation in simulated seconds [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    /// Set a parameter or initial-state variable (`--set theta1=120deg`).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Output: FILE.gif, or FILE.mp4 (needs ffmpeg on the PATH) [default: pendula-out/animate/animation.gif].
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Add a second pendulum whose first angle starts DELTA radians (or `1e-3deg`) away.
+    #[arg(long, value_name = "DELTA", allow_hyphen_values = true)]
+    pub compare: Option<String>,
+    /// Frames per second of simulated time [default: 30].
+    #[arg(long, value_name = "N")]
+    pub fps: Option<u32>,
+    /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+}
+
+pub fn run(args: &AnimateArgs) -> Result<()> {
+    let system = args.system.as_deref().unwrap_or("double");
+    if !matches!(system, "pendulum" | "double") {
+        bail!("invalid system `{system}` for animate: it draws pendulums; use pendulum or double");
+    }
+    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "a time in seconds")?;
+    let fps = args.fps.unwrap_or(30);
+    if fps == 0 || fps > 240 {
+        bail!("invalid --fps {fps}: must be 1 to 240");
+    }
+    let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
+    let mp4 = match out.extension().and_then(|e| e.to_str()) {
+        Some("gif") => false,
+        Some("mp4") => true,
+        _ => bail!("invalid --out `{}`: use FILE.gif or FILE.mp4", out.display()),
+    };
+    if mp4 && !ffmpeg_available() {
+        bail!(
+            "MP4 output needs an `ffmpeg` binary on the PATH, and none was found; install ffmpeg or write a .gif"
+        );
+    }
+    let values = study::values(system, &args.set)?;
+    let first = values.info().state[0];
+    let delta = args.compare.as_deref().map(|d| parse_value("--compare", d, Some(&first))).transpose()?;
+    if let Some(d) = delta
+        && !d.is_finite()
+    {
+        bail!("invalid --compare {d}: must be finite");
+    }
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
+    spec.schedule()?;
+    if out.parent().is_some_and(|p| !p.as_os_str().is_empty()) && args.out.is_none() {
+        std::fs::create_dir_all(out.parent().expect("checked"))?;
+    }
+    let file = AtomicFile::create(&out, "--out")?;
+
+    // One frame every 1/fps s of simulated time (rounded to whole steps).
+    let every = ((1.0 / (fps as f64 * h)).round() as u64).max(1);
+    let mut starts = vec![values.initial_state().to_vec()];
+    if let Some(d) = delta {
+        let mut y = values.initial_state().to_vec();
+        y[0] += d;
+        starts.push(y);
+    }
+    let model = values.build();
+    let n = values.info().state.len() / 2;
+    let mut tracks = Vec::new();
+    for y0 in &starts {
+        let mut rec = Every { n: every, inner: Recorder::default() };
+        model.solve(method, y0, &spec, &mut rec)?;
+        tracks.push(rec.inner.rows);
+    }
+    let e0: Vec<f64> = starts.iter().map(|y| model.energy(0.0, y)).collect();
+    let frames_n = tracks[0].len() / (2 * n + 1);
+    let frames: Vec<Snapshot> = (0..frames_n)
+        .map(|k| {
+            let rows: Vec<&[f64]> =
+                tracks.iter().map(|t| &t[k * (2 * n + 1)..(k + 1) * (2 * n + 1)]).collect();
+            Snapshot {
+                t: rows[0][0],
+                angles: rows.iter().map(|r| r[1..=n].to_vec()).collect(),
+                energy_error: rows
+                    .iter()
+                    .zip(&e0)
+                    .map(|(r, e)| {
+                        ((model.energy(r[0], &r[1..]) - e) / if *e == 0.0 { 1.0 } else { e.abs() }).abs()
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    let lengths: Vec<f64> = match system {
+        "pendulum" => vec![values.get("l")],
+        _ => vec![values.get("l1"), values.get("l2")],
+    };
+    let mut labels = vec![format!("{}", method.name)];
+    if let Some(d) = delta {
+        labels.push(format!("started {d:e} rad away"));
+    }
+    let animation = Animation {
+        title: format!("{system} pendulum, {}, h = {h} s", method.name),
+        lengths,
+        frames,
+        size,
+        fps,
+        trail: (fps as usize * 2).max(2),
+        labels,
+    };
+    if mp4 {
+        encode_mp4(&animation, &file)?;
+    } else {
+        std::io::Write::write_all(&mut file.handle()?, &animation.gif()?)?;
+    }
+    file.commit()?;
+    eprintln!("wrote {} ({} frames, {}x{})", out.display(), animation.frames.len(), size.0, size.1);
+    Ok(())
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32)> {
+    let bad =
+        || anyhow::anyhow!("invalid --size `{text}`: expected WIDTHxHEIGHT, each 64 to 4096, e.g. 480x480");
+    let (w, h) = text.split_once('x').ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if !(64..=4096).contains(&w) || !(64..=4096).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn ffmpeg_available() -> bool {
+    Command::new("ffmpeg")
+        .arg("-version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Pipes raw RGB frames into ffmpeg, which writes H.264 into the temporary file.
+fn encode_mp4(animation: &Animation, file: &AtomicFile) -> Result<()> {
+    let (w, h) = animation.size;
+    let target = file.temp_path();
+    let mut child = Command::new("ffmpeg")
+        .args(["-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
+        .args(["-s", &format!("{w}x{h}"), "-r", &animation.fps.to_string(), "-i", "-"])
+        .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4"])
+        .arg(target)
+        .stdin(Stdio::piped())
+        .spawn()
+        .context("cannot start ffmpeg")?;
+    {
+        let stdin = child.stdin.as_mut().expect("piped");
+        for k in 0..animation.frames.len() {
+            stdin.write_all(&animation.frame_rgb(k)?)?;
+        }
+    }
+    let status = child.wait()?;
+    if !status.success() {
+        bail!("ffmpeg failed ({status}) while encoding the MP4");
+    }
+    Ok(())
+}

@@ -1,0 +1,171 @@
+//! `pendula convergence`: global error against step size on log-log axes, and the fitted
+//! order of each method (paper §7.3, §8.3).
+
+use anyhow::{Result, bail};
+use clap::Args;
+use pendula::analysis::{self, fit_order};
+use pendula_viz::{Figure, GUIDE, Kind, Scale, method_color};
+use serde_json::json;
+
+use crate::config::f64_arg;
+use crate::study::{self, Common, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct ConvergenceArgs {
+    /// System [default: oscillator].
+    pub system: Option<String>,
+    /// Comma-separated methods [default: every method that applies].
+    #[arg(long, value_name = "LIST")]
+    pub methods: Option<String>,
+    /// Smallest step size, s [default: dt-max / 16].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_min: Option<String>,
+    /// Largest step size, s [default: 0.05].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_max: Option<String>,
+    /// Number of step sizes, geometrically spaced [default: 5].
+    #[arg(long, value_name = "N")]
+    pub levels: Option<usize>,
+    /// End time at which the error is measured, s [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// The result for one method.
+pub struct MethodConvergence {
+    pub method: &'static str,
+    pub hs: Vec<f64>,
+    pub errors: Vec<f64>,
+    /// Fitted order over the errors above the round-off floor.
+    pub order: Option<f64>,
+}
+
+/// Errors below this (relative to the state's size) are round-off, not truncation, and
+/// are left out of the fit.
+const ROUNDOFF_FLOOR: f64 = 1e-12;
+
+pub fn run(args: &ConvergenceArgs) -> Result<()> {
+    let system = args.system.as_deref().unwrap_or("oscillator");
+    let values = study::values(system, &args.common.set)?;
+    let dt_max = f64_arg("--dt-max", args.dt_max.as_deref(), 0.05, "a step size in seconds")?;
+    let dt_min = f64_arg("--dt-min", args.dt_min.as_deref(), dt_max / 16.0, "a step size in seconds")?;
+    let levels = args.levels.unwrap_or(5);
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?;
+    if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
+        bail!(
+            "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
+        );
+    }
+    if levels < 2 {
+        bail!("invalid --levels {levels}: need at least 2 step sizes to fit an order");
+    }
+    pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) }.schedule()?;
+    let model = values.build();
+    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
+
+    let hs: Vec<f64> =
+        (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
+    let (results, reference) = study_orders(&values, &methods, &hs, t_end)?;
+
+    let mut rows = Vec::new();
+    for r in &results {
+        for (h, e) in r.hs.iter().zip(&r.errors) {
+            rows.push(vec![r.method.to_owned(), num(*h), num(*e)]);
+        }
+    }
+    out.csv("convergence.csv", &["method", "dt", "error"], &rows)?;
+    println!("{system}: error at t = {t_end} s against the {}", reference.source);
+    let shown: Vec<Vec<String>> = results
+        .iter()
+        .map(|r| {
+            let declared =
+                pendula::integrator::find(r.method).map(|m| m.order.to_string()).unwrap_or_default();
+            vec![r.method.to_owned(), declared, r.order.map_or("-".into(), |o| format!("{o:.3}"))]
+        })
+        .collect();
+    print!("{}", study::table(&["method", "declared order", "fitted order"], &shown));
+    out.figure("convergence", &figure(system, t_end, &results, reference.source))?;
+    let orders: serde_json::Map<String, serde_json::Value> =
+        results.iter().map(|r| (r.method.to_owned(), json!(r.order))).collect();
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": hs, "orders": orders }),
+    )?;
+    out.report();
+    Ok(())
+}
+
+/// Errors and fitted orders of `methods` at steps `hs`, against the exact solution or an
+/// RK4-Richardson reference at a 16× finer step.
+pub fn study_orders(
+    values: &pendula::system::Values,
+    methods: &[&'static pendula::integrator::Method],
+    hs: &[f64],
+    t_end: f64,
+) -> Result<(Vec<MethodConvergence>, analysis::Reference)> {
+    let model = values.build();
+    let h_min = hs.iter().copied().fold(f64::INFINITY, f64::min);
+    let reference = analysis::reference_state(&*model, values.initial_state(), t_end, h_min / 16.0)?;
+    let scale = reference.state.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+    let bar = study::progress(methods.len() as u64, "convergence");
+    let mut results = Vec::new();
+    for method in methods {
+        let errors = analysis::convergence_errors(
+            &*model,
+            method,
+            values.initial_state(),
+            t_end,
+            hs,
+            &reference.state,
+        )?;
+        let (fit_h, fit_e): (Vec<f64>, Vec<f64>) = hs
+            .iter()
+            .zip(&errors)
+            .filter(|(_, e)| **e > ROUNDOFF_FLOOR * scale)
+            .map(|(h, e)| (*h, *e))
+            .unzip();
+        let order = fit_order(&fit_h, &fit_e).map(|f| f.order);
+        results.push(MethodConvergence { method: method.name, hs: hs.to_vec(), errors, order });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok((results, reference))
+}
+
+/// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
+pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
+    let mut fig = Figure::new(
+        format!("{system}: global error at t = {t_end} s (against the {reference})"),
+        "step size h (s)",
+        "max |y(t) - y_ref(t)|",
+    )
+    .scales(Scale::Log, Scale::Log);
+    for r in results {
+        let label = match r.order {
+            Some(o) => format!("{} (order {o:.2})", r.method),
+            None => r.method.to_owned(),
+        };
+        fig = fig.with(
+            label,
+            method_color(r.method),
+            Kind::LineMarkers,
+            r.hs.iter().copied().zip(r.errors.iter().copied()).collect(),
+        );
+    }
+    if let Some(first) = results.first() {
+        let (h0, h1) = (first.hs[0], first.hs[first.hs.len() - 1]);
+        let anchor = results.iter().map(|r| r.errors[0]).fold(f64::INFINITY, f64::min);
+        // Dense points: a dashed line is interpolated in data coordinates, which bends on log axes.
+        for p in [1, 2, 4] {
+            let c = anchor / h0.powi(p);
+            let line =
+                (0..=24).map(|k| h0 * (h1 / h0).powf(k as f64 / 24.0)).map(|h| (h, c * h.powi(p))).collect();
+            let label = if p == 1 { "guides: slopes 1, 2, 4" } else { "" };
+            fig = fig.with(label, GUIDE, Kind::Dashed, line);
+        }
+    }
+    fig
+}

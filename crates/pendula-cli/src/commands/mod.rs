@@ -1,0 +1,9 @@
+//! The study commands, one file each.
+
+pub mod animate;
+pub mod compare;
+pub mod convergence;
+pub mod period;
+pub mod regimes;
+pub mod report;
+pub mod stability;

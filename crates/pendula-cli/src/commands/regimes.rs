@@ -1,0 +1,229 @@
+//! `pendula oscillator-regimes`: the three damping regimes and forced resonance (the paper's
+//! Figure 1 and §2.2), exact and simulated on the same axes.
+
+use anyhow::Result;
+use clap::Args;
+use pendula::integrator::explicit_rk::RK4;
+use pendula::observe::Recorder;
+use pendula::system::Model;
+use pendula::system::oscillator::Oscillator;
+use pendula::{End, RunSpec};
+use pendula_viz::{Figure, Kind, palette};
+use serde_json::json;
+
+use crate::study::{self, Common, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct RegimesArgs {
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Damping ratios of the three regimes.
+const REGIMES: [(&str, f64); 3] =
+    [("underdamped, ζ = 0.2", 0.2), ("critically damped, ζ = 1", 1.0), ("overdamped, ζ = 3", 3.0)];
+/// Damping ratios of the resonance curves.
+const RESONANCE: [f64; 4] = [0.05, 0.1, 0.25, 0.7];
+/// Step of the simulations, s.
+const H: f64 = 0.01;
+
+/// One simulated point of a resonance curve.
+pub struct ResonancePoint {
+    pub zeta: f64,
+    pub ratio: f64,
+    pub amplitude_exact: f64,
+    pub amplitude_simulated: f64,
+    pub phase_exact: f64,
+    pub phase_simulated: f64,
+}
+
+fn oscillator(set: &[String], extra: &[String]) -> Result<(pendula::system::Values, Oscillator)> {
+    let mut items = set.to_vec();
+    items.extend_from_slice(extra);
+    let values = study::values("oscillator", &items)?;
+    let o = Oscillator::from_values(&values);
+    Ok((values, o))
+}
+
+pub fn run(args: &RegimesArgs) -> Result<()> {
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "oscillator-regimes")?;
+    let (transients, transient_rows) = transients(&args.common.set)?;
+    out.csv("transients.csv", &["zeta", "t", "exact", "simulated"], &transient_rows)?;
+    let points = resonance(&args.common.set)?;
+    let rows: Vec<Vec<String>> = points
+        .iter()
+        .map(|p| {
+            vec![
+                num(p.zeta),
+                num(p.ratio),
+                num(p.amplitude_exact),
+                num(p.amplitude_simulated),
+                num(p.phase_exact),
+                num(p.phase_simulated),
+            ]
+        })
+        .collect();
+    let header =
+        ["zeta", "drive_ratio", "amplitude_exact", "amplitude_simulated", "phase_exact", "phase_simulated"];
+    out.csv("resonance.csv", &header, &rows)?;
+    let worst_amp =
+        points.iter().map(|p| (p.amplitude_simulated / p.amplitude_exact - 1.0).abs()).fold(0.0, f64::max);
+    let worst_phase = points.iter().map(|p| (p.phase_simulated - p.phase_exact).abs()).fold(0.0, f64::max);
+    let shown: Vec<Vec<String>> = RESONANCE
+        .iter()
+        .map(|&z| {
+            let peak = points
+                .iter()
+                .filter(|p| p.zeta == z)
+                .max_by(|a, b| a.amplitude_exact.total_cmp(&b.amplitude_exact));
+            let at = |f: fn(&ResonancePoint) -> f64| peak.map_or("-".into(), |p| format!("{:.4}", f(p)));
+            vec![format!("{z}"), at(|p| p.ratio), at(|p| p.amplitude_exact), at(|p| p.amplitude_simulated)]
+        })
+        .collect();
+    print!("{}", study::table(&["zeta", "W/w0 at peak", "X k/F exact", "X k/F simulated"], &shown));
+    println!(
+        "largest deviation of simulated from exact: amplitude {worst_amp:.2e} (relative), phase {worst_phase:.2e} rad"
+    );
+    out.figure("regimes", &transients)?;
+    for (name, fig) in resonance_figures(&points) {
+        out.figure(name, &fig)?;
+    }
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({ "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4" }),
+    )?;
+    out.report();
+    Ok(())
+}
+
+/// Free decay from x = 1 m at rest in each regime: exact curve and RK4 markers.
+pub fn transients(set: &[String]) -> Result<(Figure, Vec<Vec<String>>)> {
+    let mut fig = Figure::new(
+        "Damped oscillator: the three regimes (paper Figure 1)",
+        "time t (s)",
+        "displacement x (m)",
+    );
+    let mut rows = Vec::new();
+    for (i, (label, zeta)) in REGIMES.iter().enumerate() {
+        let (_, base) = oscillator(set, &[])?;
+        let c = 2.0 * zeta * (base.k * base.m).sqrt();
+        let (values, o) =
+            oscillator(set, &["x=1".into(), "v=0".into(), "drive_amplitude=0".into(), format!("c={c}")])?;
+        let period = std::f64::consts::TAU / o.natural_frequency();
+        let t_end = 3.0 * period;
+        let mut rec = Recorder::default();
+        let model = values.build();
+        model.solve(
+            &RK4,
+            values.initial_state(),
+            &RunSpec { t0: 0.0, h: H, end: End::Time(t_end) },
+            &mut rec,
+        )?;
+        let samples: Vec<(f64, f64)> = rec.rows.chunks(3).map(|r| (r[0], r[1])).collect();
+        let stride = (samples.len() / 40).max(1);
+        let exact: Vec<(f64, f64)> =
+            (0..=600).map(|k| t_end * k as f64 / 600.0).map(|t| (t, o.exact(t, 1.0, 0.0).0)).collect();
+        for (t, x) in samples.iter().step_by(stride) {
+            rows.push(vec![num(*zeta), num(*t), num(o.exact(*t, 1.0, 0.0).0), num(*x)]);
+        }
+        fig = fig.with(format!("{label} (exact)"), palette(i), Kind::Line, exact).with(
+            "",
+            palette(i),
+            Kind::Markers,
+            samples.into_iter().step_by(stride).collect(),
+        );
+    }
+    Ok((fig, rows))
+}
+
+/// Steady-state amplitude and phase lag against drive frequency: exact, and from RK4 runs
+/// past their transient, fitted as x ≈ a cos Ωt + b sin Ωt by least squares.
+pub fn resonance(set: &[String]) -> Result<Vec<ResonancePoint>> {
+    let ratios: Vec<f64> = (1..=15).map(|k| 0.2 * k as f64).collect();
+    let bar = study::progress((RESONANCE.len() * ratios.len()) as u64, "resonance");
+    let mut points = Vec::new();
+    for &zeta in &RESONANCE {
+        for &ratio in &ratios {
+            let (_, o) = oscillator(set, &[])?;
+            let w0 = o.natural_frequency();
+            let (c, w) = (2.0 * zeta * (o.k * o.m).sqrt(), ratio * w0);
+            let items = [
+                format!("c={c}"),
+                "drive_amplitude=1".into(),
+                format!("drive_frequency={w}"),
+                "x=0".into(),
+                "v=0".into(),
+            ];
+            let (values, o) = oscillator(set, &items)?;
+            let steady = o.steady_state();
+            // Transients decay as e^{−ζ ω₀ t}: wait 25 e-folds, then fit 10 drive periods.
+            let transient = 25.0 / (zeta * w0);
+            let window = 10.0 * std::f64::consts::TAU / w;
+            let mut rec = Recorder::default();
+            let model = values.build();
+            let spec = RunSpec { t0: 0.0, h: H, end: End::Time(transient + window) };
+            model.solve(&RK4, values.initial_state(), &spec, &mut rec)?;
+            let (a, b) =
+                fit_harmonic(rec.rows.chunks(3).filter(|r| r[0] >= transient).map(|r| (r[0], r[1])), w);
+            let scale = o.drive_amplitude / o.k;
+            points.push(ResonancePoint {
+                zeta,
+                ratio,
+                amplitude_exact: steady.amplitude / scale,
+                amplitude_simulated: a.hypot(b) / scale,
+                phase_exact: steady.phase_lag,
+                phase_simulated: b.atan2(a),
+            });
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    Ok(points)
+}
+
+/// Least-squares (a, b) in x(t) ≈ a cos(ω t) + b sin(ω t).
+fn fit_harmonic(samples: impl Iterator<Item = (f64, f64)>, w: f64) -> (f64, f64) {
+    let (mut cc, mut ss, mut cs, mut xc, mut xs) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (t, x) in samples {
+        let (s, c) = (w * t).sin_cos();
+        cc += c * c;
+        ss += s * s;
+        cs += c * s;
+        xc += x * c;
+        xs += x * s;
+    }
+    let det = cc * ss - cs * cs;
+    ((xc * ss - xs * cs) / det, (xs * cc - xc * cs) / det)
+}
+
+/// Amplitude and phase curves: exact lines, simulated markers, one colour per ζ.
+pub fn resonance_figures(points: &[ResonancePoint]) -> Vec<(&'static str, Figure)> {
+    let mut amp =
+        Figure::new("Forced damped oscillator: resonance", "drive frequency Ω / ω₀", "amplitude X k / F");
+    let mut phase = Figure::new(
+        "Forced damped oscillator: phase lag (π/2 at resonance)",
+        "drive frequency Ω / ω₀",
+        "phase lag φ (rad)",
+    );
+    for (i, &zeta) in RESONANCE.iter().enumerate() {
+        let curve = |f: &dyn Fn(f64) -> f64| {
+            (0..=280).map(|k| 0.2 + k as f64 * 0.01).map(|r| (r, f(r))).collect::<Vec<_>>()
+        };
+        let exact_amp = move |r: f64| 1.0 / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+        let exact_phase = move |r: f64| (2.0 * zeta * r).atan2(1.0 - r * r);
+        let pts: Vec<&ResonancePoint> = points.iter().filter(|p| p.zeta == zeta).collect();
+        amp = amp.with(format!("ζ = {zeta}"), palette(i), Kind::Line, curve(&exact_amp)).with(
+            "",
+            palette(i),
+            Kind::Markers,
+            pts.iter().map(|p| (p.ratio, p.amplitude_simulated)).collect(),
+        );
+        phase = phase.with(format!("ζ = {zeta}"), palette(i), Kind::Line, curve(&exact_phase)).with(
+            "",
+            palette(i),
+            Kind::Markers,
+            pts.iter().map(|p| (p.ratio, p.phase_simulated)).collect(),
+        );
+    }
+    vec![("resonance_amplitude", amp), ("resonance_phase", phase)]
+}

@@ -1,0 +1,173 @@
+//! What the study commands (compare, convergence, stability, period, oscillator-regimes,
+//! report) share: their common arguments, the output directory, tables and progress.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use pendula::integrator::{self, METHODS, Method, Requirement};
+use pendula::system::{self, DynModel, Values};
+use pendula_viz::Figure;
+
+use crate::config::parse_settings;
+use crate::output::AtomicFile;
+
+/// Arguments every study command takes.
+#[derive(Debug, Clone, Args)]
+pub struct Common {
+    /// Set a parameter or initial-state variable (`--set theta1=120deg`).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Directory for CSV, PNG and SVG outputs [default: pendula-out/<command>].
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: Option<PathBuf>,
+    /// Write the headline numbers as JSON here.
+    #[arg(long, value_name = "FILE.json")]
+    pub summary: Option<PathBuf>,
+}
+
+/// Validated system values from a name and `--set` items.
+pub fn values(system: &str, set: &[String]) -> Result<Values> {
+    let info = system::find(system)?;
+    Ok(info.values(&parse_settings(info, set)?)?)
+}
+
+/// Methods from a comma-separated list, or every method that applies to `model` when `None`.
+pub fn methods(list: Option<&str>, model: &dyn DynModel, values: &Values) -> Result<Vec<&'static Method>> {
+    match list {
+        Some(text) => text.split(',').map(|name| Ok(integrator::find(name.trim())?)).collect(),
+        None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values)).collect()),
+    }
+}
+
+/// Whether `method` can run on the model (its requirement is met).
+fn applies(method: &Method, model: &dyn DynModel, values: &Values) -> bool {
+    method.requirement == Requirement::Any || {
+        let spec = pendula::RunSpec { t0: 0.0, h: 1e-3, end: pendula::End::Steps(1) };
+        !matches!(
+            model.solve(method, values.initial_state(), &spec, &mut pendula::observe::Ignore),
+            Err(pendula::Error::UnmetRequirement { .. })
+        )
+    }
+}
+
+/// The output directory: created if needed; files appear whole (temporary name, then rename).
+pub struct OutDir {
+    path: PathBuf,
+    written: Vec<PathBuf>,
+}
+
+impl OutDir {
+    /// `--out-dir`, or `pendula-out/<command>`.
+    pub fn new(dir: Option<&Path>, command: &str) -> Result<Self> {
+        let path = dir.map_or_else(|| Path::new("pendula-out").join(command), Path::to_path_buf);
+        if path.exists() && !path.is_dir() {
+            bail!("cannot write --out-dir {}: it is a file, not a directory", path.display());
+        }
+        std::fs::create_dir_all(&path)
+            .with_context(|| format!("cannot create --out-dir {}", path.display()))?;
+        // Fail now, not after the work, if the directory cannot be written.
+        AtomicFile::create(&path.join(".pendula-probe"), "--out-dir")?;
+        Ok(OutDir { path, written: Vec::new() })
+    }
+
+    /// Where the files go.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes `bytes` to `name` in the directory.
+    pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf> {
+        let path = self.path.join(name);
+        let file = AtomicFile::create(&path, "--out-dir")?;
+        std::io::Write::write_all(&mut file.handle()?, bytes)?;
+        file.commit()?;
+        self.written.push(path.clone());
+        Ok(path)
+    }
+
+    /// Writes `name.png` and `name.svg`.
+    pub fn figure(&mut self, name: &str, figure: &Figure) -> Result<()> {
+        self.write(&format!("{name}.png"), &figure.png()?)?;
+        self.write(&format!("{name}.svg"), figure.svg()?.as_bytes())?;
+        Ok(())
+    }
+
+    /// Writes a CSV file from a header and rows of fields.
+    pub fn csv(&mut self, name: &str, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(header)?;
+        for row in rows {
+            w.write_record(row)?;
+        }
+        self.write(name, &w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?)?;
+        Ok(())
+    }
+
+    /// Tells stderr what was written.
+    pub fn report(&self) {
+        eprintln!("wrote {} files to {}", self.written.len(), self.path.display());
+    }
+}
+
+/// Writes the `--summary` JSON, if asked for.
+pub fn summary(path: Option<&Path>, doc: &serde_json::Value) -> Result<()> {
+    if let Some(path) = path {
+        let file = AtomicFile::create(path, "--summary")?;
+        let mut handle = file.handle()?;
+        serde_json::to_writer_pretty(&mut handle, doc)?;
+        std::io::Write::write_all(&mut handle, b"\n")?;
+        file.commit()?;
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr for `n` units of work; invisible when stderr is not a terminal.
+pub fn progress(n: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(n);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_owned());
+    bar
+}
+
+/// A plain-text table with aligned columns.
+pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
+    let mut widths: Vec<usize> = header.iter().map(|h| h.len()).collect();
+    for row in rows {
+        for (w, cell) in widths.iter_mut().zip(row) {
+            *w = (*w).max(cell.len());
+        }
+    }
+    let mut out = String::new();
+    let line = |out: &mut String, cells: &mut dyn Iterator<Item = &str>| {
+        let parts: Vec<String> = cells.zip(&widths).map(|(c, w)| format!("{c:>w$}")).collect();
+        let _ = writeln!(out, "{}", parts.join("  ").trim_end());
+    };
+    line(&mut out, &mut header.iter().copied());
+    for row in rows {
+        line(&mut out, &mut row.iter().map(String::as_str));
+    }
+    out
+}
+
+/// A number for tables and CSV: shortest round-trip form.
+pub fn num(v: f64) -> String {
+    if v.is_finite() { ryu::Buffer::new().format(v).to_owned() } else { String::new() }
+}
+
+/// A number for humans: 4 significant digits.
+pub fn short(v: f64) -> String {
+    if !v.is_finite() {
+        "-".into()
+    } else if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}

@@ -1,0 +1,66 @@
+//! # pendula-viz
+//!
+//! Figures and animations of pendula's results. A [`Figure`] is data — title, axis labels
+//! with units, linear or logarithmic axes, and [`Series`] — rendered to PNG or SVG bytes
+//! with an embedded font (DejaVu Sans), so that output is the same on every machine.
+//! [`method_color`] gives each integration method one colour, used in every figure.
+//! [`animate`] draws anti-aliased pendulum frames and encodes them as GIF.
+//!
+//! Nothing here writes files: callers decide where bytes go.
+
+pub mod animate;
+mod figure;
+
+pub use animate::{Animation, Snapshot};
+
+pub use figure::{Figure, Kind, Scale, Series};
+
+use plotters::style::RGBColor;
+
+/// What can go wrong while drawing or encoding.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The plotting backend failed.
+    #[error("drawing failed: {0}")]
+    Draw(String),
+    /// PNG or GIF encoding failed.
+    #[error("encoding failed: {0}")]
+    Encode(String),
+    /// Nothing to draw (no finite points, or a log axis with no positive values).
+    #[error("nothing to draw in `{0}`: no finite points in range")]
+    Empty(String),
+}
+
+/// An RGB colour.
+pub type Rgb = RGBColor;
+
+/// Colour-blind-safe palette (Okabe & Ito, 2008), in the order methods are registered.
+const PALETTE: [Rgb; 8] = [
+    RGBColor(213, 94, 0),    // vermillion
+    RGBColor(0, 114, 178),   // blue
+    RGBColor(0, 158, 115),   // bluish green
+    RGBColor(204, 121, 167), // reddish purple
+    RGBColor(230, 159, 0),   // orange
+    RGBColor(86, 180, 233),  // sky blue
+    RGBColor(120, 94, 240),  // violet
+    RGBColor(100, 100, 100), // grey
+];
+
+/// Black, for exact solutions and references.
+pub const REFERENCE: Rgb = RGBColor(0, 0, 0);
+
+/// Light grey, for guide lines.
+pub const GUIDE: Rgb = RGBColor(150, 150, 150);
+
+/// The colour of a method, the same in every figure: its position in
+/// [`pendula::integrator::METHODS`] picks a palette entry.
+pub fn method_color(name: &str) -> Rgb {
+    let i = pendula::integrator::METHODS.iter().position(|m| m.name == name).unwrap_or(PALETTE.len() - 1);
+    PALETTE[i % PALETTE.len()]
+}
+
+/// The i-th colour of the palette, for series that are not methods.
+pub fn palette(i: usize) -> Rgb {
+    PALETTE[i % PALETTE.len()]
+}
