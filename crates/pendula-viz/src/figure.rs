@@ -35,6 +35,20 @@ pub enum Kind {
     Dots,
 }
 
+/// Where the legend goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Legend {
+    /// Top right corner.
+    #[default]
+    UpperRight,
+    /// Bottom right corner.
+    LowerRight,
+    /// Top left corner.
+    UpperLeft,
+    /// Bottom left corner.
+    LowerLeft,
+}
+
 /// One labelled series of (x, y) points.
 #[derive(Debug, Clone)]
 pub struct Series {
@@ -65,6 +79,8 @@ pub struct Figure {
     pub series: Vec<Series>,
     /// Size in pixels (PNG) or user units (SVG).
     pub size: (u32, u32),
+    /// Legend position.
+    pub legend: Legend,
 }
 
 impl Figure {
@@ -78,7 +94,14 @@ impl Figure {
             y_scale: Scale::Linear,
             series: Vec::new(),
             size: (960, 600),
+            legend: Legend::UpperRight,
         }
+    }
+
+    /// With the legend here.
+    pub fn legend(mut self, legend: Legend) -> Self {
+        self.legend = legend;
+        self
     }
 
     /// With these axis scales.
@@ -223,7 +246,12 @@ impl Figure {
                 .background_style(WHITE.mix(0.85))
                 .border_style(RGBColor(180, 180, 180))
                 .label_font(("sans-serif", 15))
-                .position(SeriesLabelPosition::UpperRight)
+                .position(match self.legend {
+                    Legend::UpperRight => SeriesLabelPosition::UpperRight,
+                    Legend::LowerRight => SeriesLabelPosition::LowerRight,
+                    Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+                    Legend::LowerLeft => SeriesLabelPosition::LowerLeft,
+                })
                 .draw()
                 .map_err(draw_error)?;
         }

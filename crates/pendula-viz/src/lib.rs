@@ -13,7 +13,7 @@ mod figure;
 
 pub use animate::{Animation, Snapshot};
 
-pub use figure::{Figure, Kind, Scale, Series};
+pub use figure::{Figure, Kind, Legend, Scale, Series};
 
 use plotters::style::RGBColor;
 

@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{StabilityCriterion, largest_stable_step};
-use pendula_viz::{Figure, Kind, Scale, method_color};
+use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -100,7 +100,8 @@ pub fn figure(
         "method (position in the table)",
         "largest stable step h (s)",
     )
-    .scales(Scale::Linear, Scale::Log);
+    .scales(Scale::Linear, Scale::Log)
+    .legend(Legend::LowerRight);
     for (i, (m, h)) in results.iter().enumerate() {
         if let Some(h) = h {
             fig = fig.with(*m, method_color(m), Kind::Markers, vec![(i as f64 + 1.0, *h)]);

@@ -1,0 +1,223 @@
+//! The study commands end to end: their headline numbers, their files (CSV columns, PNG and
+//! GIF that decode to the right size), and their errors.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use tempfile::TempDir;
+
+fn pendula(dir: &Path, args: &[&str]) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("pendula").unwrap().current_dir(dir).args(args).assert()
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn header(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap().lines().next().unwrap().to_owned()
+}
+
+fn png_size(path: &Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    let info = reader.info();
+    (info.width, info.height)
+}
+
+#[test]
+fn ref_convergence_orders_of_the_oscillator() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path(), &["convergence", "oscillator", "--out-dir", "c", "--summary", "s.json"]).success();
+    let s = json(&dir.path().join("s.json"));
+    for (method, order) in [("euler", 1.0), ("rk4", 4.0), ("symplectic-euler", 1.0), ("verlet", 2.0)] {
+        let fitted = s["orders"][method].as_f64().unwrap();
+        assert!((fitted - order).abs() <= 0.1, "{method}: {fitted}");
+    }
+    assert_eq!(s["reference"], "exact solution");
+    assert_eq!(header(&dir.path().join("c/convergence.csv")), "method,dt,error");
+    assert_eq!(png_size(&dir.path().join("c/convergence.png")), (960, 600));
+    assert!(std::fs::read_to_string(dir.path().join("c/convergence.svg")).unwrap().starts_with("<svg"));
+}
+
+#[test]
+fn ref_period_at_170_degrees_matches_the_exact_period() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path(), &["period", "--out-dir", "p", "--summary", "s.json"]).success();
+    let s = json(&dir.path().join("s.json"));
+    let row = s["rows"].as_array().unwrap().iter().find(|r| r["amplitude_deg"] == 170.0).unwrap();
+    let (sim, exact) = (row["simulated"].as_f64().unwrap(), row["exact"].as_f64().unwrap());
+    assert!((sim / exact - 1.0).abs() < 1e-6, "{sim} vs {exact}");
+    assert!((exact - 4.893524274105486164).abs() < 1e-12, "mpmath's 4 sqrt(l/g) K(sin 85°)");
+    assert!(row["small_angle"].as_f64().unwrap() < 0.5 * exact);
+    assert_eq!(header(&dir.path().join("p/period.csv")), "amplitude_deg,simulated,exact,small_angle");
+    assert_eq!(png_size(&dir.path().join("p/period.png")), (960, 600));
+}
+
+#[test]
+fn compare_writes_its_summary_and_figures() {
+    let dir = TempDir::new().unwrap();
+    let out =
+        pendula(dir.path(), &["compare", "pendulum", "--dt", "0.05", "--t-end", "200", "--out-dir", "c"])
+            .success();
+    let table = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    assert!(table.contains("verlet") && table.contains("max |dE/E0|"));
+    assert_eq!(
+        header(&dir.path().join("c/summary.csv")),
+        "method,dt,steps,rhs_evals,wall_s,max_rel_energy_error,drift_rate"
+    );
+    let csv = std::fs::read_to_string(dir.path().join("c/summary.csv")).unwrap();
+    let error = |method: &str| -> f64 {
+        let line = csv.lines().find(|l| l.starts_with(&format!("{method},"))).unwrap();
+        line.split(',').nth(5).unwrap().parse().unwrap()
+    };
+    // Euler's energy runs away; Verlet's stays bounded and small at this step.
+    assert!(error("euler") > 100.0 * error("verlet"), "{csv}");
+    for name in ["energy", "trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"]
+    {
+        assert_eq!(png_size(&dir.path().join(format!("c/{name}.png"))), (960, 600), "{name}");
+    }
+}
+
+#[test]
+fn stability_and_regimes_write_their_tables() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path(), &["stability", "--methods", "euler,verlet", "--out-dir", "s", "--summary", "s.json"])
+        .success();
+    let s = json(&dir.path().join("s.json"));
+    let (euler, verlet) = (
+        s["largest_stable_dt"]["euler"].as_f64().unwrap(),
+        s["largest_stable_dt"]["verlet"].as_f64().unwrap(),
+    );
+    assert!(euler < verlet / 10.0, "euler {euler}, verlet {verlet}");
+    assert_eq!(header(&dir.path().join("s/stability.csv")), "method,largest_stable_dt");
+    pendula(dir.path(), &["oscillator-regimes", "--out-dir", "r", "--summary", "r.json"]).success();
+    let r = json(&dir.path().join("r.json"));
+    assert!(r["max_rel_amplitude_error"].as_f64().unwrap() < 1e-6);
+    assert_eq!(
+        header(&dir.path().join("r/resonance.csv")),
+        "zeta,drive_ratio,amplitude_exact,amplitude_simulated,phase_exact,phase_simulated"
+    );
+    for name in ["regimes", "resonance_amplitude", "resonance_phase"] {
+        assert_eq!(png_size(&dir.path().join(format!("r/{name}.png"))), (960, 600));
+    }
+}
+
+#[test]
+fn animate_writes_a_gif_with_one_frame_per_sample() {
+    let dir = TempDir::new().unwrap();
+    pendula(
+        dir.path(),
+        &[
+            "animate",
+            "double",
+            "--t-end",
+            "1",
+            "--fps",
+            "10",
+            "--size",
+            "160x120",
+            "--compare",
+            "1e-3",
+            "--out",
+            "a.gif",
+        ],
+    )
+    .success();
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options.read_info(std::fs::File::open(dir.path().join("a.gif")).unwrap()).unwrap();
+    assert_eq!((decoder.width(), decoder.height()), (160, 120));
+    let mut frames = 0;
+    while decoder.read_next_frame().unwrap().is_some() {
+        frames += 1;
+    }
+    // t = 0, 0.1, ..., 1.0 s.
+    assert_eq!(frames, 11);
+}
+
+#[test]
+fn report_is_one_self_contained_page() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path(), &["report", "--out-dir", "r"]).success();
+    let html = std::fs::read_to_string(dir.path().join("r/report.html")).unwrap();
+    assert!(html.matches("src=\"data:image/png;base64,").count() >= 20);
+    assert!(html.contains("src=\"data:image/gif;base64,"));
+    assert!(!html.contains("src=\"http") && !html.contains("src=\"/"), "no external images");
+    for section in ["§2", "§7.3", "§8", "ERRATA", "Figure 1"] {
+        assert!(html.contains(section), "{section}");
+    }
+    for entry in std::fs::read_dir(dir.path().join("r")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "png") {
+            assert_eq!(png_size(&path), (960, 600), "{}", path.display());
+        }
+    }
+}
+
+#[test]
+fn study_commands_reject_bad_input() {
+    let dir = TempDir::new().unwrap();
+    for (args, needle) in [
+        (&["convergence", "--levels", "1"][..], "--levels"),
+        (&["convergence", "--dt-min", "0.1", "--dt-max", "0.01"][..], "dt-min"),
+        (&["compare", "--methods", "euler,rk5"][..], "unknown method `rk5`"),
+        (&["compare", "pendulum", "--methods", "verlet", "--set", "damping=0.1"][..], "verlet needs"),
+        (&["period", "--max-amplitude", "180"][..], "--max-amplitude"),
+        (&["animate", "oscillator"][..], "use pendulum or double"),
+        (&["animate", "--out", "a.png"][..], ".gif"),
+        (&["animate", "--size", "10x10"][..], "--size"),
+        (&["stability", "--max-energy-error", "0"][..], "--max-energy-error"),
+    ] {
+        let out = pendula(dir.path(), args).code(2);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn mp4_without_ffmpeg_says_so() {
+    let has_ffmpeg =
+        std::process::Command::new("ffmpeg").arg("-version").output().is_ok_and(|o| o.status.success());
+    let dir = TempDir::new().unwrap();
+    let a = pendula(dir.path(), &["animate", "--t-end", "0.2", "--out", "a.mp4"]);
+    if has_ffmpeg {
+        a.success();
+        assert!(std::fs::metadata(dir.path().join("a.mp4")).unwrap().len() > 0);
+    } else {
+        let out = a.code(2);
+        assert!(String::from_utf8_lossy(&out.get_output().stderr).contains("ffmpeg"));
+        assert!(!dir.path().join("a.mp4").exists());
+    }
+}
+
+/// Small runs pinned: a change of method, expression order or output format shows here.
+#[test]
+fn regress_small_run_csv() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path(), &["simulate", "oscillator", "--dt", "0.1", "--steps", "5", "--out", "-"])
+        .success();
+    insta::assert_snapshot!(String::from_utf8(out.get_output().stdout.clone()).unwrap(), @r"
+    t,x,v,energy
+    0.0,1.0,0.0,0.5
+    0.1,0.9950041666666667,-0.09983333333333333,0.49999999306423615
+    0.2,0.9800665972395833,-0.19866916527777778,0.49999998612847235
+    0.30000000000000004,0.9553365428639757,-0.29551996253066265,0.49999997919270855
+    0.4,0.9210610977926066,-0.38941802558044014,0.4999999722569449
+    0.5,0.8775827305044371,-0.4794251576239398,0.4999999653211815
+    ");
+    let out = pendula(
+        dir.path(),
+        &["simulate", "pendulum", "--method", "verlet", "--dt", "0.1", "--steps", "5", "--out", "-"],
+    )
+    .success();
+    insta::assert_snapshot!(String::from_utf8(out.get_output().stdout.clone()).unwrap(), @r"
+    t,theta,omega,energy
+    0.0,1.0471975511965976,0.0,-4.905000000000001
+    0.1,1.004719005140971,-0.8387730009296126,-4.909582087854115
+    0.2,0.879442951010675,-1.6306338123385216,-4.925180258296197
+    0.30000000000000004,0.6785922426732665,-2.3163928383933134,-4.9538266128478705
+    0.4,0.4161643833320123,-2.8225657704914844,-4.989240777569198
+    0.5,0.11407908857496957,-3.076687450993198,-5.013232503852725
+    ");
+}
