@@ -205,6 +205,8 @@ impl Figure {
             .map_err(draw_error)?;
         chart
             .configure_mesh()
+            .x_labels(8)
+            .y_labels(10)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .label_style(("sans-serif", 15))

@@ -4,7 +4,7 @@
 use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::{self, fit_order};
-use pendula_viz::{Figure, GUIDE, Kind, Scale, method_color};
+use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -138,11 +138,12 @@ pub fn study_orders(
 /// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
     let mut fig = Figure::new(
-        format!("{system}: global error at t = {t_end} s (against the {reference})"),
+        format!("{system}: global error at t = {t_end} s, against the {reference}"),
         "step size h (s)",
         "max |y(t) - y_ref(t)|",
     )
-    .scales(Scale::Log, Scale::Log);
+    .scales(Scale::Log, Scale::Log)
+    .legend(Legend::LowerRight);
     for r in results {
         let label = match r.order {
             Some(o) => format!("{} (order {o:.2})", r.method),

@@ -56,7 +56,7 @@ pub fn reference_state(
     };
     let (coarse, fine) = (run(h_fine)?, run(h_fine / 2.0)?);
     let state = coarse.iter().zip(&fine).map(|(c, f)| f + (f - c) / 15.0).collect();
-    Ok(Reference { state, source: "RK4 with Richardson extrapolation at a fine step" })
+    Ok(Reference { state, source: "RK4-Richardson reference" })
 }
 
 /// Max-norm error at `t_end` of `method` at each step size in `hs`, against `reference`.
