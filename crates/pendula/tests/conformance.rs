@@ -7,7 +7,9 @@ use pendula::system::oscillator::Oscillator;
 use pendula::system::pendulum::Pendulum;
 use pendula::system::{Model, Values};
 
-use crate::support::{final_state, fitted_order, max_diff, values};
+use pendula::analysis::fit_order;
+
+use crate::support::{final_state, max_diff, values};
 
 /// A problem with an independently known solution at `t_end`.
 struct Problem {
@@ -121,7 +123,7 @@ fn measured_order(problem: &Problem, method: &Method) -> Option<f64> {
             Err(e) => panic!("{} on {}: {e}", method.name, problem.name),
         }
     }
-    let order = fitted_order(&hs, &errors);
+    let order = fit_order(&hs, &errors).expect("positive errors").order;
     eprintln!(
         "{:<17} on {:<48} errors {} -> order {order:.3}",
         method.name,
