@@ -249,6 +249,10 @@ fn output_path_that_is_a_directory() {
 #[test]
 fn unmet_requirement_is_explained() {
     rejects(
+        &["simulate", "double", "--method", "yoshida-6"],
+        &["yoshida-6 needs a separable Hamiltonian", "`double`", "not separable", "verlet"],
+    );
+    rejects(
         &["simulate", "pendulum", "--method", "verlet", "--set", "damping=0.3"],
         &["verlet", "Hamiltonian", "damping = 0.3", "try rk4"],
     );

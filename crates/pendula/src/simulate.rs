@@ -7,7 +7,7 @@ use std::cell::Cell;
 use crate::Error;
 use crate::integrator::explicit_rk::ExplicitRk;
 use crate::integrator::partitioned::PartitionedStepper;
-use crate::integrator::{Method, Scheme, Stepper};
+use crate::integrator::{Method, Requirement, Scheme, Stepper};
 use crate::observe::{Observer, Sample};
 use crate::system::{Hamiltonian, Model, System};
 
@@ -206,12 +206,19 @@ pub fn solve<M: Model>(
             Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
         }
         Scheme::Partitioned(partition) => {
-            let form = model.hamiltonian_form().map_err(|reason| Error::UnmetRequirement {
+            let unmet = |reason| Error::UnmetRequirement {
                 method: method.name,
                 needs: method.requirement.describe(),
                 reason,
-                suggestion: "rk4",
-            })?;
+                suggestion: method.requirement.suggestion(),
+            };
+            let form = model.hamiltonian_form().map_err(unmet)?;
+            if method.requirement == Requirement::Separable && !form.separable() {
+                return Err(unmet(format!(
+                    "the `{}` system's Hamiltonian is not separable (its kinetic energy depends on the positions)",
+                    M::INFO.name
+                )));
+            }
             let system = Counted::new(&form);
             let mut z = vec![0.0; dim];
             model.to_momenta(y0, &mut z);

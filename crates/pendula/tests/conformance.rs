@@ -114,7 +114,13 @@ fn problems() -> Vec<Problem> {
 /// The fitted order, or `None` when the problem has no step range for this order or the
 /// method does not apply to it (only an unmet requirement may say so).
 fn measured_order(problem: &Problem, method: &Method) -> Option<f64> {
-    let hs = if method.order <= 2 { problem.low_order_h } else { problem.high_order_h? };
+    // Step ranges are set for order 4; higher orders reach round-off sooner, so they take
+    // larger steps: ×2 per two orders.
+    let hs = if method.order <= 2 {
+        problem.low_order_h
+    } else {
+        problem.high_order_h?.map(|h| h * 2f64.powi((method.order as i32 - 4) / 2))
+    };
     let mut errors = Vec::new();
     for h in hs {
         match final_state(&problem.values, method, h, problem.t_end) {
@@ -123,7 +129,16 @@ fn measured_order(problem: &Problem, method: &Method) -> Option<f64> {
             Err(e) => panic!("{} on {}: {e}", method.name, problem.name),
         }
     }
-    let order = fit_order(&hs, &errors).expect("positive errors").order;
+    // Order 8 has a narrow asymptotic window between its pre-asymptotic large steps and the
+    // round-off floor: fit its three finest steps whose errors stay above 2e-14 (~100 ε).
+    let (fit_h, fit_e): (Vec<f64>, Vec<f64>) = if method.order >= 8 {
+        let kept: Vec<(f64, f64)> =
+            hs.iter().copied().zip(errors.iter().copied()).filter(|(_, e)| *e > 2e-14).collect();
+        kept[kept.len().saturating_sub(3)..].iter().copied().unzip()
+    } else {
+        (hs.to_vec(), errors.clone())
+    };
+    let order = fit_order(&fit_h, &fit_e).expect("positive errors").order;
     eprintln!(
         "{:<17} on {:<48} errors {} -> order {order:.3}",
         method.name,
@@ -143,7 +158,9 @@ fn ref_measured_order_equals_declared_order() {
                 continue;
             };
             measured += 1;
-            if (order - method.order as f64).abs() > 0.1 {
+            // ±0.1 as the foundation issue asks up to order 4, ±0.15 above (the integrators issue).
+            let tolerance = if method.order <= 4 { 0.1 } else { 0.15 };
+            if (order - method.order as f64).abs() > tolerance {
                 failures.push(format!(
                     "{} on {}: {order:.3}, declared {}",
                     method.name, problem.name, method.order
@@ -152,11 +169,15 @@ fn ref_measured_order_equals_declared_order() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
-    // Every pair but the ones explained as skipped: order > 2 on problem A, and the
-    // Hamiltonian methods on the damped oscillator.
-    let hamiltonian = METHODS.iter().filter(|m| m.requirement == Requirement::Hamiltonian).count();
-    let high = METHODS.iter().filter(|m| m.order > 2).count();
-    assert_eq!(measured, problems().len() * METHODS.len() - high - hamiltonian);
+    // Every pair but the ones explained as skipped: order > 2 on problem A, methods needing
+    // a Hamiltonian on the damped oscillator, and methods needing a separable H on the
+    // double pendulum (A and B; on A only those of order ≤ 2, the rest are skipped already).
+    let count = |f: &dyn Fn(&&&Method) -> bool| METHODS.iter().filter(f).count();
+    let needs_h = count(&|m| m.requirement != Requirement::Any);
+    let high = count(&|m| m.order > 2);
+    let separable_b = count(&|m| m.requirement == Requirement::Separable);
+    let separable_a_low = count(&|m| m.requirement == Requirement::Separable && m.order <= 2);
+    assert_eq!(measured, problems().len() * METHODS.len() - high - needs_h - separable_b - separable_a_low);
 }
 
 /// Σ b = 1 and the row sums of A equal c, for every Runge–Kutta tableau.

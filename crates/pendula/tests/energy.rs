@@ -72,3 +72,26 @@ fn ref_explicit_methods_drift() {
     let (_, verlet) = tenths(integrator::find("verlet").unwrap(), STEPS).unwrap();
     assert!(first > 100.0 * verlet, "euler {first:e} vs verlet {verlet:e}");
 }
+
+/// Yoshida-6 on the simple pendulum from 60°: over 10⁶ steps of h = 0.01 the energy error is
+/// bounded, and its size scales as h⁶ (halving h divides it by 2⁶ = 64, within 25%).
+#[test]
+fn ref_yoshida_6_energy_error_is_bounded_at_order_6() {
+    let values = values("pendulum", &[]);
+    let model = values.build();
+    let method = integrator::find("yoshida-6").unwrap();
+    let run = |h: f64, steps: u64| {
+        let mut obs = Tenths { model: &*model, steps, e0: None, first: 0.0, last: 0.0 };
+        let spec = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
+        model.solve(method, values.initial_state(), &spec, &mut obs).unwrap();
+        (obs.first, obs.last)
+    };
+    let (first, last) = run(0.01, STEPS);
+    eprintln!("yoshida-6: first tenth {first:.3e} J, last tenth {last:.3e} J");
+    assert!(last <= 2.0 * first, "{first:e} then {last:e}");
+    // Short runs over the same 100 s at h = 0.1 and 0.05 (errors far above round-off).
+    let (coarse, fine) = (run(0.1, 1000).0.max(run(0.1, 1000).1), run(0.05, 2000).0.max(run(0.05, 2000).1));
+    let ratio = coarse / fine;
+    eprintln!("yoshida-6: max |dE| {coarse:.3e} J at h = 0.1, {fine:.3e} J at h = 0.05, ratio {ratio:.1}");
+    assert!((ratio / 64.0 - 1.0).abs() < 0.25, "ratio {ratio}");
+}

@@ -5,6 +5,7 @@
 //! plus one line in [`METHODS`]. Steppers are built from descriptors, own their scratch
 //! buffers (allocated once), and allocate nothing per step.
 
+pub mod composition;
 pub mod explicit_rk;
 pub mod partitioned;
 
@@ -23,6 +24,8 @@ pub enum Requirement {
     Any,
     /// A Hamiltonian form on (q, p); explicit when H is separable, implicit otherwise.
     Hamiltonian,
+    /// A separable Hamiltonian H = T(p) + V(t, q).
+    Separable,
 }
 
 impl Requirement {
@@ -32,6 +35,17 @@ impl Requirement {
             Requirement::Any => "any ODE",
             Requirement::Hamiltonian => {
                 "a Hamiltonian system (explicit if H = T(p) + V(q), implicit otherwise)"
+            }
+            Requirement::Separable => "a separable Hamiltonian H = T(p) + V(q)",
+        }
+    }
+
+    /// Methods to try instead when the requirement is not met.
+    pub fn suggestion(self) -> &'static str {
+        match self {
+            Requirement::Any | Requirement::Hamiltonian => "rk4",
+            Requirement::Separable => {
+                "verlet or symplectic-euler, which are implicit and still symplectic on non-separable systems"
             }
         }
     }
@@ -70,8 +84,16 @@ pub struct Method {
 }
 
 /// Every method pendula knows, in the order `pendula list methods` shows them.
-pub static METHODS: &[&Method] =
-    &[&explicit_rk::EULER, &explicit_rk::RK4, &partitioned::SYMPLECTIC_EULER, &partitioned::VERLET];
+#[rustfmt::skip] // one method per line
+pub static METHODS: &[&Method] = &[
+    &explicit_rk::EULER,
+    &explicit_rk::RK4,
+    &partitioned::SYMPLECTIC_EULER,
+    &partitioned::VERLET,
+    &composition::YOSHIDA_4,
+    &composition::YOSHIDA_6,
+    &composition::YOSHIDA_8,
+];
 
 /// Looks a method up by name.
 pub fn find(name: &str) -> Result<&'static Method, Error> {

@@ -18,13 +18,16 @@ use crate::Error;
 use crate::system::Hamiltonian;
 
 /// Which partitioned scheme.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Partition {
     /// pₙ₊₁ = pₙ − h ∂H/∂q(qₙ, pₙ₊₁); qₙ₊₁ = qₙ + h ∂H/∂p(qₙ, pₙ₊₁).
     SymplecticEuler,
     /// p½ = pₙ − h/2 ∂H/∂q(qₙ, p½); qₙ₊₁ = qₙ + h/2 (∂H/∂p(qₙ, p½) + ∂H/∂p(qₙ₊₁, p½));
     /// pₙ₊₁ = p½ − h/2 ∂H/∂q(qₙ₊₁, p½).
     StormerVerlet,
+    /// Störmer–Verlet steps of sizes wᵢ h in turn (Σ wᵢ = 1), on a separable H only: see
+    /// [`super::composition`].
+    Composition(&'static [f64]),
 }
 
 /// Symplectic Euler (Euler–Cromer): order 1, symplectic, one force evaluation per step when
@@ -115,14 +118,12 @@ impl PartitionedStepper {
         self.cached_q.copy_from_slice(q);
     }
 
-    fn explicit<H: Hamiltonian + ?Sized>(&mut self, sys: &H, t: f64, h: f64, y: &mut [f64]) {
+    /// One explicit step on a separable H: Störmer–Verlet (`verlet`) or symplectic Euler.
+    fn explicit<H: Hamiltonian + ?Sized>(&mut self, sys: &H, t: f64, h: f64, y: &mut [f64], verlet: bool) {
         let n = y.len() / 2;
         let (q, p) = y.split_at_mut(n);
         self.separable_force(sys, t, q, p);
-        let kick = match self.scheme {
-            Partition::SymplecticEuler => h,
-            Partition::StormerVerlet => 0.5 * h,
-        };
+        let kick = if verlet { 0.5 * h } else { h };
         for (pi, f) in p.iter_mut().zip(&self.force) {
             *pi -= kick * f;
         }
@@ -130,7 +131,7 @@ impl PartitionedStepper {
         for (qi, v) in q.iter_mut().zip(&self.a) {
             *qi += h * v;
         }
-        if self.scheme == Partition::StormerVerlet {
+        if verlet {
             sys.dh_dq(t + h, q, p, &mut self.force);
             for (pi, f) in p.iter_mut().zip(&self.force) {
                 *pi -= kick * f;
@@ -150,10 +151,7 @@ impl PartitionedStepper {
     ) -> Result<(), Error> {
         let n = y.len() / 2;
         let (q, p) = y.split_at_mut(n);
-        let kick = match self.scheme {
-            Partition::SymplecticEuler => h,
-            Partition::StormerVerlet => 0.5 * h,
-        };
+        let kick = if self.scheme == Partition::SymplecticEuler { h } else { 0.5 * h };
         // P = p − kick ∂H/∂q(t, q, P)
         self.x.copy_from_slice(p);
         let Self { x, next, a, .. } = self;
@@ -171,7 +169,7 @@ impl PartitionedStepper {
                     *qi += h * v;
                 }
             }
-            Partition::StormerVerlet => {
+            Partition::StormerVerlet | Partition::Composition(_) => {
                 // Q = q + h/2 (∂H/∂p(q, P) + ∂H/∂p(Q, P)), started from the explicit guess.
                 sys.dh_dp(t, q, p, &mut self.a);
                 let Self { x, next, a, b, .. } = self;
@@ -224,11 +222,22 @@ fn fixed_point(
 
 impl<H: Hamiltonian + ?Sized> Stepper<H> for PartitionedStepper {
     fn step(&mut self, system: &H, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
-        if system.separable() {
-            self.explicit(system, t, h, y);
-            Ok(())
-        } else {
-            self.implicit(system, t, h, y)
+        match self.scheme {
+            Partition::Composition(weights) => {
+                // `solve` refuses non-separable systems for compositions (their requirement).
+                debug_assert!(system.separable(), "a composition on a non-separable system");
+                let mut s = t;
+                for w in weights {
+                    self.explicit(system, s, w * h, y, true);
+                    s += w * h;
+                }
+                Ok(())
+            }
+            scheme if system.separable() => {
+                self.explicit(system, t, h, y, scheme == Partition::StormerVerlet);
+                Ok(())
+            }
+            _ => self.implicit(system, t, h, y),
         }
     }
 }
