@@ -35,8 +35,9 @@ pub enum Error {
 /// An RGB colour.
 pub type Rgb = RGBColor;
 
-/// Colour-blind-safe palette (Okabe & Ito, 2008), in the order methods are registered.
-const PALETTE: [Rgb; 8] = [
+/// Colour-blind-safe palette (Okabe & Ito, 2008), then Paul Tol's muted colours, in the
+/// order methods are registered.
+const PALETTE: [Rgb; 13] = [
     RGBColor(213, 94, 0),    // vermillion
     RGBColor(0, 114, 178),   // blue
     RGBColor(0, 158, 115),   // bluish green
@@ -44,6 +45,11 @@ const PALETTE: [Rgb; 8] = [
     RGBColor(230, 159, 0),   // orange
     RGBColor(86, 180, 233),  // sky blue
     RGBColor(120, 94, 240),  // violet
+    RGBColor(136, 34, 85),   // wine
+    RGBColor(68, 170, 153),  // teal
+    RGBColor(153, 153, 51),  // olive
+    RGBColor(166, 86, 40),   // brown
+    RGBColor(51, 34, 136),   // indigo
     RGBColor(100, 100, 100), // grey
 ];
 

@@ -6,6 +6,7 @@ use std::cell::Cell;
 
 use crate::Error;
 use crate::integrator::explicit_rk::ExplicitRk;
+use crate::integrator::gauss_legendre::Collocation;
 use crate::integrator::partitioned::PartitionedStepper;
 use crate::integrator::{Method, Requirement, Scheme, Stepper};
 use crate::observe::{Observer, Sample};
@@ -199,12 +200,14 @@ pub fn solve<M: Model>(
     assert_eq!(y0.len(), dim, "initial state of the wrong length");
     match method.scheme {
         Scheme::ExplicitRk(tableau) => {
-            let system = Counted::new(model);
-            let mut y = y0.to_vec();
-            let run = Simulation { system: &system, spec: *spec };
-            let outcome = run.run(&mut ExplicitRk::new(tableau, dim), &mut y, observer)?;
-            Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
+            run_direct(model, &mut ExplicitRk::new(tableau, dim), y0, spec, observer)
         }
+        Scheme::Collocation(tableau) => match model.hamiltonian_form() {
+            // On (q, p), where the method is symplectic.
+            Ok(form) => run_on_form(model, &form, &mut Collocation::new(tableau, dim), y0, spec, observer),
+            // Damped or otherwise not Hamiltonian: still an order-2s method on the ODE.
+            Err(_) => run_direct(model, &mut Collocation::new(tableau, dim), y0, spec, observer),
+        },
         Scheme::Partitioned(partition) => {
             let unmet = |reason| Error::UnmetRequirement {
                 method: method.name,
@@ -219,17 +222,44 @@ pub fn solve<M: Model>(
                     M::INFO.name
                 )));
             }
-            let system = Counted::new(&form);
-            let mut z = vec![0.0; dim];
-            model.to_momenta(y0, &mut z);
-            let mut shown = ToVelocities { model, y: vec![0.0; dim], inner: observer };
-            let run = Simulation { system: &system, spec: *spec };
-            let outcome = run.run(&mut PartitionedStepper::new(partition, dim / 2), &mut z, &mut shown)?;
-            let mut y = vec![0.0; dim];
-            model.to_velocities(&z, &mut y);
-            Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
+            run_on_form(model, &form, &mut PartitionedStepper::new(partition, dim / 2), y0, spec, observer)
         }
     }
+}
+
+/// Runs a stepper on the model's own (position, velocity) ODE.
+fn run_direct<M: Model>(
+    model: &M,
+    stepper: &mut impl for<'a> Stepper<Counted<'a, M>>,
+    y0: &[f64],
+    spec: &RunSpec,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    let system = Counted::new(model);
+    let mut y = y0.to_vec();
+    let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut y, observer)?;
+    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
+}
+
+/// Runs a stepper on the Hamiltonian form, converting to (q, p) before and back after, and
+/// for every state the observer sees.
+fn run_on_form<M: Model>(
+    model: &M,
+    form: &M::Form,
+    stepper: &mut impl for<'a> Stepper<Counted<'a, M::Form>>,
+    y0: &[f64],
+    spec: &RunSpec,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    let dim = y0.len();
+    let system = Counted::new(form);
+    let mut z = vec![0.0; dim];
+    model.to_momenta(y0, &mut z);
+    let mut shown = ToVelocities { model, y: vec![0.0; dim], inner: observer };
+    let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut z, &mut shown)?;
+    let mut y = vec![0.0; dim];
+    model.to_velocities(&z, &mut y);
+    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
 }
 
 /// Shows (q, p) states to an observer as (q, q').

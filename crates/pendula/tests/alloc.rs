@@ -6,6 +6,7 @@ use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::Cell;
 
 use pendula::integrator::explicit_rk::ExplicitRk;
+use pendula::integrator::gauss_legendre::Collocation;
 use pendula::integrator::partitioned::PartitionedStepper;
 use pendula::integrator::{METHODS, Requirement, Scheme, Stepper};
 use pendula::observe::Ignore;
@@ -63,6 +64,14 @@ fn check<M: Model>(v: &Values) {
                 stepper.step(&model, 0.0, 1e-3, &mut y).unwrap();
                 allocations_during(|| {
                     Simulation { system: &model, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
+                })
+            }
+            Scheme::Collocation(t) => {
+                let form = model.hamiltonian_form().unwrap();
+                let mut stepper = Collocation::new(t, y.len());
+                stepper.step(&form, 0.0, 1e-3, &mut y).unwrap();
+                allocations_during(|| {
+                    Simulation { system: &form, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
                 })
             }
             Scheme::Partitioned(p) => {

@@ -7,6 +7,7 @@
 
 pub mod composition;
 pub mod explicit_rk;
+pub mod gauss_legendre;
 pub mod partitioned;
 
 use crate::Error;
@@ -58,6 +59,9 @@ pub enum Scheme {
     ExplicitRk(&'static explicit_rk::Tableau),
     /// A partitioned method on (q, p).
     Partitioned(partitioned::Partition),
+    /// A fully implicit Runge–Kutta (collocation) method, run on the Hamiltonian form when
+    /// the system has one.
+    Collocation(&'static gauss_legendre::ImplicitTableau),
 }
 
 /// A method descriptor.
@@ -93,6 +97,9 @@ pub static METHODS: &[&Method] = &[
     &composition::YOSHIDA_4,
     &composition::YOSHIDA_6,
     &composition::YOSHIDA_8,
+    &gauss_legendre::GAUSS_LEGENDRE_2,
+    &gauss_legendre::GAUSS_LEGENDRE_4,
+    &gauss_legendre::GAUSS_LEGENDRE_6,
 ];
 
 /// Looks a method up by name.
