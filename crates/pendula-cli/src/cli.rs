@@ -25,6 +25,8 @@ pub enum Command {
     Convergence(Box<crate::commands::convergence::ConvergenceArgs>),
     /// The largest stable step of each method.
     Stability(Box<crate::commands::stability::StabilityArgs>),
+    /// Error against cost (rhs evaluations, wall time) of each method over a range of steps.
+    WorkPrecision(Box<crate::commands::work_precision::WorkPrecisionArgs>),
     /// The simple pendulum's period against amplitude: simulated, exact and small-angle.
     Period(Box<crate::commands::period::PeriodArgs>),
     /// The oscillator's damping regimes and forced resonance, exact and simulated.

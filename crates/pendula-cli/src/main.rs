@@ -22,6 +22,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => commands::compare::run(args),
         Command::Convergence(args) => commands::convergence::run(args),
         Command::Stability(args) => commands::stability::run(args),
+        Command::WorkPrecision(args) => commands::work_precision::run(args),
         Command::Period(args) => commands::period::run(args),
         Command::OscillatorRegimes(args) => commands::regimes::run(args),
         Command::Animate(args) => commands::animate::run(args),

@@ -156,6 +156,35 @@ fn report_is_one_self_contained_page() {
 }
 
 #[test]
+fn work_precision_writes_error_and_cost() {
+    let dir = TempDir::new().unwrap();
+    pendula(
+        dir.path(),
+        &["work-precision", "pendulum", "--methods", "rk4,gauss-legendre-4", "--out-dir", "w"],
+    )
+    .success();
+    let csv = std::fs::read_to_string(dir.path().join("w/work_precision.csv")).unwrap();
+    assert_eq!(csv.lines().next().unwrap(), "method,dt,error,rhs_evals,wall_s");
+    let rk4: Vec<(f64, u64)> = csv
+        .lines()
+        .filter(|l| l.starts_with("rk4,"))
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[2].parse().unwrap(), f[3].parse().unwrap())
+        })
+        .collect();
+    assert_eq!(rk4.len(), 7);
+    // Halving the step doubles the work (4 evaluations a step) and cuts the error ~16-fold.
+    for w in rk4.windows(2) {
+        assert_eq!(w[1].1, 2 * w[0].1);
+        assert!(w[1].0 < w[0].0 / 10.0, "{rk4:?}");
+    }
+    for name in ["work_precision_evals", "work_precision_time"] {
+        assert_eq!(png_size(&dir.path().join(format!("w/{name}.png"))), (960, 600));
+    }
+}
+
+#[test]
 fn study_commands_reject_bad_input() {
     let dir = TempDir::new().unwrap();
     for (args, needle) in [

@@ -7,3 +7,4 @@ pub mod period;
 pub mod regimes;
 pub mod report;
 pub mod stability;
+pub mod work_precision;

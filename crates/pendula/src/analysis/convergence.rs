@@ -68,11 +68,40 @@ pub fn convergence_errors(
     hs: &[f64],
     reference: &[f64],
 ) -> Result<Vec<f64>, Error> {
+    Ok(work_precision(model, method, y0, t_end, hs, reference)?.into_iter().map(|p| p.error).collect())
+}
+
+/// One run of a work-precision study.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorkPoint {
+    /// Step size, s.
+    pub h: f64,
+    /// Max-norm error at the end time.
+    pub error: f64,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: u64,
+    /// Wall-clock time of the run, s (noisy: compare methods measured together).
+    pub wall_s: f64,
+}
+
+/// Error and cost of `method` at each step size in `hs`: what a work-precision diagram
+/// plots (DiffEqDevTools' `WorkPrecisionSet` for fixed-step methods).
+pub fn work_precision(
+    model: &dyn DynModel,
+    method: &Method,
+    y0: &[f64],
+    t_end: f64,
+    hs: &[f64],
+    reference: &[f64],
+) -> Result<Vec<WorkPoint>, Error> {
     hs.iter()
         .map(|&h| {
             let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-            let state = model.solve(method, y0, &spec, &mut Ignore)?.state;
-            Ok(state.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max))
+            let start = std::time::Instant::now();
+            let report = model.solve(method, y0, &spec, &mut Ignore)?;
+            let wall_s = start.elapsed().as_secs_f64();
+            let error = report.state.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            Ok(WorkPoint { h, error, rhs_evals: report.rhs_evals, wall_s })
         })
         .collect()
 }

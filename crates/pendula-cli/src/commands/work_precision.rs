@@ -1,0 +1,125 @@
+//! `pendula work-precision`: error against cost — right-hand-side evaluations and wall
+//! time — for each method over a range of step sizes (as DiffEqDevTools' WorkPrecisionSet).
+
+use anyhow::{Result, bail};
+use clap::Args;
+use pendula::analysis::{self, WorkPoint};
+use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
+use serde_json::json;
+
+use crate::config::f64_arg;
+use crate::study::{self, Common, OutDir, num, short};
+
+#[derive(Debug, Clone, Args)]
+pub struct WorkPrecisionArgs {
+    /// System [default: pendulum].
+    pub system: Option<String>,
+    /// Comma-separated methods [default: every method that applies].
+    #[arg(long, value_name = "LIST")]
+    pub methods: Option<String>,
+    /// Smallest step size, s [default: dt-max / 64].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_min: Option<String>,
+    /// Largest step size, s [default: 0.1].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_max: Option<String>,
+    /// Number of step sizes, geometrically spaced [default: 7].
+    #[arg(long, value_name = "N")]
+    pub levels: Option<usize>,
+    /// End time at which the error is measured, s [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
+    let system = args.system.as_deref().unwrap_or("pendulum");
+    let values = study::values(system, &args.common.set)?;
+    let dt_max = f64_arg("--dt-max", args.dt_max.as_deref(), 0.1, "a step size in seconds")?;
+    let dt_min = f64_arg("--dt-min", args.dt_min.as_deref(), dt_max / 64.0, "a step size in seconds")?;
+    let levels = args.levels.unwrap_or(7);
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?;
+    if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
+        bail!(
+            "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
+        );
+    }
+    if levels < 2 {
+        bail!("invalid --levels {levels}: need at least 2 step sizes");
+    }
+    pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) }.schedule()?;
+    let model = values.build();
+    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
+    let hs: Vec<f64> =
+        (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
+    let reference = analysis::reference_state(&*model, values.initial_state(), t_end, dt_min / 16.0)?;
+    let bar = study::progress(methods.len() as u64, "work-precision");
+    let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
+    for method in &methods {
+        let points =
+            analysis::work_precision(&*model, method, values.initial_state(), t_end, &hs, &reference.state)?;
+        results.push((method.name, points));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let mut rows = Vec::new();
+    for (m, points) in &results {
+        for p in points {
+            rows.push(vec![(*m).to_owned(), num(p.h), num(p.error), p.rhs_evals.to_string(), num(p.wall_s)]);
+        }
+    }
+    out.csv("work_precision.csv", &["method", "dt", "error", "rhs_evals", "wall_s"], &rows)?;
+    // For each method: the fewest evaluations that reach an error of 1e-6, if any run did.
+    let target = 1e-6;
+    let shown: Vec<Vec<String>> = results
+        .iter()
+        .map(|(m, points)| {
+            let best = points.iter().filter(|p| p.error <= target).min_by_key(|p| p.rhs_evals);
+            vec![
+                (*m).to_owned(),
+                best.map_or("-".into(), |p| p.rhs_evals.to_string()),
+                best.map_or("-".into(), |p| short(p.h)),
+                short(points.iter().map(|p| p.error).fold(f64::INFINITY, f64::min)),
+            ]
+        })
+        .collect();
+    println!("{system}: error at t = {t_end} s against the {}", reference.source);
+    print!("{}", study::table(&["method", "rhs evals for error <= 1e-6", "at dt", "smallest error"], &shown));
+    for (name, x_label, cost) in [
+        (
+            "work_precision_evals",
+            "right-hand-side evaluations",
+            (|p: &WorkPoint| p.rhs_evals as f64) as fn(&WorkPoint) -> f64,
+        ),
+        ("work_precision_time", "wall time (s)", |p: &WorkPoint| p.wall_s),
+    ] {
+        let mut fig = Figure::new(
+            format!("{system}: work-precision at t = {t_end} s, against the {}", reference.source),
+            x_label,
+            "max |y(t) - y_ref(t)|",
+        )
+        .scales(Scale::Log, Scale::Log)
+        .legend(Legend::LowerLeft);
+        for (m, points) in &results {
+            fig = fig.with(
+                *m,
+                method_color(m),
+                Kind::LineMarkers,
+                points.iter().map(|p| (cost(p), p.error)).collect(),
+            );
+        }
+        out.figure(name, &fig)?;
+    }
+    let doc = json!({
+        "system": system, "t_end": t_end, "reference": reference.source,
+        "methods": results.iter().map(|(m, points)| ((*m).to_owned(), json!(points.iter().map(|p| json!({
+            "dt": p.h, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
+        })).collect::<Vec<_>>()))).collect::<serde_json::Map<_, _>>(),
+    });
+    study::summary(args.common.summary.as_deref(), &doc)?;
+    out.report();
+    Ok(())
+}
