@@ -55,7 +55,7 @@ pub struct SimulateArgs {
     /// Integration method (see `pendula list methods`) [default: rk4].
     #[arg(long, value_name = "NAME")]
     pub method: Option<String>,
-    /// Step size, s [default: 0.001].
+    /// Step size, s; for adaptive methods the first step to try [default: 0.001].
     #[arg(long, allow_hyphen_values = true, value_name = "H")]
     pub dt: Option<String>,
     /// End time, s; the last step is shortened to land on it [default: 10].
@@ -64,6 +64,18 @@ pub struct SimulateArgs {
     /// Number of steps, instead of --t-end.
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub steps: Option<String>,
+    /// Relative tolerance of adaptive methods (dopri5) [default: 1e-6].
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub rtol: Option<String>,
+    /// Absolute tolerance of adaptive methods [default: 1e-6].
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub atol: Option<String>,
+    /// Smallest step an adaptive method may take, s; below it the run fails [default: 0].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub h_min: Option<String>,
+    /// Largest step an adaptive method may take, s [default: unbounded].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub h_max: Option<String>,
     /// Set a parameter or initial-state variable, e.g. `--set theta1=120deg --set m2=2`.
     /// Angles take a `deg` suffix (bare numbers are radians) or a `pi` suffix.
     #[arg(long = "set", value_name = "NAME=VALUE")]

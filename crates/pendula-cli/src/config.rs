@@ -5,7 +5,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
-use pendula::integrator::{self, Method};
+use pendula::control::Tolerances;
+use pendula::integrator::{self, Method, Scheme};
 use pendula::system::{self, Quantity, SystemInfo, Values};
 use pendula::{End, RunSpec};
 use serde::Deserialize;
@@ -36,6 +37,10 @@ pub struct SimulateConfig {
     pub values: Values,
     pub method: &'static Method,
     pub spec: RunSpec,
+    /// Adaptive steps with these tolerances (methods with an error estimate).
+    pub tolerances: Option<Tolerances>,
+    /// The first step of an adaptive run, when `--dt` was given.
+    pub first_step: Option<f64>,
     /// Write every n-th step; `None` writes no trajectory.
     pub every: Option<u64>,
     pub out: Option<Output>,
@@ -52,6 +57,12 @@ struct Scenario {
     #[serde(alias = "t-end")]
     t_end: Option<f64>,
     steps: Option<u64>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    #[serde(alias = "h-min")]
+    h_min: Option<f64>,
+    #[serde(alias = "h-max")]
+    h_max: Option<f64>,
     every: Option<u64>,
     out: Option<PathBuf>,
     summary: Option<PathBuf>,
@@ -160,10 +171,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     settings.extend(parse_settings(info, &args.set)?);
     let values = info.values(&settings)?;
 
-    let h = match &args.dt {
-        Some(text) => parse_number("--dt", text, "a step size in seconds")?,
-        None => scenario.dt.unwrap_or(DEFAULT_DT),
+    let given_dt = match &args.dt {
+        Some(text) => Some(parse_number("--dt", text, "a step size in seconds")?),
+        None => scenario.dt,
     };
+    let h = given_dt.unwrap_or(DEFAULT_DT);
     let end = match (&args.t_end, &args.steps) {
         (Some(t), _) => End::Time(parse_number("--t-end", t, "an end time in seconds")?),
         (None, Some(n)) => End::Steps(parse_number("--steps", n, "a whole number of steps >= 1")?),
@@ -174,6 +186,34 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     };
     let spec = RunSpec { t0: 0.0, h, end };
     spec.schedule()?;
+    let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
+        Ok(match text {
+            Some(t) => parse_number(flag, t, "a number")?,
+            None => file.unwrap_or(default),
+        })
+    };
+    let asked = args.rtol.is_some() || args.atol.is_some() || args.h_min.is_some() || args.h_max.is_some();
+    let tolerances = if matches!(method.scheme, Scheme::Embedded(_)) || asked {
+        let tol = Tolerances {
+            rtol: number("--rtol", &args.rtol, scenario.rtol, 1e-6)?,
+            atol: number("--atol", &args.atol, scenario.atol, 1e-6)?,
+            h_min: number("--h-min", &args.h_min, scenario.h_min, 0.0)?,
+            h_max: number("--h-max", &args.h_max, scenario.h_max, f64::INFINITY)?,
+        };
+        tol.validate()?;
+        if !matches!(method.scheme, Scheme::Embedded(_)) {
+            bail!(
+                "--rtol, --atol, --h-min and --h-max apply to adaptive methods (dopri5); {} takes fixed steps (--dt)",
+                method.name
+            );
+        }
+        if let End::Steps(_) = end {
+            bail!("--steps applies to fixed steps; {} is adaptive: give --t-end", method.name);
+        }
+        Some(tol)
+    } else {
+        None
+    };
 
     let every = match &args.every {
         Some(text) => parse_number("--every", text, "a whole number >= 0")?,
@@ -185,7 +225,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         Some(_) => Some(output(args.out.clone().or(scenario.out).unwrap_or_else(|| DEFAULT_OUT.into()))?),
     };
     let summary = args.summary.clone().or(scenario.summary);
-    Ok(SimulateConfig { values, method, spec, every, out, summary })
+    Ok(SimulateConfig { values, method, spec, tolerances, first_step: given_dt, every, out, summary })
 }
 
 fn output(path: PathBuf) -> Result<Output> {

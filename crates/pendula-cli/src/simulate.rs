@@ -38,7 +38,7 @@ impl<F: FnMut(f64, &[f64]) -> f64> Observer for Writer<F> {
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig { values, method, spec, every, out, summary } = &config;
+    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary } = &config;
     let info = values.info();
     // Open the outputs first: a path that cannot be written fails before the work.
     let out_file = match out {
@@ -59,7 +59,13 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         failure: None,
     };
     let start = Instant::now();
-    let report = model.solve(method, values.initial_state(), spec, &mut writer);
+    let report = match tolerances {
+        Some(tol) => {
+            let t_end = spec.schedule()?.t_end;
+            model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, &mut writer)
+        }
+        None => model.solve(method, values.initial_state(), spec, &mut writer),
+    };
     let wall_s = start.elapsed().as_secs_f64();
     if let Some(err) = writer.failure.take() {
         return Err(err);
@@ -90,8 +96,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             "method": method.name,
             "parameters": parameters,
             "initial": initial,
-            "dt": spec.h,
+            "dt": if tolerances.is_some() { serde_json::Value::Null } else { json!(spec.h) },
             "steps": steps,
+            "steps_accepted": steps,
+            "steps_rejected": report.steps_rejected,
+            "rtol": tolerances.map(|t| t.rtol),
+            "atol": tolerances.map(|t| t.atol),
             "rhs_evals": report.rhs_evals,
             "t_end": t_end,
             "final": final_state,
@@ -112,8 +122,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let mut err = std::io::stderr().lock();
     writeln!(
         err,
-        "{} with {}: {steps} steps of {} s to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
-        info.name, method.name, spec.h, report.rhs_evals
+        "{} with {}: {steps} steps {} to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
+        info.name,
+        method.name,
+        match tolerances {
+            Some(t) =>
+                format!("(adaptive, rtol {} atol {}, {} rejected)", t.rtol, t.atol, report.steps_rejected),
+            None => format!("of {} s", spec.h),
+        },
+        report.rhs_evals
     )?;
     writeln!(
         err,

@@ -71,6 +71,32 @@ fn summary_json_has_the_documented_keys() {
 }
 
 #[test]
+fn adaptive_run_reports_accepted_and_rejected_steps() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args([
+            "simulate", "double", "--method", "dopri5", "--rtol", "1e-10", "--atol", "1e-10", "--t-end", "10",
+        ])
+        .args(["--every", "0", "--summary", "s.json"])
+        .assert()
+        .success();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    assert_eq!(s["final"]["t"], 10.0);
+    assert!(s["steps_accepted"].as_u64().unwrap() > 100);
+    assert!(s["steps_rejected"].is_u64());
+    assert!(s["rhs_evals"].as_u64().unwrap() >= 6 * s["steps_accepted"].as_u64().unwrap());
+    assert!(s["dt"].is_null());
+    // The bench's long-double reference at t = 10 s (shared/bench/SPEC.md, W2).
+    let reference =
+        [-0.80261199633036104544, -2.4815018039172568802, -1.9522456761809047925, -2.3287508056909700408];
+    for (name, want) in ["theta1", "theta2", "omega1", "omega2"].iter().zip(reference) {
+        let got = s["final"][name].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-5, "{name}: {got} vs {want}");
+    }
+}
+
+#[test]
 fn npy_output_has_rows_and_columns() {
     let dir = TempDir::new().unwrap();
     pendula(dir.path())
@@ -191,6 +217,14 @@ fn unknown_system_method_and_parameter_list_the_valid_names() {
         &["simulate", "double", "--set", "theta3=1"],
         &["unknown name `theta3`", "m1, m2, l1, l2, g, theta1"],
     );
+}
+
+#[test]
+fn tolerance_flags_need_an_adaptive_method() {
+    rejects(&["simulate", "--method", "rk4", "--rtol", "1e-8"], &["--rtol", "adaptive", "rk4"]);
+    rejects(&["simulate", "--method", "dopri5", "--steps", "10"], &["--steps", "dopri5", "--t-end"]);
+    rejects(&["simulate", "--method", "dopri5", "--rtol", "0"], &["rtol", "> 0"]);
+    rejects(&["simulate", "--method", "dopri5", "--h-min", "1", "--h-max", "0.5"], &["h-max", "h-min"]);
 }
 
 #[test]

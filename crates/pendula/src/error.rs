@@ -62,6 +62,16 @@ pub enum Error {
         /// Time of the first non-finite state, s.
         t: f64,
     },
+    /// The step-size controller asked for a step below the minimum.
+    #[error(
+        "the step size fell to h = {h} s at t = {t} s, below the minimum (loosen the tolerances or lower --h-min)"
+    )]
+    StepSizeTooSmall {
+        /// Time, s.
+        t: f64,
+        /// The step size proposed, s.
+        h: f64,
+    },
     /// The iteration that solves an implicit step did not converge.
     #[error(
         "the implicit step at t = {t} s did not converge after {iterations} iterations (try a smaller step)"

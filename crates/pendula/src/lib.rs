@@ -40,6 +40,7 @@
 //! q positions, p momenta, rhs right-hand side f(t, y), H Hamiltonian.
 
 pub mod analysis;
+pub mod control;
 pub mod error;
 pub mod integrator;
 pub mod observe;
@@ -48,4 +49,4 @@ pub mod special;
 pub mod system;
 
 pub use error::Error;
-pub use simulate::{End, Outcome, Report, RunSpec, Simulation, solve};
+pub use simulate::{End, Outcome, Report, RunSpec, Simulation, solve, solve_adaptive};

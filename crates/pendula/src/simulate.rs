@@ -5,6 +5,8 @@
 use std::cell::Cell;
 
 use crate::Error;
+use crate::control::{PiController, Tolerances, Verdict};
+use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::explicit_rk::ExplicitRk;
 use crate::integrator::gauss_legendre::Collocation;
 use crate::integrator::partitioned::PartitionedStepper;
@@ -178,6 +180,8 @@ pub struct Report {
     pub rhs_evals: u64,
     /// Final state, in the model's (position, velocity) coordinates.
     pub state: Vec<f64>,
+    /// Steps rejected by the step-size controller (0 for fixed steps).
+    pub steps_rejected: u64,
 }
 
 /// Runs `method` on `model` from `y0` (positions, velocities), showing every state to
@@ -201,6 +205,9 @@ pub fn solve<M: Model>(
     match method.scheme {
         Scheme::ExplicitRk(tableau) => {
             run_direct(model, &mut ExplicitRk::new(tableau, dim), y0, spec, observer)
+        }
+        Scheme::Embedded(tableau) => {
+            run_direct(model, &mut EmbeddedRk::new(tableau, dim), y0, spec, observer)
         }
         Scheme::Collocation(tableau) => match model.hamiltonian_form() {
             // On (q, p), where the method is symplectic.
@@ -238,7 +245,133 @@ fn run_direct<M: Model>(
     let system = Counted::new(model);
     let mut y = y0.to_vec();
     let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut y, observer)?;
-    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
+    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: 0 })
+}
+
+/// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly),
+/// showing the initial state and every accepted step to `observer`. `h0` is the first step
+/// to try; `None` picks one from the problem (Hairer, Nørsett, Wanner §II.4).
+///
+/// # Errors
+/// [`Error::UnmetRequirement`] for a method without an error estimate, invalid tolerances,
+/// [`Error::StepSizeTooSmall`], [`Error::NonFinite`].
+pub fn solve_adaptive<M: Model>(
+    model: &M,
+    method: &Method,
+    y0: &[f64],
+    t_end: f64,
+    h0: Option<f64>,
+    tol: &Tolerances,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    let Scheme::Embedded(tableau) = method.scheme else {
+        return Err(Error::UnmetRequirement {
+            method: method.name,
+            needs: "fixed steps (--dt)",
+            reason: "tolerances apply to methods with an error estimate".into(),
+            suggestion: "dopri5 for adaptive steps",
+        });
+    };
+    tol.validate()?;
+    if !(t_end.is_finite() && t_end > 0.0) {
+        return Err(Error::InvalidValue {
+            name: "t-end".into(),
+            value: t_end,
+            allowed: "the end time must be finite and > 0",
+        });
+    }
+    let system = Counted::new(model);
+    let mut y = y0.to_vec();
+    if y.iter().any(|v| !v.is_finite()) {
+        return Err(Error::NonFinite { t: 0.0 });
+    }
+    let mut stepper = EmbeddedRk::new(tableau, y.len());
+    let mut control = PiController::new(tableau.error_order);
+    let (mut accepted, mut rejected) = (0u64, 0u64);
+    if observer.observe(&Sample { step: 0, t: 0.0, y: &y, last: false }).is_break() {
+        return Ok(Report {
+            outcome: Outcome::Stopped { steps: 0, t: 0.0 },
+            rhs_evals: 0,
+            state: y,
+            steps_rejected: 0,
+        });
+    }
+    let mut t = 0.0;
+    let mut h = h0.unwrap_or_else(|| initial_step(&system, &y, method.order, tol)).min(tol.h_max).min(t_end);
+    let mut just_rejected = false;
+    loop {
+        // Land on t_end exactly; stretch a last step that would leave a sliver.
+        let last = t + 1.01 * h >= t_end;
+        if last {
+            h = t_end - t;
+        }
+        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs());
+        if h < floor && !last {
+            return Err(Error::StepSizeTooSmall { t, h });
+        }
+        stepper.attempt(&system, t, h, &y);
+        let err = stepper.error_norm(&y, tol.rtol, tol.atol);
+        match control.judge(h, err) {
+            Verdict::Accept(next) => {
+                let t_new = if last { t_end } else { t + h };
+                stepper.accept(&mut y, t_new);
+                accepted += 1;
+                t = t_new;
+                if y.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::NonFinite { t });
+                }
+                if observer.observe(&Sample { step: accepted, t, y: &y, last }).is_break() {
+                    let outcome = Outcome::Stopped { steps: accepted, t };
+                    return Ok(Report {
+                        outcome,
+                        rhs_evals: system.evaluations(),
+                        state: y,
+                        steps_rejected: rejected,
+                    });
+                }
+                if last {
+                    break;
+                }
+                // After a rejection, do not grow the step at once (as DOPRI5 does).
+                h = if just_rejected { next.min(h) } else { next }.min(tol.h_max);
+                just_rejected = false;
+            }
+            Verdict::Reject(next) => {
+                rejected += 1;
+                just_rejected = true;
+                if next < floor {
+                    return Err(Error::StepSizeTooSmall { t, h: next });
+                }
+                h = next;
+            }
+        }
+    }
+    let outcome = Outcome::ReachedEnd { steps: accepted, t: t_end };
+    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: rejected })
+}
+
+/// A first step from the sizes of y₀, f(0, y₀) and an estimate of f' (Hairer, Nørsett,
+/// Wanner §II.4, "Starting step size").
+fn initial_step<S: System + ?Sized>(system: &S, y0: &[f64], order: u32, tol: &Tolerances) -> f64 {
+    let n = y0.len();
+    let scale: Vec<f64> = y0.iter().map(|v| tol.atol + tol.rtol * v.abs()).collect();
+    let norm =
+        |v: &[f64]| (v.iter().zip(&scale).map(|(a, s)| (a / s) * (a / s)).sum::<f64>() / n as f64).sqrt();
+    let mut f0 = vec![0.0; n];
+    system.rhs(0.0, y0, &mut f0);
+    let (d0, d1) = (norm(y0), norm(&f0));
+    let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+    let y1: Vec<f64> = y0.iter().zip(&f0).map(|(y, f)| y + h0 * f).collect();
+    let mut f1 = vec![0.0; n];
+    system.rhs(h0, &y1, &mut f1);
+    let diff: Vec<f64> = f1.iter().zip(&f0).map(|(a, b)| a - b).collect();
+    let d2 = norm(&diff) / h0;
+    let h1 = if d1.max(d2) <= 1e-15 {
+        (h0 * 1e-3).max(1e-6)
+    } else {
+        (0.01 / d1.max(d2)).powf(1.0 / (order as f64 + 1.0))
+    };
+    (100.0 * h0).min(h1)
 }
 
 /// Runs a stepper on the Hamiltonian form, converting to (q, p) before and back after, and
@@ -259,7 +392,7 @@ fn run_on_form<M: Model>(
     let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut z, &mut shown)?;
     let mut y = vec![0.0; dim];
     model.to_velocities(&z, &mut y);
-    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y })
+    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: 0 })
 }
 
 /// Shows (q, p) states to an observer as (q, q').

@@ -5,6 +5,7 @@
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::Cell;
 
+use pendula::integrator::embedded::EmbeddedRk;
 use pendula::integrator::explicit_rk::ExplicitRk;
 use pendula::integrator::gauss_legendre::Collocation;
 use pendula::integrator::partitioned::PartitionedStepper;
@@ -61,6 +62,13 @@ fn check<M: Model>(v: &Values) {
         let count = match method.scheme {
             Scheme::ExplicitRk(t) => {
                 let mut stepper = ExplicitRk::new(t, y.len());
+                stepper.step(&model, 0.0, 1e-3, &mut y).unwrap();
+                allocations_during(|| {
+                    Simulation { system: &model, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
+                })
+            }
+            Scheme::Embedded(t) => {
+                let mut stepper = EmbeddedRk::new(t, y.len());
                 stepper.step(&model, 0.0, 1e-3, &mut y).unwrap();
                 allocations_during(|| {
                     Simulation { system: &model, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();

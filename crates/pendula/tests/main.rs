@@ -6,6 +6,7 @@
 // Reference values are pasted with the 20 digits mpmath printed, to keep their provenance plain.
 #![allow(clippy::excessive_precision)]
 
+mod adaptive;
 mod alloc;
 mod analysis;
 mod architecture;

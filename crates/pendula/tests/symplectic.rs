@@ -2,6 +2,7 @@
 //! double pendulum's (non-separable) Hamiltonian form, and time reversibility of the
 //! symmetric ones.
 
+use pendula::integrator::embedded::EmbeddedRk;
 use pendula::integrator::explicit_rk::{EULER, ExplicitRk};
 use pendula::integrator::gauss_legendre::Collocation;
 use pendula::integrator::partitioned::PartitionedStepper;
@@ -73,6 +74,7 @@ fn stepper(method: &Method) -> Box<dyn Stepper<dyn Hamiltonian>> {
         Scheme::ExplicitRk(t) => Box::new(ExplicitRk::new(t, 4)),
         Scheme::Partitioned(p) => Box::new(PartitionedStepper::new(p, 2)),
         Scheme::Collocation(t) => Box::new(Collocation::new(t, 4)),
+        Scheme::Embedded(t) => Box::new(EmbeddedRk::new(t, 4)),
     }
 }
 

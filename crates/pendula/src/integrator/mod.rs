@@ -6,6 +6,7 @@
 //! buffers (allocated once), and allocate nothing per step.
 
 pub mod composition;
+pub mod embedded;
 pub mod explicit_rk;
 pub mod gauss_legendre;
 pub mod partitioned;
@@ -62,6 +63,8 @@ pub enum Scheme {
     /// A fully implicit Runge–Kutta (collocation) method, run on the Hamiltonian form when
     /// the system has one.
     Collocation(&'static gauss_legendre::ImplicitTableau),
+    /// An embedded Runge–Kutta pair: adaptive with tolerances, or fixed-step.
+    Embedded(&'static embedded::EmbeddedTableau),
 }
 
 /// A method descriptor.
@@ -100,6 +103,7 @@ pub static METHODS: &[&Method] = &[
     &gauss_legendre::GAUSS_LEGENDRE_2,
     &gauss_legendre::GAUSS_LEGENDRE_4,
     &gauss_legendre::GAUSS_LEGENDRE_6,
+    &embedded::DOPRI5,
 ];
 
 /// Looks a method up by name.

@@ -264,6 +264,17 @@ pub trait DynModel {
         spec: &RunSpec,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error>;
+    /// Runs an embedded pair with adaptive steps to `t_end` (see
+    /// [`crate::simulate::solve_adaptive`]).
+    fn solve_adaptive(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &crate::control::Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
 }
 
 impl<M: Model> DynModel for M {
@@ -288,5 +299,16 @@ impl<M: Model> DynModel for M {
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
         crate::simulate::solve(self, method, y0, spec, observer)
+    }
+    fn solve_adaptive(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &crate::control::Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
     }
 }

@@ -38,6 +38,8 @@ cases = {
         (1, 1, 1, 1, mp.mpf("9.81")), [120 * deg, -10 * deg, 0, 0], 2),
     "DOUBLE_B (m=1,2 l=1,0.5 g=9.81; 60deg,90deg,0.5,-1; t=2)": (
         (1, 2, 1, mp.mpf("0.5"), mp.mpf("9.81")), [60 * deg, 90 * deg, mp.mpf("0.5"), -1], 2),
+    "DOUBLE_C (m=1,1 l=1,1 g=9.81; 30deg,-20deg,0.3,0; t=2)": (
+        (1, 1, 1, 1, mp.mpf("9.81")), [30 * deg, -20 * deg, mp.mpf("0.3"), 0], 2),
 }
 for name, (params, y0, t) in cases.items():
     sol = mp.odefun(double_pendulum(*params), 0, y0)
