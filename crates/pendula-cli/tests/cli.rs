@@ -1,6 +1,9 @@
 //! The `pendula` binary end to end: outputs, and every invalid input with its message, exit
 //! code, and no file left behind.
 
+// Reference values are pasted with the digits their source printed.
+#![allow(clippy::excessive_precision)]
+
 use std::path::Path;
 
 use assert_cmd::Command;
