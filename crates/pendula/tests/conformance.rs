@@ -219,6 +219,29 @@ fn ref_measured_order_equals_declared_order() {
     assert_eq!(measured, expected);
 }
 
+/// Embedded pairs: both weight sets sum to 1, row sums of A equal c, and with FSAL the last
+/// row of A is b.
+#[test]
+fn embedded_tableaus_are_consistent() {
+    use pendula::integrator::Scheme;
+    let mut checked = 0;
+    for method in METHODS {
+        if let Scheme::Embedded(t) = method.scheme {
+            assert!((t.b.iter().sum::<f64>() - 1.0).abs() < 1e-15, "{}", method.name);
+            assert!((t.b_hat.iter().sum::<f64>() - 1.0).abs() < 1e-15, "{}", method.name);
+            for (row, c) in t.a.iter().zip(t.c) {
+                assert!((row.iter().sum::<f64>() - c).abs() < 1e-14, "{}", method.name);
+            }
+            if t.fsal {
+                let last = t.a[t.a.len() - 1];
+                assert!(last.iter().zip(t.b).all(|(a, b)| a == b), "{}", method.name);
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 1);
+}
+
 /// Collocation tableaus: Σ b = 1, row sums of A equal c, and the quadrature conditions
 /// Σ bᵢ cᵢ^(k−1) = 1/k up to k = 2s (Gauss quadrature is exact to degree 2s − 1).
 #[test]

@@ -47,7 +47,7 @@ impl Requirement {
         match self {
             Requirement::Any | Requirement::Hamiltonian => "rk4",
             Requirement::Separable => {
-                "verlet or symplectic-euler, which are implicit and still symplectic on non-separable systems"
+                "gauss-legendre-4, or verlet or symplectic-euler (implicit there): they stay symplectic on non-separable systems"
             }
         }
     }
