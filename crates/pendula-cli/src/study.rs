@@ -11,7 +11,7 @@ use pendula::integrator::{self, METHODS, Method, Requirement};
 use pendula::system::{self, DynModel, Values};
 use pendula_viz::Figure;
 
-use crate::config::parse_settings;
+use crate::config::{f64_arg, parse_settings};
 use crate::output::AtomicFile;
 
 /// Arguments every study command takes.
@@ -26,6 +26,48 @@ pub struct Common {
     /// Write the headline numbers as JSON here.
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+}
+
+/// A geometric range of step sizes and an end time, as convergence and work-precision take
+/// them.
+#[derive(Debug, Clone, Args)]
+pub struct StepRange {
+    /// Smallest step size, s [default: dt-max / 2^(levels - 1)].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_min: Option<String>,
+    /// Largest step size, s [default: 0.05 for convergence, 0.1 for work-precision].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt_max: Option<String>,
+    /// Number of step sizes, geometrically spaced [default: 5 for convergence, 7 for
+    /// work-precision].
+    #[arg(long, value_name = "N")]
+    pub levels: Option<usize>,
+    /// End time at which the error is measured, s [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+}
+
+impl StepRange {
+    /// The steps, largest first, and the end time, validated.
+    pub fn resolve(&self, default_max: f64, default_levels: usize) -> Result<(Vec<f64>, f64)> {
+        let levels = self.levels.unwrap_or(default_levels);
+        if levels < 2 {
+            bail!("invalid --levels {levels}: need at least 2 step sizes");
+        }
+        let dt_max = f64_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
+        let fallback = dt_max / 2f64.powi(levels as i32 - 1);
+        let dt_min = f64_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
+        let t_end = f64_arg("--t-end", self.t_end.as_deref(), 10.0, "an end time in seconds")?;
+        if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
+            bail!(
+                "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
+            );
+        }
+        pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) }.schedule()?;
+        let hs =
+            (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
+        Ok((hs, t_end))
+    }
 }
 
 /// Validated system values from a name and `--set` items.

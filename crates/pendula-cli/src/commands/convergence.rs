@@ -1,14 +1,13 @@
 //! `pendula convergence`: global error against step size on log-log axes, and the fitted
 //! order of each method (paper §7.3, §8.3).
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{self, fit_order};
 use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
-use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, StepRange, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -17,18 +16,8 @@ pub struct ConvergenceArgs {
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
-    /// Smallest step size, s [default: dt-max / 16].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt_min: Option<String>,
-    /// Largest step size, s [default: 0.05].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt_max: Option<String>,
-    /// Number of step sizes, geometrically spaced [default: 5].
-    #[arg(long, value_name = "N")]
-    pub levels: Option<usize>,
-    /// End time at which the error is measured, s [default: 10].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub steps: StepRange,
     #[command(flatten)]
     pub common: Common,
 }
@@ -49,25 +38,11 @@ const ROUNDOFF_FLOOR: f64 = 1e-12;
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("oscillator");
     let values = study::values(system, &args.common.set)?;
-    let dt_max = f64_arg("--dt-max", args.dt_max.as_deref(), 0.05, "a step size in seconds")?;
-    let dt_min = f64_arg("--dt-min", args.dt_min.as_deref(), dt_max / 16.0, "a step size in seconds")?;
-    let levels = args.levels.unwrap_or(5);
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?;
-    if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
-        bail!(
-            "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
-        );
-    }
-    if levels < 2 {
-        bail!("invalid --levels {levels}: need at least 2 step sizes to fit an order");
-    }
-    pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) }.schedule()?;
+    let (hs, t_end) = args.steps.resolve(0.05, 5)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
 
-    let hs: Vec<f64> =
-        (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
     let (results, reference) = study_orders(&values, &methods, &hs, t_end)?;
 
     let mut rows = Vec::new();
