@@ -136,7 +136,8 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
         let runs: Vec<compare::Run> =
             all.iter().map(|m| compare::compare_one(&values, m, &spec)).collect::<Result<_>>()?;
-        page.section(&format!("2. Energy conservation: {system} (paper §7.3, §8.3, Figures 6 and 7)"), text);
+        let title = if system == "double" { "the double pendulum" } else { "the simple pendulum" };
+        page.section(&format!("2. Energy conservation: {title} (paper §7.3, §8.3, Figures 6 and 7)"), text);
         for (name, fig) in compare::figures(&values, &runs, h, t_end) {
             let caption = match name.as_str() {
                 "energy" => {

@@ -103,22 +103,18 @@ impl EmbeddedRk {
     pub fn attempt<S: System + ?Sized>(&mut self, system: &S, t: f64, h: f64, y: &[f64]) {
         let tab = self.tableau;
         let n = y.len();
-        for (i, (row, c)) in tab.a.iter().zip(tab.c).enumerate() {
-            if i == 0 && self.first_stage == Some(t) {
-                continue;
-            }
-            let (done, rest) = self.k.split_at_mut(i * n);
-            for (j, s) in self.stage.iter_mut().enumerate() {
-                let mut acc = 0.0;
-                for (l, &a) in row.iter().enumerate() {
-                    if a != 0.0 {
-                        acc += a * done[l * n + j];
-                    }
-                }
-                *s = y[j] + h * acc;
-            }
-            system.rhs(t + c * h, &self.stage, &mut rest[..n]);
-        }
+        let first = usize::from(self.first_stage == Some(t));
+        super::explicit_rk::explicit_stages(
+            tab.a,
+            tab.c,
+            first,
+            &mut self.k,
+            &mut self.stage,
+            system,
+            t,
+            h,
+            y,
+        );
         for (j, yj) in y.iter().enumerate() {
             let (mut high, mut low) = (0.0, 0.0);
             for (i, (b, bh)) in tab.b.iter().zip(tab.b_hat).enumerate() {

@@ -73,23 +73,42 @@ impl ExplicitRk {
     }
 }
 
+/// The stages of an explicit tableau (rows `a`, nodes `c`) from (t, y) with step h: stage i
+/// is kᵢ = f(t + cᵢ h, y + h Σⱼ aᵢⱼ kⱼ), stored at `k[i n .. (i + 1) n]`. Stages before
+/// `first` are taken as already in `k` (first same as last).
+#[allow(clippy::too_many_arguments)] // the tableau's parts and the stepper's buffers, all needed
+pub(super) fn explicit_stages<S: System + ?Sized>(
+    a: &[&[f64]],
+    c: &[f64],
+    first: usize,
+    k: &mut [f64],
+    stage: &mut [f64],
+    system: &S,
+    t: f64,
+    h: f64,
+    y: &[f64],
+) {
+    let n = y.len();
+    for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
+        let (done, rest) = k.split_at_mut(i * n);
+        for (j, s) in stage.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (l, &a) in row.iter().enumerate() {
+                if a != 0.0 {
+                    acc += a * done[l * n + j];
+                }
+            }
+            *s = y[j] + h * acc;
+        }
+        system.rhs(t + c * h, stage, &mut rest[..n]);
+    }
+}
+
 impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
     fn step(&mut self, system: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
         let tab = self.tableau;
         let n = y.len();
-        for (i, (row, c)) in tab.a.iter().zip(tab.c).enumerate() {
-            let (done, rest) = self.k.split_at_mut(i * n);
-            for (j, s) in self.stage.iter_mut().enumerate() {
-                let mut acc = 0.0;
-                for (l, &a) in row.iter().enumerate() {
-                    if a != 0.0 {
-                        acc += a * done[l * n + j];
-                    }
-                }
-                *s = y[j] + h * acc;
-            }
-            system.rhs(t + c * h, &self.stage, &mut rest[..n]);
-        }
+        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, system, t, h, y);
         let scale = h / tab.denominator;
         for (j, yj) in y.iter_mut().enumerate() {
             let mut acc = tab.b[0] * self.k[j];
