@@ -94,4 +94,11 @@ pub struct SimulateArgs {
     /// Write a JSON summary of the run here.
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    /// Locate events and list them in the summary: `flip` (an angle passes ±π the first
+    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE`.
+    #[arg(long = "event", value_name = "SPEC")]
+    pub events: Vec<String>,
+    /// End the run at the first event.
+    #[arg(long)]
+    pub stop_on_event: bool,
 }

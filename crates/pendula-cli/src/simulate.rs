@@ -5,6 +5,7 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
+use pendula::events::{EventLocator, EventSpec};
 use pendula::observe::{EnergyTracker, Observer, Sample};
 use serde_json::{Map, Value, json};
 
@@ -58,13 +59,20 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         rows: 0,
         failure: None,
     };
+    let specs = args
+        .events
+        .iter()
+        .map(|e| EventSpec::parse(e, &*model, args.stop_on_event))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut events = EventLocator::new(&*model, specs);
+    let mut observers = (&mut writer, &mut events);
     let start = Instant::now();
     let report = match tolerances {
         Some(tol) => {
             let t_end = spec.schedule()?.t_end;
-            model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, &mut writer)
+            model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, &mut observers)
         }
-        None => model.solve(method, values.initial_state(), spec, &mut writer),
+        None => model.solve(method, values.initial_state(), spec, &mut observers),
     };
     let wall_s = start.elapsed().as_secs_f64();
     if let Some(err) = writer.failure.take() {
@@ -112,6 +120,13 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
                 "max_rel_error": energy.max_rel_error(),
             },
             "wall_s": wall_s,
+            "events": events.found.iter().map(|e| {
+                let mut state = Map::new();
+                for (q, v) in info.state.iter().zip(&e.state) {
+                    state.insert(q.name.into(), json!(v));
+                }
+                json!({ "name": e.name, "t": e.t, "state": state })
+            }).collect::<Vec<_>>(),
         });
         let mut handle = f.handle()?;
         serde_json::to_writer_pretty(&mut handle, &doc)?;
@@ -144,6 +159,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         Some(Output::Csv(p) | Output::Npy(p)) => writeln!(err, "wrote {} ({rows} rows)", p.display())?,
         Some(Output::Stdout) => {}
         None => writeln!(err, "no trajectory written (--every 0)")?,
+    }
+    if let Some(first) = events.found.first() {
+        writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
     }
     if let Some(p) = summary {
         writeln!(err, "wrote {}", p.display())?;

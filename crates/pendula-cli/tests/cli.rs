@@ -100,6 +100,36 @@ fn adaptive_run_reports_accepted_and_rejected_steps() {
 }
 
 #[test]
+fn events_are_listed_in_the_summary() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args(["simulate", "pendulum", "--set", "theta=170deg", "--t-end", "12", "--event", "zero:theta"])
+        .args(["--every", "0", "--summary", "s.json"])
+        .assert()
+        .success();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    let events = s["events"].as_array().unwrap();
+    assert!(events.len() >= 4);
+    assert_eq!(events[0]["name"], "zero:theta");
+    let period = events[2]["t"].as_f64().unwrap() - events[0]["t"].as_f64().unwrap();
+    assert!((period / 4.893_524_274_105_486 - 1.0).abs() < 1e-9, "{period}");
+    assert!(events[0]["state"]["theta"].as_f64().unwrap().abs() < 1e-10);
+
+    pendula(dir.path())
+        .args(["simulate", "double", "--t-end", "30", "--event", "flip", "--stop-on-event"])
+        .args(["--every", "0", "--summary", "f.json"])
+        .assert()
+        .success();
+    let f: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("f.json")).unwrap()).unwrap();
+    let flips = f["events"].as_array().unwrap();
+    assert_eq!(flips.len(), 1);
+    let t_flip = flips[0]["t"].as_f64().unwrap();
+    assert!(f["final"]["t"].as_f64().unwrap() - t_flip <= 1e-3 + 1e-12, "the run stops at the flip");
+}
+
+#[test]
 fn npy_output_has_rows_and_columns() {
     let dir = TempDir::new().unwrap();
     pendula(dir.path())
@@ -220,6 +250,13 @@ fn unknown_system_method_and_parameter_list_the_valid_names() {
         &["simulate", "double", "--set", "theta3=1"],
         &["unknown name `theta3`", "m1, m2, l1, l2, g, theta1"],
     );
+}
+
+#[test]
+fn unknown_events_are_rejected() {
+    rejects(&["simulate", "pendulum", "--event", "zero:phi"], &["unknown name `phi`", "theta, omega"]);
+    rejects(&["simulate", "oscillator", "--event", "flip"], &["flip", "no angle"]);
+    rejects(&["simulate", "--event", "crossing"], &["`crossing`", "flip, zero:NAME, section:NAME=VALUE"]);
 }
 
 #[test]

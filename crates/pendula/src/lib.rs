@@ -42,6 +42,7 @@
 pub mod analysis;
 pub mod control;
 pub mod error;
+pub mod events;
 pub mod integrator;
 pub mod observe;
 pub mod simulate;

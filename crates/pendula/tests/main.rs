@@ -12,6 +12,7 @@ mod analysis;
 mod architecture;
 mod conformance;
 mod energy;
+mod events;
 mod exact;
 mod formulations;
 mod schedule;

@@ -1,0 +1,227 @@
+//! Event location: times where a function g(t, y) of the state crosses zero, found between
+//! steps on the cubic Hermite interpolant of the step (the state and its derivative at both
+//! ends) by bisection to ~1e-13 relative in t.
+//!
+//! The interpolant's own error is O(h⁴): with RK4 at h = 1 ms an event time is good to about
+//! 1e-12 s; with large adaptive steps the interpolation limits the accuracy.
+//!
+//! # References
+//! E. Hairer, S. P. Nørsett, G. Wanner, *Solving ODEs I*, §II.6 (dense output) and §II.6.4
+//! (event location).
+
+use std::ops::ControlFlow;
+
+use crate::Error;
+use crate::analysis::Direction;
+use crate::observe::{Observer, Sample};
+use crate::system::DynModel;
+
+/// What an event watches.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EventKind {
+    /// Any angle of the state passes ±π for the first time (the pendulum flips over).
+    Flip,
+    /// State variable `index` crosses zero.
+    Zero {
+        /// Index in the state vector.
+        index: usize,
+    },
+    /// State variable `index` crosses `value` (a Poincaré section).
+    Section {
+        /// Index in the state vector.
+        index: usize,
+        /// The section's value, in the variable's unit.
+        value: f64,
+    },
+}
+
+/// An event to locate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventSpec {
+    /// Name, as reported (`flip`, `zero:theta`, `section:theta1=0`).
+    pub name: String,
+    /// What it watches.
+    pub kind: EventKind,
+    /// Which crossings count.
+    pub direction: Direction,
+    /// Stop the run at the first occurrence.
+    pub terminal: bool,
+}
+
+impl EventSpec {
+    /// Parses `flip`, `zero:NAME` or `section:NAME=VALUE` against the state variable names of
+    /// `model`; angles of `Flip` are the variables in rad.
+    pub fn parse(text: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
+        let state = model.info().state;
+        let index_of = |name: &str| {
+            state.iter().position(|q| q.name == name).ok_or_else(|| Error::UnknownName {
+                system: model.info().name,
+                name: name.to_owned(),
+                valid: state.iter().map(|q| q.name).collect::<Vec<_>>().join(", "),
+            })
+        };
+        let kind = if text == "flip" {
+            if !state.iter().any(|q| q.is_angle()) {
+                return Err(Error::UnknownName {
+                    system: model.info().name,
+                    name: "flip".into(),
+                    valid: "zero:NAME, section:NAME=VALUE (this system has no angle)".into(),
+                });
+            }
+            EventKind::Flip
+        } else if let Some(name) = text.strip_prefix("zero:") {
+            EventKind::Zero { index: index_of(name)? }
+        } else if let Some(rest) = text.strip_prefix("section:") {
+            let (name, value) = rest.split_once('=').ok_or_else(|| Error::UnknownName {
+                system: model.info().name,
+                name: text.to_owned(),
+                valid: "flip, zero:NAME, section:NAME=VALUE".into(),
+            })?;
+            let value: f64 = value.trim().parse().map_err(|_| Error::InvalidValue {
+                name: text.to_owned(),
+                value: f64::NAN,
+                allowed: "the section value must be a number",
+            })?;
+            if !value.is_finite() {
+                return Err(Error::InvalidValue { name: text.to_owned(), value, allowed: "must be finite" });
+            }
+            EventKind::Section { index: index_of(name)?, value }
+        } else {
+            return Err(Error::UnknownName {
+                system: model.info().name,
+                name: text.to_owned(),
+                valid: "flip, zero:NAME, section:NAME=VALUE".into(),
+            });
+        };
+        Ok(EventSpec { name: text.to_owned(), kind, direction: Direction::Both, terminal })
+    }
+}
+
+/// One located event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventRecord {
+    /// The event's name.
+    pub name: String,
+    /// Time, s.
+    pub t: f64,
+    /// State at that time (interpolated).
+    pub state: Vec<f64>,
+}
+
+/// An observer that locates events between the steps it sees.
+pub struct EventLocator<'a> {
+    model: &'a dyn DynModel,
+    specs: Vec<EventSpec>,
+    /// Flip events already seen (they count once).
+    flipped: Vec<bool>,
+    previous: Option<(f64, Vec<f64>, Vec<f64>)>,
+    f: Vec<f64>,
+    /// The events found, in time order per step.
+    pub found: Vec<EventRecord>,
+}
+
+impl<'a> EventLocator<'a> {
+    /// Locates `specs` along a run of `model`.
+    pub fn new(model: &'a dyn DynModel, specs: Vec<EventSpec>) -> Self {
+        let n = model.info().state.len();
+        let flipped = vec![false; specs.len()];
+        EventLocator { model, specs, flipped, previous: None, f: vec![0.0; n], found: Vec::new() }
+    }
+
+    /// The event functions of spec `k` at state y (several for `Flip`: θ − π and θ + π per
+    /// angle).
+    fn values(&self, k: usize, y: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        match &self.specs[k].kind {
+            EventKind::Flip => {
+                for (q, v) in self.model.info().state.iter().zip(y) {
+                    if q.is_angle() {
+                        out.push(v - std::f64::consts::PI);
+                        out.push(v + std::f64::consts::PI);
+                    }
+                }
+            }
+            EventKind::Zero { index } => out.push(y[*index]),
+            EventKind::Section { index, value } => out.push(y[*index] - value),
+        }
+    }
+}
+
+/// The cubic Hermite interpolant at fraction s of a step of size h.
+fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: &mut [f64]) {
+    let (s2, s3) = (s * s, s * s * s);
+    let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i];
+    }
+}
+
+impl Observer for EventLocator<'_> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        self.model.rhs(sample.t, sample.y, &mut self.f);
+        let mut stop = false;
+        if let Some((t0, y0, f0)) = &self.previous {
+            let (t0, h) = (*t0, sample.t - *t0);
+            let (mut g0, mut g1, mut g) = (Vec::new(), Vec::new(), Vec::new());
+            let mut at = vec![0.0; y0.len()];
+            let mut hits: Vec<EventRecord> = Vec::new();
+            for k in 0..self.specs.len() {
+                if self.flipped[k] {
+                    continue;
+                }
+                self.values(k, y0, &mut g0);
+                self.values(k, sample.y, &mut g1);
+                let mut first: Option<f64> = None;
+                for (m, (a, b)) in g0.iter().zip(&g1).enumerate() {
+                    let (up, down) = (*a < 0.0 && *b >= 0.0, *a > 0.0 && *b <= 0.0);
+                    let counts = match self.specs[k].direction {
+                        Direction::Rising => up,
+                        Direction::Falling => down,
+                        Direction::Both => up || down,
+                    };
+                    if !counts {
+                        continue;
+                    }
+                    // Bisection on the fraction s of the step: g(s) changes sign in [lo, hi].
+                    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+                    let sign = a.signum();
+                    while (hi - lo) * h.abs() > 1e-13 * sample.t.abs().max(1.0) && hi - lo > f64::EPSILON {
+                        let mid = 0.5 * (lo + hi);
+                        hermite(mid, h, y0, f0, sample.y, &self.f, &mut at);
+                        self.values(k, &at, &mut g);
+                        if g[m].signum() == sign {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    let s = 0.5 * (lo + hi);
+                    first = Some(first.map_or(s, |f: f64| f.min(s)));
+                }
+                if let Some(s) = first {
+                    hermite(s, h, y0, f0, sample.y, &self.f, &mut at);
+                    hits.push(EventRecord {
+                        name: self.specs[k].name.clone(),
+                        t: t0 + s * h,
+                        state: at.clone(),
+                    });
+                    if matches!(self.specs[k].kind, EventKind::Flip) {
+                        self.flipped[k] = true;
+                    }
+                    stop |= self.specs[k].terminal;
+                }
+            }
+            hits.sort_by(|a, b| a.t.total_cmp(&b.t));
+            self.found.extend(hits);
+        }
+        match &mut self.previous {
+            Some((t, y, f)) => {
+                *t = sample.t;
+                y.copy_from_slice(sample.y);
+                f.copy_from_slice(&self.f);
+            }
+            None => self.previous = Some((sample.t, sample.y.to_vec(), self.f.clone())),
+        }
+        if stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    }
+}
