@@ -12,9 +12,19 @@
 use std::ops::ControlFlow;
 
 use crate::Error;
-use crate::analysis::Direction;
 use crate::observe::{Observer, Sample};
 use crate::system::DynModel;
+
+/// Which crossings of zero count.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direction {
+    /// From negative to non-negative.
+    Rising,
+    /// From positive to non-positive.
+    Falling,
+    /// Either.
+    Both,
+}
 
 /// What an event watches.
 #[derive(Debug, Clone, PartialEq)]
@@ -158,6 +168,10 @@ fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: 
 
 impl Observer for EventLocator<'_> {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        // `simulate` always carries a locator: with nothing to watch it costs nothing per step.
+        if self.specs.is_empty() {
+            return ControlFlow::Continue(());
+        }
         self.model.rhs(sample.t, sample.y, &mut self.f);
         let mut stop = false;
         if let Some((t0, y0, f0)) = &self.previous {
