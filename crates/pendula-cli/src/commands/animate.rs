@@ -8,6 +8,7 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use pendula::analysis::relative_error;
 use pendula::integrator;
 use pendula::observe::{Every, Recorder};
 use pendula::{End, RunSpec};
@@ -86,41 +87,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     }
     let file = AtomicFile::create(&out, "--out")?;
 
-    // One frame every 1/fps s of simulated time (rounded to whole steps).
-    let every = ((1.0 / (fps as f64 * h)).round() as u64).max(1);
-    let mut starts = vec![values.initial_state().to_vec()];
-    if let Some(d) = delta {
-        let mut y = values.initial_state().to_vec();
-        y[0] += d;
-        starts.push(y);
-    }
-    let model = values.build();
-    let n = values.info().state.len() / 2;
-    let mut tracks = Vec::new();
-    for y0 in &starts {
-        let mut rec = Every { n: every, inner: Recorder::default() };
-        model.solve(method, y0, &spec, &mut rec)?;
-        tracks.push(rec.inner.rows);
-    }
-    let e0: Vec<f64> = starts.iter().map(|y| model.energy(0.0, y)).collect();
-    let frames_n = tracks[0].len() / (2 * n + 1);
-    let frames: Vec<Snapshot> = (0..frames_n)
-        .map(|k| {
-            let rows: Vec<&[f64]> =
-                tracks.iter().map(|t| &t[k * (2 * n + 1)..(k + 1) * (2 * n + 1)]).collect();
-            Snapshot {
-                t: rows[0][0],
-                angles: rows.iter().map(|r| r[1..=n].to_vec()).collect(),
-                energy_error: rows
-                    .iter()
-                    .zip(&e0)
-                    .map(|(r, e)| {
-                        ((model.energy(r[0], &r[1..]) - e) / if *e == 0.0 { 1.0 } else { e.abs() }).abs()
-                    })
-                    .collect(),
-            }
-        })
-        .collect();
+    let frames = snapshots(&values, method, &spec, fps, delta)?;
     let lengths: Vec<f64> = match system {
         "pendulum" => vec![values.get("l")],
         _ => vec![values.get("l1"), values.get("l2")],
@@ -146,6 +113,48 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     file.commit()?;
     eprintln!("wrote {} ({} frames, {}x{})", out.display(), animation.frames.len(), size.0, size.1);
     Ok(())
+}
+
+/// One snapshot every 1/fps s of simulated time (rounded to whole steps) of the pendulum
+/// from `values`, and of a second one whose first angle starts `delta` rad away.
+pub fn snapshots(
+    values: &pendula::system::Values,
+    method: &pendula::integrator::Method,
+    spec: &RunSpec,
+    fps: u32,
+    delta: Option<f64>,
+) -> Result<Vec<Snapshot>> {
+    let every = ((1.0 / (fps as f64 * spec.h)).round() as u64).max(1);
+    let mut starts = vec![values.initial_state().to_vec()];
+    if let Some(d) = delta {
+        let mut y = values.initial_state().to_vec();
+        y[0] += d;
+        starts.push(y);
+    }
+    let model = values.build();
+    let n = values.info().state.len() / 2;
+    let mut tracks = Vec::new();
+    for y0 in &starts {
+        let mut rec = Every { n: every, inner: Recorder::default() };
+        model.solve(method, y0, spec, &mut rec)?;
+        tracks.push(rec.inner.rows);
+    }
+    let e0: Vec<f64> = starts.iter().map(|y| model.energy(0.0, y)).collect();
+    let row = 2 * n + 1;
+    Ok((0..tracks[0].len() / row)
+        .map(|k| {
+            let rows: Vec<&[f64]> = tracks.iter().map(|t| &t[k * row..(k + 1) * row]).collect();
+            Snapshot {
+                t: rows[0][0],
+                angles: rows.iter().map(|r| r[1..=n].to_vec()).collect(),
+                energy_error: rows
+                    .iter()
+                    .zip(&e0)
+                    .map(|(r, e)| relative_error(model.energy(r[0], &r[1..]), *e).abs())
+                    .collect(),
+            }
+        })
+        .collect())
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32)> {

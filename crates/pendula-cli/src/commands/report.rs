@@ -10,7 +10,7 @@ use clap::Args;
 use pendula::analysis::StabilityCriterion;
 use pendula::integrator;
 use pendula::{End, RunSpec};
-use pendula_viz::{Animation, Figure, Snapshot};
+use pendula_viz::{Animation, Figure};
 
 use super::{compare, convergence, period, regimes, stability};
 use crate::study::{self, OutDir, short};
@@ -272,32 +272,9 @@ pub fn run(args: &ReportArgs) -> Result<()> {
 /// The chaos animation: two double pendulums 1e-3 rad apart.
 fn chaos_animation() -> Result<Vec<u8>> {
     let values = study::values("double", &[])?;
-    let model = values.build();
-    let (h, fps, t_end) = (1e-3, 20u32, 12.0);
-    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    let every = (1.0 / (fps as f64 * h)).round() as u64;
-    let mut starts = vec![values.initial_state().to_vec()];
-    let mut other = starts[0].clone();
-    other[0] += 1e-3;
-    starts.push(other);
-    let mut tracks = Vec::new();
-    for y0 in &starts {
-        let mut rec = pendula::observe::Every { n: every, inner: pendula::observe::Recorder::default() };
-        model.solve(&integrator::explicit_rk::RK4, y0, &spec, &mut rec)?;
-        tracks.push(rec.inner.rows);
-    }
-    let e0: Vec<f64> = starts.iter().map(|y| model.energy(0.0, y)).collect();
-    let frames = (0..tracks[0].len() / 5)
-        .map(|k| Snapshot {
-            t: tracks[0][5 * k],
-            angles: tracks.iter().map(|t| t[5 * k + 1..5 * k + 3].to_vec()).collect(),
-            energy_error: tracks
-                .iter()
-                .zip(&e0)
-                .map(|(t, e)| ((model.energy(0.0, &t[5 * k + 1..5 * k + 5]) - e) / e).abs())
-                .collect(),
-        })
-        .collect();
+    let (h, fps) = (1e-3, 20u32);
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(12.0) };
+    let frames = super::animate::snapshots(&values, &integrator::explicit_rk::RK4, &spec, fps, Some(1e-3))?;
     let animation = Animation {
         title: "double pendulums 1e-3 rad apart, rk4".into(),
         lengths: vec![1.0, 1.0],

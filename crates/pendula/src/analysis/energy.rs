@@ -4,6 +4,11 @@ use std::ops::ControlFlow;
 
 use crate::observe::{Observer, Sample};
 
+/// The relative energy error (E − E₀)/|E₀|, or the absolute error E − E₀ (J) when E₀ = 0.
+pub fn relative_error(e: f64, e0: f64) -> f64 {
+    if e0 == 0.0 { e - e0 } else { (e - e0) / e0.abs() }
+}
+
 /// Relative energy error (E − E₀)/|E₀| sampled along a run, every `every`-th step.
 #[derive(Debug, Clone)]
 pub struct EnergySeries<F> {
@@ -29,8 +34,7 @@ impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergySeries<F> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
         let e = (self.energy)(s.t, s.y);
         let e0 = *self.e0.get_or_insert(e);
-        let scale = if e0 == 0.0 { 1.0 } else { e0.abs() };
-        let err = (e - e0) / scale;
+        let err = relative_error(e, e0);
         self.max_abs = self.max_abs.max(err.abs());
         if s.step.is_multiple_of(self.every) || s.last {
             self.t.push(s.t);

@@ -9,6 +9,6 @@ pub mod stability;
 pub use convergence::{
     OrderFit, Reference, WorkPoint, convergence_errors, fit_order, reference_state, work_precision,
 };
-pub use energy::{EnergySeries, drift_rate, envelope};
+pub use energy::{EnergySeries, drift_rate, envelope, relative_error};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

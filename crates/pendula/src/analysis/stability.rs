@@ -2,6 +2,7 @@
 
 use std::ops::ControlFlow;
 
+use super::energy::relative_error;
 use crate::integrator::Method;
 use crate::observe::{Observer, Sample};
 use crate::system::DynModel;
@@ -28,8 +29,7 @@ impl Observer for Guard<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
         let e = self.model.energy(s.t, s.y);
         let e0 = *self.e0.get_or_insert(e);
-        let scale = if e0 == 0.0 { 1.0 } else { e0.abs() };
-        if ((e - e0) / scale).abs() > self.bound {
+        if relative_error(e, e0).abs() > self.bound {
             self.exceeded = true;
             return ControlFlow::Break(());
         }
