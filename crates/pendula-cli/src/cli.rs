@@ -64,7 +64,7 @@ pub struct SimulateArgs {
     /// Number of steps, instead of --t-end.
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub steps: Option<String>,
-    /// Relative tolerance of adaptive methods (dopri5) [default: 1e-6].
+    /// Relative tolerance of adaptive methods (dopri5, dop853) [default: 1e-6].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub rtol: Option<String>,
     /// Absolute tolerance of adaptive methods [default: 1e-6].

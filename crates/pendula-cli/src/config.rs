@@ -203,7 +203,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         tol.validate()?;
         if !matches!(method.scheme, Scheme::Embedded(_)) {
             bail!(
-                "--rtol, --atol, --h-min and --h-max apply to adaptive methods (dopri5); {} takes fixed steps (--dt)",
+                "--rtol, --atol, --h-min and --h-max apply to adaptive methods (dopri5, dop853); {} takes fixed steps (--dt)",
                 method.name
             );
         }
@@ -225,6 +225,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         Some(_) => Some(output(args.out.clone().or(scenario.out).unwrap_or_else(|| DEFAULT_OUT.into()))?),
     };
     let summary = args.summary.clone().or(scenario.summary);
+    if matches!(out, Some(Output::Stdout)) && summary.as_deref() == Some(Path::new("-")) {
+        bail!("--out - and --summary - would both write to stdout: give one of them a file");
+    }
     Ok(SimulateConfig { values, method, spec, tolerances, first_step: given_dt, every, out, summary })
 }
 

@@ -46,7 +46,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
         _ => None,
     };
-    let summary_file = summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+    // `--summary -` prints the summary on stdout.
+    let to_stdout = summary.as_deref() == Some(std::path::Path::new("-"));
+    let summary_file =
+        summary.as_deref().filter(|_| !to_stdout).map(|p| AtomicFile::create(p, "--summary")).transpose()?;
 
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
@@ -98,7 +101,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     let parameters: Map<String, Value> = values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect();
     let steps = report.outcome.steps();
-    if let Some(f) = summary_file {
+    if summary.is_some() {
         let doc = json!({
             "system": info.name,
             "method": method.name,
@@ -128,10 +131,19 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
                 json!({ "name": e.name, "t": e.t, "state": state })
             }).collect::<Vec<_>>(),
         });
-        let mut handle = f.handle()?;
-        serde_json::to_writer_pretty(&mut handle, &doc)?;
-        writeln!(handle)?;
-        f.commit()?;
+        match summary_file {
+            Some(f) => {
+                let mut handle = f.handle()?;
+                serde_json::to_writer_pretty(&mut handle, &doc)?;
+                writeln!(handle)?;
+                f.commit()?;
+            }
+            None => {
+                let mut out = std::io::stdout().lock();
+                serde_json::to_writer_pretty(&mut out, &doc)?;
+                writeln!(out)?;
+            }
+        }
     }
 
     let mut err = std::io::stderr().lock();
@@ -142,7 +154,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         method.name,
         match tolerances {
             Some(t) =>
-                format!("(adaptive, rtol {} atol {}, {} rejected)", t.rtol, t.atol, report.steps_rejected),
+                format!("(adaptive, rtol {:e} atol {:e}, {} rejected)", t.rtol, t.atol, report.steps_rejected),
             None => format!("of {} s", spec.h),
         },
         report.rhs_evals
@@ -163,7 +175,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(first) = events.found.first() {
         writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
     }
-    if let Some(p) = summary {
+    if let Some(p) = summary.as_deref().filter(|_| !to_stdout) {
         writeln!(err, "wrote {}", p.display())?;
     }
     Ok(())

@@ -129,6 +129,32 @@ fn events_are_listed_in_the_summary() {
     assert!(f["final"]["t"].as_f64().unwrap() - t_flip <= 1e-3 + 1e-12, "the run stops at the flip");
 }
 
+/// The integrators issue's check through the CLI: the period at 170° from `zero:theta` events
+/// of dop853 at tight tolerance (located on its dense output) equals the exact one to 1e-9,
+/// with the summary on stdout (`--summary -`).
+#[test]
+fn dop853_events_give_the_period_with_the_summary_on_stdout() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path())
+        .args(["simulate", "pendulum", "--set", "theta=170deg", "--method", "dop853", "--rtol", "1e-12"])
+        .args(["--atol", "1e-12", "--t-end", "12", "--event", "zero:theta", "--every", "0", "--summary", "-"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let s: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let events = s["events"].as_array().unwrap();
+    let period = events[2]["t"].as_f64().unwrap() - events[0]["t"].as_f64().unwrap();
+    assert!((period / 4.893_524_274_105_486 - 1.0).abs() < 1e-9, "{period}");
+    assert!(s["steps_accepted"].as_u64().unwrap() < 1000, "large adaptive steps");
+    assert_eq!(files(dir.path()), Vec::<String>::new(), "no file named `-`");
+    rejects(
+        &["simulate", "--out", "-", "--summary", "-"],
+        &["--out - and --summary - would both write to stdout"],
+    );
+}
+
 #[test]
 fn npy_output_has_rows_and_columns() {
     let dir = TempDir::new().unwrap();

@@ -29,16 +29,40 @@ impl Tolerances {
     }
 }
 
-/// The PI step-size controller of Hairer's DOPRI5 (Gustafsson's, with β = 0.04): the next
-/// step is h · (1/err)^(1/q − 0.75 β) · err_prev^β · 0.9, clamped to [h/5, 10 h], where q is
-/// the error estimate's order + 1.
+/// The parameters of a [`PiController`], part of each embedded pair's data (Hairer's codes
+/// use different ones for DOPRI5 and DOP853).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlParams {
+    /// Exponent α on the current error: 1/q − (weight) β for an error estimate of order q − 1.
+    pub alpha: f64,
+    /// Exponent β on the previous step's error (0: a plain I controller).
+    pub beta: f64,
+    /// Safety factor on the proposed step.
+    pub safety: f64,
+    /// Smallest factor by which a step may shrink.
+    pub min_factor: f64,
+    /// Largest factor by which a step may grow.
+    pub max_factor: f64,
+}
+
+/// DOPRI5's defaults: α = 1/5 − 0.75 β, β = 0.04, safety 0.9, factors in [0.2, 10].
+pub const DOPRI5_CONTROL: ControlParams =
+    ControlParams { alpha: 0.2 - 0.75 * 0.04, beta: 0.04, safety: 0.9, min_factor: 0.2, max_factor: 10.0 };
+
+/// DOP853's defaults: α = 1/8, β = 0, safety 0.9, factors in [0.333, 6].
+pub const DOP853_CONTROL: ControlParams =
+    ControlParams { alpha: 1.0 / 8.0, beta: 0.0, safety: 0.9, min_factor: 0.333, max_factor: 6.0 };
+
+/// The PI step-size controller of Hairer's DOPRI5 and DOP853 (Gustafsson's): the next step
+/// is h · safety · err^(−α) · err_prev^β, the factor clamped to [min_factor, max_factor];
+/// a rejected step shrinks by safety · err^(−α), at most to min_factor h.
 ///
 /// # References
-/// Hairer, Nørsett, Wanner, *Solving ODEs I*, §IV.2 (PI control) and the DOPRI5 code.
+/// Hairer, Nørsett, Wanner, *Solving ODEs I*, §II.4 and §IV.2 (PI control), and the DOPRI5
+/// and DOP853 codes.
 #[derive(Debug, Clone, Copy)]
 pub struct PiController {
-    expo: f64,
-    beta: f64,
+    params: ControlParams,
     previous: f64,
 }
 
@@ -52,23 +76,23 @@ pub enum Verdict {
 }
 
 impl PiController {
-    /// A controller for an error estimate of order `error_order`.
-    pub fn new(error_order: u32) -> Self {
-        let beta = 0.04;
-        PiController { expo: 1.0 / (error_order as f64 + 1.0) - 0.75 * beta, beta, previous: 1e-4 }
+    /// A controller with these parameters.
+    pub fn new(params: &ControlParams) -> Self {
+        PiController { params: *params, previous: 1e-4 }
     }
 
     /// Judges a step of size h whose scaled error norm was `err`.
     pub fn judge(&mut self, h: f64, err: f64) -> Verdict {
-        const SAFE: f64 = 0.9;
+        let ControlParams { alpha, beta, safety, min_factor, max_factor } = self.params;
         let err = if err.is_finite() { err } else { f64::MAX };
-        let fac11 = err.powf(self.expo);
+        // The step shrinks by `fac`: h / fac (the form of Hairer's codes).
+        let fac11 = err.powf(alpha);
         if err <= 1.0 {
-            let fac = (fac11 / self.previous.powf(self.beta) / SAFE).clamp(0.1, 5.0);
+            let fac = (fac11 / self.previous.powf(beta) / safety).clamp(1.0 / max_factor, 1.0 / min_factor);
             self.previous = err.max(1e-4);
             Verdict::Accept(h / fac)
         } else {
-            Verdict::Reject(h / (fac11 / SAFE).min(5.0))
+            Verdict::Reject(h / (fac11 / safety).min(1.0 / min_factor))
         }
     }
 }

@@ -15,17 +15,75 @@ pub struct Sample<'a> {
     pub y: &'a [f64],
     /// Whether this is the last step of the run.
     pub last: bool,
+    /// The continuous solution over the step that ended here, when the method provides one
+    /// and an observer asked for it ([`Observer::wants_dense`]); in the same coordinates as
+    /// `y`.
+    pub dense: Option<DenseStep<'a>>,
+}
+
+impl<'a> Sample<'a> {
+    /// A sample without dense output.
+    pub fn new(step: u64, t: f64, y: &'a [f64], last: bool) -> Self {
+        Sample { step, t, y, last, dense: None }
+    }
+}
+
+/// The dense output of one step from t₀ to t₀ + h: the polynomial
+/// y(t₀ + θh) = r₀ + θ(r₁ + (1−θ)(r₂ + θ(r₃ + (1−θ)(r₄ + …)))) of Hairer's DOPRI5 and DOP853
+/// codes, whose coefficients rᵢ (one row of the state's length each) the method computed.
+///
+/// # References
+/// E. Hairer, S. P. Nørsett, G. Wanner, *Solving ODEs I*, §II.6.
+#[derive(Debug, Clone, Copy)]
+pub struct DenseStep<'a> {
+    /// Start of the step, s.
+    pub t0: f64,
+    /// Size of the step, s.
+    pub h: f64,
+    coefficients: &'a [f64],
+}
+
+impl<'a> DenseStep<'a> {
+    /// The step from t₀ of size h with coefficients r₀, r₁, … stored one after the other.
+    pub fn new(t0: f64, h: f64, coefficients: &'a [f64]) -> Self {
+        DenseStep { t0, h, coefficients }
+    }
+
+    /// The state at time t (within the step for the method's accuracy), into `out`.
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        let n = out.len();
+        let terms = self.coefficients.len() / n;
+        let theta = (t - self.t0) / self.h;
+        let factor = [theta, 1.0 - theta];
+        for (j, o) in out.iter_mut().enumerate() {
+            // Horner from the innermost term: after rᵢ comes θ for even i, 1 − θ for odd i.
+            let mut acc = self.coefficients[(terms - 1) * n + j];
+            for i in (0..terms - 1).rev() {
+                acc = self.coefficients[i * n + j] + factor[i % 2] * acc;
+            }
+            *o = acc;
+        }
+    }
 }
 
 /// Watches a run step by step.
 pub trait Observer {
     /// Sees one state; `Break` ends the run early (as [`crate::Outcome::Stopped`]).
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()>;
+
+    /// Whether this observer uses [`Sample::dense`]; methods that must spend evaluations on
+    /// dense output (DOP853) do so only then.
+    fn wants_dense(&self) -> bool {
+        false
+    }
 }
 
 impl<O: Observer + ?Sized> Observer for &mut O {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
         (**self).observe(sample)
+    }
+    fn wants_dense(&self) -> bool {
+        (**self).wants_dense()
     }
 }
 
@@ -34,6 +92,9 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         let a = self.0.observe(sample);
         let b = self.1.observe(sample);
         if a.is_break() || b.is_break() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    }
+    fn wants_dense(&self) -> bool {
+        self.0.wants_dense() || self.1.wants_dense()
     }
 }
 
@@ -68,11 +129,17 @@ pub struct Every<O> {
 
 impl<O: Observer> Observer for Every<O> {
     fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        if sample.step.is_multiple_of(self.n) || sample.last {
+        if self.n == 1 {
             self.inner.observe(sample)
+        } else if sample.step.is_multiple_of(self.n) || sample.last {
+            // The dense output covers only the last step, not all since the last kept one.
+            self.inner.observe(&Sample { dense: None, ..*sample })
         } else {
             ControlFlow::Continue(())
         }
+    }
+    fn wants_dense(&self) -> bool {
+        self.n == 1 && self.inner.wants_dense()
     }
 }
 

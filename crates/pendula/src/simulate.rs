@@ -150,7 +150,7 @@ impl<S: ?Sized> Simulation<'_, S> {
         if y.iter().any(|v| !v.is_finite()) {
             return Err(Error::NonFinite { t: t0 });
         }
-        let first = Sample { step: 0, t: t0, y, last: false };
+        let first = Sample::new(0, t0, y, false);
         if observer.observe(&first).is_break() {
             return Ok(Outcome::Stopped { steps: 0, t: t0 });
         }
@@ -163,7 +163,7 @@ impl<S: ?Sized> Simulation<'_, S> {
             if y.iter().any(|v| !v.is_finite()) {
                 return Err(Error::NonFinite { t: t_next });
             }
-            if observer.observe(&Sample { step: k, t: t_next, y, last }).is_break() {
+            if observer.observe(&Sample::new(k, t_next, y, last)).is_break() {
                 return Ok(Outcome::Stopped { steps: k, t: t_next });
             }
         }
@@ -269,7 +269,7 @@ pub fn solve_adaptive<M: Model>(
             method: method.name,
             needs: "fixed steps (--dt)",
             reason: "tolerances apply to methods with an error estimate".into(),
-            suggestion: "dopri5 for adaptive steps",
+            suggestion: "dopri5 or dop853 for adaptive steps",
         });
     };
     tol.validate()?;
@@ -286,9 +286,10 @@ pub fn solve_adaptive<M: Model>(
         return Err(Error::NonFinite { t: 0.0 });
     }
     let mut stepper = EmbeddedRk::new(tableau, y.len());
-    let mut control = PiController::new(tableau.error_order);
+    let mut control = PiController::new(tableau.control);
+    let dense = observer.wants_dense();
     let (mut accepted, mut rejected) = (0u64, 0u64);
-    if observer.observe(&Sample { step: 0, t: 0.0, y: &y, last: false }).is_break() {
+    if observer.observe(&Sample::new(0, 0.0, &y, false)).is_break() {
         return Ok(Report {
             outcome: Outcome::Stopped { steps: 0, t: 0.0 },
             rhs_evals: 0,
@@ -314,13 +315,14 @@ pub fn solve_adaptive<M: Model>(
         match control.judge(h, err) {
             Verdict::Accept(next) => {
                 let t_new = if last { t_end } else { t + h };
-                stepper.accept(&mut y, t_new);
+                stepper.accept(&system, t, h, t_new, &mut y, dense);
                 accepted += 1;
                 t = t_new;
                 if y.iter().any(|v| !v.is_finite()) {
                     return Err(Error::NonFinite { t });
                 }
-                if observer.observe(&Sample { step: accepted, t, y: &y, last }).is_break() {
+                let sample = Sample { step: accepted, t, y: &y, last, dense: stepper.dense_output() };
+                if observer.observe(&sample).is_break() {
                     let outcome = Outcome::Stopped { steps: accepted, t };
                     return Ok(Report {
                         outcome,
@@ -350,27 +352,26 @@ pub fn solve_adaptive<M: Model>(
     Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: rejected })
 }
 
-/// A first step from the sizes of y₀, f(0, y₀) and an estimate of f' (Hairer, Nørsett,
-/// Wanner §II.4, "Starting step size").
+/// A first step from the sizes of y₀, f(0, y₀) and an estimate of f', as Hairer's DOPRI5 and
+/// DOP853 codes choose it (`HINIT`; Hairer, Nørsett, Wanner §II.4, "Starting step size"):
+/// h₀ = 0.01 ‖y₀‖/‖f₀‖, one Euler step to estimate ‖f'‖, then h₁ = (0.01 / max(‖f₀‖,
+/// ‖f'‖))^(1/p) with p the method's order, and the smaller of 100 h₀ and h₁. Norms are
+/// weighted sums of squares (not means), as in the codes.
 fn initial_step<S: System + ?Sized>(system: &S, y0: &[f64], order: u32, tol: &Tolerances) -> f64 {
     let n = y0.len();
     let scale: Vec<f64> = y0.iter().map(|v| tol.atol + tol.rtol * v.abs()).collect();
-    let norm =
-        |v: &[f64]| (v.iter().zip(&scale).map(|(a, s)| (a / s) * (a / s)).sum::<f64>() / n as f64).sqrt();
+    let norm2 = |v: &[f64]| v.iter().zip(&scale).map(|(a, s)| (a / s) * (a / s)).sum::<f64>();
     let mut f0 = vec![0.0; n];
     system.rhs(0.0, y0, &mut f0);
-    let (d0, d1) = (norm(y0), norm(&f0));
-    let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+    let (dny, dnf) = (norm2(y0), norm2(&f0));
+    let h0 = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { 0.01 * (dny / dnf).sqrt() }.min(tol.h_max);
     let y1: Vec<f64> = y0.iter().zip(&f0).map(|(y, f)| y + h0 * f).collect();
     let mut f1 = vec![0.0; n];
     system.rhs(h0, &y1, &mut f1);
     let diff: Vec<f64> = f1.iter().zip(&f0).map(|(a, b)| a - b).collect();
-    let d2 = norm(&diff) / h0;
-    let h1 = if d1.max(d2) <= 1e-15 {
-        (h0 * 1e-3).max(1e-6)
-    } else {
-        (0.01 / d1.max(d2)).powf(1.0 / (order as f64 + 1.0))
-    };
+    let der2 = norm2(&diff).sqrt() / h0;
+    let der12 = der2.max(dnf.sqrt());
+    let h1 = if der12 <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / order as f64) };
     (100.0 * h0).min(h1)
 }
 
@@ -405,7 +406,7 @@ struct ToVelocities<'a, M> {
 impl<M: Model> Observer for ToVelocities<'_, M> {
     fn observe(&mut self, sample: &Sample<'_>) -> std::ops::ControlFlow<()> {
         self.model.to_velocities(sample.y, &mut self.y);
-        self.inner.observe(&Sample { y: &self.y, ..*sample })
+        self.inner.observe(&Sample { y: &self.y, dense: None, ..*sample })
     }
 }
 

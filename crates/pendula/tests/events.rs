@@ -24,6 +24,35 @@ fn ref_zero_events_give_the_exact_period() {
     }
 }
 
+/// The same period from dop853's adaptive steps at rtol = atol = 1e-12: the events are
+/// located on its order-7 dense output (steps of ~0.1 s, where a cubic Hermite interpolant
+/// would be off by ~1e-6), and the period is exact to 1e-9 relative, as the integrators issue
+/// asks; also with dopri5's order-4 dense output (steps of ~5 ms) to 1e-8.
+#[test]
+fn ref_zero_events_on_dense_output_give_the_exact_period() {
+    use pendula::control::Tolerances;
+    use pendula::integrator::embedded::{DOP853, DOPRI5};
+    let v = values("pendulum", &[("theta", 170f64.to_radians())]);
+    let model = v.build();
+    let exact = 4.893524274105486164;
+    for (method, tol, allowed, min_mean_step) in [(&DOP853, 1e-12, 1e-9, 0.02), (&DOPRI5, 1e-12, 1e-8, 0.002)]
+    {
+        let spec = EventSpec::parse("zero:theta", &*model, false).unwrap();
+        let mut events = EventLocator::new(&*model, vec![spec]);
+        let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
+        let report = model.solve_adaptive(method, v.initial_state(), 12.0, None, &tol, &mut events).unwrap();
+        assert!(events.found.len() >= 4);
+        let period = events.found[2].t - events.found[0].t;
+        let mean_step = 12.0 / report.outcome.steps() as f64;
+        eprintln!("{}: period error {:.2e}, mean step {mean_step:.3} s", method.name, period / exact - 1.0);
+        assert!((period / exact - 1.0).abs() < allowed, "{}: {period}", method.name);
+        assert!(mean_step > min_mean_step, "{} took small steps: {mean_step}", method.name);
+        for e in &events.found {
+            assert!(e.state[0].abs() < 1e-9, "theta at the event: {}", e.state[0]);
+        }
+    }
+}
+
 /// The double pendulum from (120°, −10°) flips once: the flip event is recorded once, at a
 /// state where an angle is ±π, and the same at half the step (chaos amplifies only round-off
 /// and the O(h⁴) error at this early time).

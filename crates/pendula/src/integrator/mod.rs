@@ -104,6 +104,7 @@ pub static METHODS: &[&Method] = &[
     &gauss_legendre::GAUSS_LEGENDRE_4,
     &gauss_legendre::GAUSS_LEGENDRE_6,
     &embedded::DOPRI5,
+    &embedded::DOP853,
 ];
 
 /// Looks a method up by name.
