@@ -41,6 +41,9 @@ cases = {
     "DOUBLE_C (m=1,1 l=1,1 g=9.81; 30deg,-20deg,0.3,0; t=2)": (
         (1, 1, 1, 1, mp.mpf("9.81")), [30 * deg, -20 * deg, mp.mpf("0.3"), 0], 2),
 }
+# The bench's W2 problem at t = 10 s (takes about 5 minutes).
+cases["DOUBLE_W2 (m=1,1 l=1,1 g=9.81; 120deg,-10deg,0,0; t=10)"] = (
+    (1, 1, 1, 1, mp.mpf("9.81")), [120 * deg, -10 * deg, 0, 0], 10)
 for name, (params, y0, t) in cases.items():
     sol = mp.odefun(double_pendulum(*params), 0, y0)
     show(name, sol(t))
