@@ -72,9 +72,10 @@ pub enum Error {
         /// The step size proposed, s.
         h: f64,
     },
-    /// The iteration that solves an implicit step did not converge.
+    /// The iteration that solves an implicit step did not converge (Gauss–Legendre: neither
+    /// Newton nor, after it, fixed-point iteration).
     #[error(
-        "the implicit step at t = {t} s did not converge after {iterations} iterations (try a smaller step)"
+        "the implicit step at t = {t} s did not converge (Newton where a Jacobian exists, then {iterations} fixed-point iterations; try a smaller step)"
     )]
     NewtonDidNotConverge {
         /// Time at the start of the failing step, s.

@@ -182,6 +182,9 @@ pub struct Report {
     pub state: Vec<f64>,
     /// Steps rejected by the step-size controller (0 for fixed steps).
     pub steps_rejected: u64,
+    /// Jacobian evaluations (implicit methods' Newton iterations), each costing a few
+    /// evaluations of f.
+    pub jacobian_evals: u64,
 }
 
 /// Runs `method` on `model` from `y0` (positions, velocities), showing every state to
@@ -245,7 +248,13 @@ fn run_direct<M: Model>(
     let system = Counted::new(model);
     let mut y = y0.to_vec();
     let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut y, observer)?;
-    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: 0 })
+    Ok(Report {
+        outcome,
+        rhs_evals: system.evaluations(),
+        state: y,
+        steps_rejected: 0,
+        jacobian_evals: system.jacobians.get(),
+    })
 }
 
 /// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly),
@@ -295,6 +304,7 @@ pub fn solve_adaptive<M: Model>(
             rhs_evals: 0,
             state: y,
             steps_rejected: 0,
+            jacobian_evals: system.jacobians.get(),
         });
     }
     let mut t = 0.0;
@@ -329,6 +339,7 @@ pub fn solve_adaptive<M: Model>(
                         rhs_evals: system.evaluations(),
                         state: y,
                         steps_rejected: rejected,
+                        jacobian_evals: system.jacobians.get(),
                     });
                 }
                 if last {
@@ -349,7 +360,13 @@ pub fn solve_adaptive<M: Model>(
         }
     }
     let outcome = Outcome::ReachedEnd { steps: accepted, t: t_end };
-    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: rejected })
+    Ok(Report {
+        outcome,
+        rhs_evals: system.evaluations(),
+        state: y,
+        steps_rejected: rejected,
+        jacobian_evals: 0,
+    })
 }
 
 /// A first step from the sizes of y₀, f(0, y₀) and an estimate of f', as Hairer's DOPRI5 and
@@ -393,7 +410,13 @@ fn run_on_form<M: Model>(
     let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut z, &mut shown)?;
     let mut y = vec![0.0; dim];
     model.to_velocities(&z, &mut y);
-    Ok(Report { outcome, rhs_evals: system.evaluations(), state: y, steps_rejected: 0 })
+    Ok(Report {
+        outcome,
+        rhs_evals: system.evaluations(),
+        state: y,
+        steps_rejected: 0,
+        jacobian_evals: system.jacobians.get(),
+    })
 }
 
 /// Shows (q, p) states to an observer as (q, q').
@@ -415,11 +438,12 @@ struct Counted<'a, S: ?Sized> {
     inner: &'a S,
     rhs: Cell<u64>,
     halves: Cell<u64>,
+    jacobians: Cell<u64>,
 }
 
 impl<'a, S: ?Sized> Counted<'a, S> {
     fn new(inner: &'a S) -> Self {
-        Counted { inner, rhs: Cell::new(0), halves: Cell::new(0) }
+        Counted { inner, rhs: Cell::new(0), halves: Cell::new(0), jacobians: Cell::new(0) }
     }
 
     fn evaluations(&self) -> u64 {
@@ -434,6 +458,11 @@ impl<S: System + ?Sized> System for Counted<'_, S> {
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         self.rhs.set(self.rhs.get() + 1);
         self.inner.rhs(t, y, dydt);
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let available = self.inner.jacobian(t, y, jac);
+        self.jacobians.set(self.jacobians.get() + u64::from(available));
+        available
     }
 }
 

@@ -15,6 +15,7 @@ mod energy;
 mod events;
 mod exact;
 mod formulations;
+mod implicit;
 mod schedule;
 mod special;
 mod support;

@@ -3,6 +3,8 @@
 
 use std::f64::consts::PI;
 
+use num_dual::{Dual64, DualNum};
+
 use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
 
 /// Two point masses on massless rigid rods, the second hung from the first.
@@ -155,6 +157,31 @@ impl DoublePendulum {
     pub fn form(&self) -> DoublePendulumForm {
         DoublePendulumForm { pendulum: *self }
     }
+
+    /// The Lagrangian right-hand side (the expressions of [`System::rhs`]) over any number
+    /// type, for its Jacobian by forward-mode automatic differentiation (num-dual).
+    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, y: [T; 4]) -> [T; 4] {
+        let Self { m1, m2, l1, l2, g } = *self;
+        let [th1, th2, w1, w2] = y;
+        let (sd, cd) = (th1 - th2).sin_cos();
+        let (m11, m22) = (T::from((m1 + m2) * l1), T::from(l2));
+        let (m12, m21) = (cd * (m2 * l2), cd * l1);
+        let r1 = w2 * w2 * sd * (-m2 * l2) - th1.sin() * ((m1 + m2) * g);
+        let r2 = w1 * w1 * sd * l1 - th2.sin() * g;
+        let det = m11 * m22 - m12 * m21;
+        [w1, w2, (r1 * m22 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det]
+    }
+}
+
+/// The Jacobian of a map of R⁴ into itself by forward-mode automatic differentiation: one
+/// dual-number evaluation per column.
+fn dual_jacobian(f: impl Fn([Dual64; 4]) -> [Dual64; 4], y: &[f64], jac: &mut [f64]) {
+    for column in 0..4 {
+        let seeded = std::array::from_fn(|j| Dual64::new(y[j], if j == column { 1.0 } else { 0.0 }));
+        for (row, value) in f(seeded).iter().enumerate() {
+            jac[row * 4 + column] = value.eps;
+        }
+    }
 }
 
 impl Model for DoublePendulum {
@@ -210,6 +237,11 @@ impl System for DoublePendulum {
         dydt[2] = (r1 * m22 - m12 * r2) / det;
         dydt[3] = (m11 * r2 - m21 * r1) / det;
     }
+
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        dual_jacobian(|y| self.rhs_generic(y), y, jac);
+        true
+    }
 }
 
 impl Energy for DoublePendulum {
@@ -232,6 +264,33 @@ impl System for DoublePendulumForm {
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         super::hamilton_rhs(self, t, y, dydt);
+    }
+
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        dual_jacobian(|y| self.rhs_generic(y), y, jac);
+        true
+    }
+}
+
+impl DoublePendulumForm {
+    /// Hamilton's equations (∂H/∂p, −∂H/∂q) with the expressions of [`Hamiltonian::dh_dq`]
+    /// and [`Hamiltonian::dh_dp`], over any number type (for the Jacobian).
+    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, y: [T; 4]) -> [T; 4] {
+        let DoublePendulum { m1, m2, l1, l2, g } = self.pendulum;
+        let [q1, q2, p1, p2] = y;
+        let (s, c) = (q1 - q2).sin_cos();
+        let d = s * s * m2 + m1;
+        let bracket = c * (m2 / (l1 * l1)) * p1 * p1 - (c * c * m2 + (m1 + m2)) / (l1 * l2) * p1 * p2
+            + c * ((m1 + m2) / (l2 * l2)) * p2 * p2;
+        let coupling = s / (d * d) * bracket;
+        let det = (s * s * m2 + m1) * (m2 * l1 * l1 * l2 * l2);
+        let b = c * (m2 * l1 * l2);
+        [
+            (p1 * (m2 * l2 * l2) - b * p2) / det,
+            (-b * p1 + p2 * (l1 * l1 * (m1 + m2))) / det,
+            coupling - q1.sin() * ((m1 + m2) * g * l1),
+            -coupling - q2.sin() * (m2 * g * l2),
+        ]
     }
 }
 

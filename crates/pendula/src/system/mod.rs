@@ -21,6 +21,14 @@ pub trait System {
     fn dim(&self) -> usize;
     /// Writes f(t, y) into `dydt`; both slices have length [`System::dim`].
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+
+    /// Writes the Jacobian ∂f/∂y at (t, y) into `jac`, row-major (`jac[i n + j]` = ∂fᵢ/∂yⱼ,
+    /// n = [`System::dim`]), and returns true; returns false when the system has none
+    /// (the default), and implicit methods then use fixed-point iteration.
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let _ = (t, y, jac);
+        false
+    }
 }
 
 /// A system whose mechanical energy T + V can be evaluated, J.

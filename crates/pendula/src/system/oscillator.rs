@@ -219,6 +219,10 @@ impl System for Oscillator {
         dydt[0] = y[1];
         dydt[1] = (force - self.c * y[1] - self.k * y[0]) / self.m;
     }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut [f64]) -> bool {
+        jac.copy_from_slice(&[0.0, 1.0, -self.k / self.m, -self.c / self.m]);
+        true
+    }
 }
 
 impl Energy for Oscillator {
@@ -240,6 +244,11 @@ impl System for OscillatorForm {
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         super::hamilton_rhs(self, t, y, dydt);
+    }
+    /// (q' = p/m, p' = −k q + F(t)).
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut [f64]) -> bool {
+        jac.copy_from_slice(&[0.0, 1.0 / self.oscillator.m, -self.oscillator.k, 0.0]);
+        true
     }
 }
 

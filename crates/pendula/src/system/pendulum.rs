@@ -153,6 +153,11 @@ impl Pendulum {
         if self.linear { theta } else { theta.sin() }
     }
 
+    /// d/dθ of [`Pendulum::gravity_term`].
+    fn gravity_slope(&self, theta: f64) -> f64 {
+        if self.linear { 1.0 } else { theta.cos() }
+    }
+
     fn potential(&self, theta: f64) -> f64 {
         let mgl = self.m * self.g * self.l;
         if self.linear { mgl * (0.5 * theta * theta - 1.0) } else { -mgl * theta.cos() }
@@ -219,6 +224,10 @@ impl System for Pendulum {
         dydt[0] = y[1];
         dydt[1] = -self.g / self.l * self.gravity_term(y[0]) - self.damping * y[1] + self.drive(t);
     }
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        jac.copy_from_slice(&[0.0, 1.0, -self.g / self.l * self.gravity_slope(y[0]), -self.damping]);
+        true
+    }
 }
 
 impl Energy for Pendulum {
@@ -241,6 +250,13 @@ impl System for PendulumForm {
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         super::hamilton_rhs(self, t, y, dydt);
+    }
+    /// (θ' = p/(m l²), p' = −m g l sin θ + m l² τ(t)).
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let s = &self.pendulum;
+        let ml2 = s.m * s.l * s.l;
+        jac.copy_from_slice(&[0.0, 1.0 / ml2, -ml2 * s.g / s.l * s.gravity_slope(y[0]), 0.0]);
+        true
     }
 }
 
