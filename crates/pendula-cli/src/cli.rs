@@ -64,6 +64,10 @@ pub struct SimulateArgs {
     /// Number of steps, instead of --t-end.
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub steps: Option<String>,
+    /// Binding constant ω of tao-2 and tao-4, 1/s [default: 200]: larger holds the two copies
+    /// closer on chaotic orbits; binding * dt must be <= 1.
+    #[arg(long, value_name = "OMEGA", allow_hyphen_values = true)]
+    pub binding: Option<String>,
     /// Relative tolerance of adaptive methods (dopri5, dop853) [default: 1e-6].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub rtol: Option<String>,

@@ -35,7 +35,7 @@ pub enum Output {
 #[derive(Debug, Clone)]
 pub struct SimulateConfig {
     pub values: Values,
-    pub method: &'static Method,
+    pub method: Method,
     pub spec: RunSpec,
     /// Adaptive steps with these tolerances (methods with an error estimate).
     pub tolerances: Option<Tolerances>,
@@ -161,7 +161,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     };
     let system_name = args.system.clone().or(scenario.system).unwrap_or_else(|| "double".into());
     let info: &'static SystemInfo = system::find(&system_name)?;
-    let method = integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
+    let mut method =
+        *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
+    if let Some(text) = &args.binding {
+        let omega = parse_number("--binding", text, "a number > 0, in 1/s")?;
+        method = method.with_binding(omega)?;
+    }
 
     let mut settings = Vec::new();
     for (name, value) in &scenario.set {

@@ -111,6 +111,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             "steps": steps,
             "steps_accepted": steps,
             "steps_rejected": report.steps_rejected,
+            "binding": match method.scheme {
+                pendula::integrator::Scheme::Tao(t) => json!(t.binding),
+                _ => serde_json::Value::Null,
+            },
             "rtol": tolerances.map(|t| t.rtol),
             "atol": tolerances.map(|t| t.atol),
             "rhs_evals": report.rhs_evals,

@@ -76,11 +76,24 @@ pub fn values(system: &str, set: &[String]) -> Result<Values> {
     Ok(info.values(&parse_settings(info, set)?)?)
 }
 
-/// Methods from a comma-separated list, or every method that applies to `model` when `None`.
-pub fn methods(list: Option<&str>, model: &dyn DynModel, values: &Values) -> Result<Vec<&'static Method>> {
+/// Methods from a comma-separated list, or every method that applies to `model` at steps up
+/// to `max_h` when `None` (Tao's maps apply only where ω h ≤ 1; `None` for `max_h` keeps
+/// them).
+pub fn methods(
+    list: Option<&str>,
+    model: &dyn DynModel,
+    values: &Values,
+    max_h: Option<f64>,
+) -> Result<Vec<&'static Method>> {
+    let stable = |m: &Method| match (m.scheme, max_h) {
+        (pendula::integrator::Scheme::Tao(t), Some(h)) => {
+            pendula::integrator::tao::check_binding_step(&t, h).is_ok()
+        }
+        _ => true,
+    };
     match list {
         Some(text) => text.split(',').map(|name| Ok(integrator::find(name.trim())?)).collect(),
-        None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values)).collect()),
+        None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values) && stable(m)).collect()),
     }
 }
 

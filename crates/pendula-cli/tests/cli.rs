@@ -129,6 +129,45 @@ fn events_are_listed_in_the_summary() {
     assert!(f["final"]["t"].as_f64().unwrap() - t_flip <= 1e-3 + 1e-12, "the run stops at the flip");
 }
 
+/// tao-4 with its binding constant: the default (200) and `--binding` go into the summary;
+/// a binding where the map is unstable (ω h > 1), on a method without one, or not > 0 is
+/// refused with exit code 2 and no file.
+#[test]
+fn tao_binding_is_a_checked_option() {
+    let dir = TempDir::new().unwrap();
+    pendula(dir.path())
+        .args([
+            "simulate",
+            "double",
+            "--method",
+            "tao-4",
+            "--t-end",
+            "2",
+            "--every",
+            "0",
+            "--summary",
+            "a.json",
+        ])
+        .assert()
+        .success();
+    let a: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("a.json")).unwrap()).unwrap();
+    assert_eq!(a["binding"], 200.0);
+    assert!(a["energy"]["max_abs_error"].as_f64().unwrap() < 1e-3);
+    pendula(dir.path())
+        .args(["simulate", "double", "--method", "tao-2", "--binding", "50", "--dt", "0.01", "--t-end", "1"])
+        .args(["--every", "0", "--summary", "b.json"])
+        .assert()
+        .success();
+    let b: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
+    assert_eq!(b["binding"], 50.0);
+    rejects(&["simulate", "--method", "tao-4", "--dt", "0.01"], &["binding * dt", "unstable above"]);
+    rejects(&["simulate", "--method", "rk4", "--binding", "50"], &["binding", "tao-2 and tao-4 only"]);
+    rejects(&["simulate", "--method", "tao-4", "--binding", "0"], &["binding", "> 0"]);
+    rejects(&["simulate", "--method", "tao-4", "--binding", "abc"], &["--binding", "abc"]);
+}
+
 /// The integrators issue's check through the CLI: the period at 170° from `zero:theta` events
 /// of dop853 at tight tolerance (located on its dense output) equals the exact one to 1e-9,
 /// with the summary on stdout (`--summary -`).

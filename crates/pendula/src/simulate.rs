@@ -10,6 +10,7 @@ use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::explicit_rk::ExplicitRk;
 use crate::integrator::gauss_legendre::Collocation;
 use crate::integrator::partitioned::PartitionedStepper;
+use crate::integrator::tao::TaoStepper;
 use crate::integrator::{Method, Requirement, Scheme, Stepper};
 use crate::observe::{Observer, Sample};
 use crate::system::{Hamiltonian, Model, System};
@@ -218,6 +219,16 @@ pub fn solve<M: Model>(
             // Damped or otherwise not Hamiltonian: still an order-2s method on the ODE.
             Err(_) => run_direct(model, &mut Collocation::new(tableau, dim), y0, spec, observer),
         },
+        Scheme::Tao(scheme) => {
+            let form = model.hamiltonian_form().map_err(|reason| Error::UnmetRequirement {
+                method: method.name,
+                needs: method.requirement.describe(),
+                reason,
+                suggestion: method.requirement.suggestion(),
+            })?;
+            crate::integrator::tao::check_binding_step(&scheme, spec.h)?;
+            run_on_form(model, &form, &mut TaoStepper::new(scheme, dim / 2), y0, spec, observer)
+        }
         Scheme::Partitioned(partition) => {
             let unmet = |reason| Error::UnmetRequirement {
                 method: method.name,

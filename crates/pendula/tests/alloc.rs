@@ -9,6 +9,7 @@ use pendula::integrator::embedded::EmbeddedRk;
 use pendula::integrator::explicit_rk::ExplicitRk;
 use pendula::integrator::gauss_legendre::Collocation;
 use pendula::integrator::partitioned::PartitionedStepper;
+use pendula::integrator::tao::TaoStepper;
 use pendula::integrator::{METHODS, Requirement, Scheme, Stepper};
 use pendula::observe::Ignore;
 use pendula::system::double::DoublePendulum;
@@ -77,6 +78,14 @@ fn check<M: Model>(v: &Values) {
             Scheme::Collocation(t) => {
                 let form = model.hamiltonian_form().unwrap();
                 let mut stepper = Collocation::new(t, y.len());
+                stepper.step(&form, 0.0, 1e-3, &mut y).unwrap();
+                allocations_during(|| {
+                    Simulation { system: &form, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
+                })
+            }
+            Scheme::Tao(scheme) => {
+                let form = model.hamiltonian_form().unwrap();
+                let mut stepper = TaoStepper::new(scheme, y.len() / 2);
                 stepper.step(&form, 0.0, 1e-3, &mut y).unwrap();
                 allocations_during(|| {
                     Simulation { system: &form, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();

@@ -41,10 +41,15 @@ impl Observer for Tenths<'_> {
 /// (first-tenth error, last-tenth error) over `steps` steps of h = 0.01 from the default
 /// state (120°, −10°), or the run's error.
 fn tenths(method: &Method, steps: u64) -> Result<(f64, f64), Error> {
+    tenths_at(method, 0.01, steps)
+}
+
+/// The same at step h.
+fn tenths_at(method: &Method, h: f64, steps: u64) -> Result<(f64, f64), Error> {
     let values = values("double", &[]);
     let model = values.build();
     let mut obs = Tenths { model: &*model, steps, e0: None, first: 0.0, last: 0.0 };
-    let spec = RunSpec { t0: 0.0, h: 0.01, end: End::Steps(steps) };
+    let spec = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
     model.solve(method, values.initial_state(), &spec, &mut obs)?;
     eprintln!("{}: first tenth {:.3e} J, last tenth {:.3e} J", method.name, obs.first, obs.last);
     Ok((obs.first, obs.last))
@@ -56,6 +61,20 @@ fn ref_symplectic_methods_keep_energy_bounded() {
         let (first, last) = tenths(integrator::find(name).unwrap(), STEPS).unwrap();
         assert!(last <= 2.0 * first, "{name}: {first:e} then {last:e}");
     }
+}
+
+/// tao-4 (explicit, extended phase space) with its default binding ω = 200 at h = 2 ms
+/// (ω h = 0.4): bounded over 10⁶ steps (2000 s); at h = 10 ms the binding is refused
+/// (ω h = 2 > 1, where the map is unstable).
+#[test]
+fn ref_tao_4_keeps_energy_bounded() {
+    let tao = integrator::find("tao-4").unwrap();
+    let (first, last) = tenths_at(tao, 0.002, STEPS).unwrap();
+    assert!(last <= 2.0 * first, "tao-4: {first:e} then {last:e}");
+    assert!(last < 1e-2, "tao-4: {last:e}");
+    let err = tenths_at(tao, 0.01, 10).unwrap_err();
+    assert!(matches!(err, Error::InvalidValue { .. }), "{err:?}");
+    assert!(err.to_string().contains("binding"), "{err}");
 }
 
 #[test]

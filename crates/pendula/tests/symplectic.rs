@@ -1,11 +1,13 @@
 //! The symplectic condition Φ'(z)ᵀ Ω Φ'(z) = Ω for one step of the symplectic methods on the
-//! double pendulum's (non-separable) Hamiltonian form, and time reversibility of the
-//! symmetric ones.
+//! double pendulum's (non-separable) Hamiltonian form — for Tao's methods, of their map on
+//! the extended phase space (q, p, x, y), where they are symplectic — and time
+//! reversibility of the symmetric ones.
 
 use pendula::integrator::embedded::EmbeddedRk;
 use pendula::integrator::explicit_rk::{EULER, ExplicitRk};
 use pendula::integrator::gauss_legendre::Collocation;
 use pendula::integrator::partitioned::PartitionedStepper;
+use pendula::integrator::tao::TaoStepper;
 use pendula::integrator::{METHODS, Method, Requirement, Scheme, Stepper};
 use pendula::system::Hamiltonian;
 use pendula::system::double::{DoublePendulum, DoublePendulumForm};
@@ -19,7 +21,7 @@ fn form() -> DoublePendulumForm {
 /// States (θ₁, θ₂, p₁, p₂) to test at.
 const STATES: [[f64; 4]; 3] = [[2.0, -0.2, 0.3, -0.4], [0.4, 1.9, -2.5, 1.1], [-1.2, 2.8, 4.0, 2.0]];
 
-fn step(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [f64; 4] {
+fn step<const N: usize>(stepper: &mut dyn FnMut(&mut [f64; N]), z: [f64; N]) -> [f64; N] {
     let mut z = z;
     stepper(&mut z);
     z
@@ -27,18 +29,18 @@ fn step(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [f64; 4] {
 
 /// Jacobian of the one-step map by 8th-order central differences: truncation below 1e-15
 /// at ε = 5e-3, round-off (and the implicit solver's tolerance) about 1e-13.
-fn jacobian(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [[f64; 4]; 4] {
+fn jacobian<const N: usize>(stepper: &mut dyn FnMut(&mut [f64; N]), z: [f64; N]) -> [[f64; N]; N] {
     const W: [f64; 4] = [4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0];
     let eps = 5e-3;
-    let mut jac = [[0.0; 4]; 4];
-    for j in 0..4 {
+    let mut jac = [[0.0; N]; N];
+    for j in 0..N {
         for (k, w) in W.iter().enumerate() {
             let d = (k + 1) as f64 * eps;
             let (mut plus, mut minus) = (z, z);
             plus[j] += d;
             minus[j] -= d;
             let (fp, fm) = (step(stepper, plus), step(stepper, minus));
-            for i in 0..4 {
+            for i in 0..N {
                 jac[i][j] += w * (fp[i] - fm[i]) / eps;
             }
         }
@@ -46,19 +48,23 @@ fn jacobian(stepper: &mut dyn FnMut(&mut [f64; 4]), z: [f64; 4]) -> [[f64; 4]; 4
     jac
 }
 
-/// max |JᵀΩJ − Ω| with Ω = [[0, I], [−I, 0]].
-fn symplectic_defect(jac: &[[f64; 4]; 4]) -> f64 {
-    let omega = |i: usize, j: usize| match (i, j) {
-        (0, 2) | (1, 3) => 1.0,
-        (2, 0) | (3, 1) => -1.0,
-        _ => 0.0,
+/// max |JᵀΩJ − Ω| for the state (q, p) or (q, p, x, y) in blocks of two degrees of freedom:
+/// Ω pairs qᵢ with pᵢ (and xᵢ with yᵢ).
+fn symplectic_defect<const N: usize>(jac: &[[f64; N]; N]) -> f64 {
+    let omega = |i: usize, j: usize| {
+        let (bi, bj) = (i / 4, j / 4);
+        match (bi == bj, i % 4, j % 4) {
+            (true, 0, 2) | (true, 1, 3) => 1.0,
+            (true, 2, 0) | (true, 3, 1) => -1.0,
+            _ => 0.0,
+        }
     };
     let mut worst = 0.0_f64;
-    for a in 0..4 {
-        for b in 0..4 {
+    for a in 0..N {
+        for b in 0..N {
             let mut s = 0.0;
-            for i in 0..4 {
-                for j in 0..4 {
+            for i in 0..N {
+                for j in 0..N {
                     s += jac[i][a] * omega(i, j) * jac[j][b];
                 }
             }
@@ -75,6 +81,7 @@ fn stepper(method: &Method) -> Box<dyn Stepper<dyn Hamiltonian>> {
         Scheme::Partitioned(p) => Box::new(PartitionedStepper::new(p, 2)),
         Scheme::Collocation(t) => Box::new(Collocation::new(t, 4)),
         Scheme::Embedded(t) => Box::new(EmbeddedRk::new(t, 4)),
+        Scheme::Tao(t) => Box::new(TaoStepper::new(t, 2)),
     }
 }
 
@@ -85,16 +92,25 @@ fn ref_symplectic_methods_preserve_the_symplectic_form() {
     let sys = form();
     let mut checked = 0;
     for method in METHODS.iter().filter(|m| m.symplectic && m.requirement != Requirement::Separable) {
-        let mut stepper = stepper(method);
-        let mut advance = |z: &mut [f64; 4]| stepper.step(&sys, 0.0, H, z).unwrap();
         for z in STATES {
-            let defect = symplectic_defect(&jacobian(&mut advance, z));
+            let defect = if let Scheme::Tao(scheme) = method.scheme {
+                // The extended map from a state whose copy is displaced from (q, p), as
+                // after a few steps.
+                let mut tao = TaoStepper::new(scheme, 2);
+                let mut advance = |s: &mut [f64; 8]| tao.step_extended(&sys, 0.0, H, s);
+                let [q1, q2, p1, p2] = z;
+                symplectic_defect(&jacobian(&mut advance, [q1, q2, p1, p2, q1 + 0.01, q2, p1, p2 - 0.02]))
+            } else {
+                let mut stepper = stepper(method);
+                let mut advance = |z: &mut [f64; 4]| stepper.step(&sys, 0.0, H, z).unwrap();
+                symplectic_defect(&jacobian(&mut advance, z))
+            };
             eprintln!("{} at {z:?}: defect {defect:.2e}", method.name);
             assert!(defect < 1e-12, "{} at {z:?}: {defect:e}", method.name);
         }
         checked += 1;
     }
-    assert!(checked >= 5, "{checked}");
+    assert!(checked >= 7, "{checked}");
 }
 
 /// The same test fails for a non-symplectic method: it can tell the difference.

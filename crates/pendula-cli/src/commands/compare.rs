@@ -56,7 +56,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
     spec.schedule()?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(h))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
 
     let bar = study::progress(methods.len() as u64, "compare");

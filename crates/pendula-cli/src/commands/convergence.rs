@@ -40,7 +40,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let values = study::values(system, &args.common.set)?;
     let (hs, t_end) = args.steps.resolve(0.05, 5)?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
 
     let (results, reference) = study_orders(&values, &methods, &hs, t_end)?;

@@ -36,7 +36,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     }
     pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) }.schedule()?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "stability")?;
     let criterion = StabilityCriterion { t_end, max_rel_energy_error: bound };
     let results = stable_steps(&values, &methods, &criterion)?;

@@ -28,7 +28,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let (hs, t_end) = args.steps.resolve(0.1, 7)?;
     let dt_min = hs[hs.len() - 1];
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end, dt_min / 16.0)?;
     let bar = study::progress(methods.len() as u64, "work-precision");

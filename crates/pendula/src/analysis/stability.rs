@@ -45,6 +45,12 @@ pub fn is_stable(
     h: f64,
     criterion: &StabilityCriterion,
 ) -> Result<bool, Error> {
+    // Tao's maps are refused (unstable) above ω h = 1: that is instability, not an error.
+    if let crate::integrator::Scheme::Tao(tao) = method.scheme
+        && crate::integrator::tao::check_binding_step(&tao, h).is_err()
+    {
+        return Ok(false);
+    }
     let mut guard = Guard { model, bound: criterion.max_rel_energy_error, e0: None, exceeded: false };
     let spec = RunSpec { t0: 0.0, h, end: End::Time(criterion.t_end) };
     match model.solve(method, y0, &spec, &mut guard) {

@@ -10,6 +10,7 @@ pub mod embedded;
 pub mod explicit_rk;
 pub mod gauss_legendre;
 pub mod partitioned;
+pub mod tao;
 
 use crate::Error;
 
@@ -28,6 +29,8 @@ pub enum Requirement {
     Hamiltonian,
     /// A separable Hamiltonian H = T(p) + V(t, q).
     Separable,
+    /// A Hamiltonian form, separable or not, used explicitly (Tao's extended phase space).
+    HamiltonianExplicit,
 }
 
 impl Requirement {
@@ -39,15 +42,16 @@ impl Requirement {
                 "a Hamiltonian system (explicit if H = T(p) + V(q), implicit otherwise)"
             }
             Requirement::Separable => "a separable Hamiltonian H = T(p) + V(q)",
+            Requirement::HamiltonianExplicit => "a Hamiltonian system (separable or not; explicit)",
         }
     }
 
     /// Methods to try instead when the requirement is not met.
     pub fn suggestion(self) -> &'static str {
         match self {
-            Requirement::Any | Requirement::Hamiltonian => "rk4",
+            Requirement::Any | Requirement::Hamiltonian | Requirement::HamiltonianExplicit => "rk4",
             Requirement::Separable => {
-                "gauss-legendre-4, or verlet or symplectic-euler (implicit there): they stay symplectic on non-separable systems"
+                "gauss-legendre-4 (implicit) or tao-4 (explicit, extended phase space), or verlet or symplectic-euler (implicit there): they stay symplectic on non-separable systems"
             }
         }
     }
@@ -65,6 +69,8 @@ pub enum Scheme {
     Collocation(&'static gauss_legendre::ImplicitTableau),
     /// An embedded Runge–Kutta pair: adaptive with tolerances, or fixed-step.
     Embedded(&'static embedded::EmbeddedTableau),
+    /// Tao's extended-phase-space map and its compositions, on a Hamiltonian form.
+    Tao(tao::TaoScheme),
 }
 
 /// A method descriptor.
@@ -103,6 +109,8 @@ pub static METHODS: &[&Method] = &[
     &gauss_legendre::GAUSS_LEGENDRE_2,
     &gauss_legendre::GAUSS_LEGENDRE_4,
     &gauss_legendre::GAUSS_LEGENDRE_6,
+    &tao::TAO_2,
+    &tao::TAO_4,
     &embedded::DOPRI5,
     &embedded::DOP853,
 ];
