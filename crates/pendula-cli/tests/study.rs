@@ -160,19 +160,27 @@ fn work_precision_writes_error_and_cost() {
     let dir = TempDir::new().unwrap();
     pendula(
         dir.path(),
-        &["work-precision", "pendulum", "--methods", "rk4,gauss-legendre-4", "--out-dir", "w"],
+        &["work-precision", "pendulum", "--methods", "rk4,gauss-legendre-4,dop853", "--out-dir", "w"],
     )
     .success();
     let csv = std::fs::read_to_string(dir.path().join("w/work_precision.csv")).unwrap();
-    assert_eq!(csv.lines().next().unwrap(), "method,dt,error,rhs_evals,wall_s");
-    let rk4: Vec<(f64, u64)> = csv
-        .lines()
-        .filter(|l| l.starts_with("rk4,"))
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (f[2].parse().unwrap(), f[3].parse().unwrap())
-        })
-        .collect();
+    assert_eq!(csv.lines().next().unwrap(), "method,dt,tol,error,rhs_evals,wall_s");
+    let column = |method: &str, i: usize| -> Vec<f64> {
+        csv.lines()
+            .filter(|l| l.starts_with(&format!("{method},")))
+            .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
+            .collect()
+    };
+    let rk4: Vec<(f64, u64)> =
+        column("rk4", 3).into_iter().zip(column("rk4", 4).into_iter().map(|e| e as u64)).collect();
+    // dop853 sweeps its tolerance (1e-3 … 1e-12, 10 levels): the error follows it down and
+    // the work grows.
+    let (tols, errors, evals) = (column("dop853", 2), column("dop853", 3), column("dop853", 4));
+    assert_eq!(tols.len(), 10);
+    assert_eq!((tols[0], tols[9]), (1e-3, 1e-12));
+    let slope = pendula::analysis::fit_order(&tols, &errors).unwrap().order;
+    assert!((0.6..=1.3).contains(&slope), "error against tolerance: slope {slope}");
+    assert!(evals.windows(2).all(|w| w[1] >= w[0]), "{evals:?}");
     assert_eq!(rk4.len(), 7);
     // Halving the step doubles the work (4 evaluations a step) and cuts the error ~16-fold.
     for w in rk4.windows(2) {

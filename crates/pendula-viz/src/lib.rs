@@ -37,7 +37,7 @@ pub type Rgb = RGBColor;
 
 /// Colour-blind-safe palette (Okabe & Ito, 2008), then Paul Tol's muted colours, in the
 /// order methods are registered.
-const PALETTE: [Rgb; 13] = [
+const PALETTE: [Rgb; 16] = [
     RGBColor(213, 94, 0),    // vermillion
     RGBColor(0, 114, 178),   // blue
     RGBColor(0, 158, 115),   // bluish green
@@ -51,6 +51,9 @@ const PALETTE: [Rgb; 13] = [
     RGBColor(166, 86, 40),   // brown
     RGBColor(51, 34, 136),   // indigo
     RGBColor(100, 100, 100), // grey
+    RGBColor(238, 51, 119),  // magenta
+    RGBColor(17, 119, 51),   // dark green
+    RGBColor(204, 187, 68),  // gold
 ];
 
 /// Black, for exact solutions and references.

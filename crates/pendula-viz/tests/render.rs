@@ -57,3 +57,20 @@ fn methods_keep_distinct_colours() {
         }
     }
 }
+
+/// Every method has its own colour (the palette grows with the registry).
+#[test]
+fn method_colours_are_distinct() {
+    let colours: Vec<_> = pendula::integrator::METHODS.iter().map(|m| method_color(m.name)).collect();
+    for (i, a) in colours.iter().enumerate() {
+        for (j, b) in colours.iter().enumerate().skip(i + 1) {
+            assert_ne!(
+                a,
+                b,
+                "{} and {}",
+                pendula::integrator::METHODS[i].name,
+                pendula::integrator::METHODS[j].name
+            );
+        }
+    }
+}

@@ -1,13 +1,16 @@
 //! `pendula work-precision`: error against cost — right-hand-side evaluations and wall
-//! time — for each method over a range of step sizes (as DiffEqDevTools' WorkPrecisionSet).
+//! time — for each method over a range of step sizes, or of tolerances for the adaptive
+//! pairs (as DiffEqDevTools' WorkPrecisionSet).
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::{self, WorkPoint};
 use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
+use crate::config::f64_arg;
 use crate::study::{self, Common, OutDir, StepRange, num, short};
+use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
 pub struct WorkPrecisionArgs {
@@ -18,24 +21,54 @@ pub struct WorkPrecisionArgs {
     pub methods: Option<String>,
     #[command(flatten)]
     pub steps: StepRange,
+    /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853) [default: 1e-3].
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub tol_max: Option<String>,
+    /// Tightest tolerance for the adaptive methods [default: 1e-12].
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub tol_min: Option<String>,
+    /// Number of tolerances, geometrically spaced [default: 10].
+    #[arg(long, value_name = "N")]
+    pub tol_levels: Option<usize>,
     #[command(flatten)]
     pub common: Common,
+}
+
+/// The tolerances, loosest first, validated.
+fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
+    let levels = args.tol_levels.unwrap_or(10);
+    if levels < 2 {
+        bail!("invalid --tol-levels {levels}: need at least 2 tolerances");
+    }
+    let hi = f64_arg("--tol-max", args.tol_max.as_deref(), 1e-3, "a tolerance in (0, 1)")?;
+    let lo = f64_arg("--tol-min", args.tol_min.as_deref(), 1e-12, "a tolerance in (0, 1)")?;
+    if !(lo > 0.0 && lo < hi && hi < 1.0) {
+        bail!("invalid tolerance range --tol-min {lo} --tol-max {hi}: need 0 < tol-min < tol-max < 1");
+    }
+    // The ends exactly as given; the levels between them geometric.
+    Ok((0..levels)
+        .map(|i| if i + 1 == levels { lo } else { hi * (lo / hi).powf(i as f64 / (levels - 1) as f64) })
+        .collect())
 }
 
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("pendulum");
     let values = study::values(system, &args.common.set)?;
     let (hs, t_end) = args.steps.resolve(0.1, 7)?;
-    let dt_min = hs[hs.len() - 1];
+    let tols = tolerances(args)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
-    let reference = analysis::reference_state(&*model, values.initial_state(), t_end, dt_min / 16.0)?;
+    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)?;
     let bar = study::progress(methods.len() as u64, "work-precision");
     let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
     for method in &methods {
-        let points =
-            analysis::work_precision(&*model, method, values.initial_state(), t_end, &hs, &reference.state)?;
+        let y0 = values.initial_state();
+        let points = if let Scheme::Embedded(_) = method.scheme {
+            analysis::work_precision_adaptive(&*model, method, y0, t_end, &tols, &reference.state)?
+        } else {
+            analysis::work_precision(&*model, method, y0, t_end, &hs, &reference.state)?
+        };
         results.push((method.name, points));
         bar.inc(1);
     }
@@ -44,10 +77,18 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let mut rows = Vec::new();
     for (m, points) in &results {
         for p in points {
-            rows.push(vec![(*m).to_owned(), num(p.h), num(p.error), p.rhs_evals.to_string(), num(p.wall_s)]);
+            rows.push(vec![
+                (*m).to_owned(),
+                num(p.h),
+                p.tol.map_or(String::new(), num),
+                num(p.error),
+                p.rhs_evals.to_string(),
+                num(p.wall_s),
+            ]);
         }
     }
-    out.csv("work_precision.csv", &["method", "dt", "error", "rhs_evals", "wall_s"], &rows)?;
+    // For adaptive runs `dt` is the mean accepted step and `tol` the tolerance.
+    out.csv("work_precision.csv", &["method", "dt", "tol", "error", "rhs_evals", "wall_s"], &rows)?;
     // For each method: the fewest evaluations that reach an error of 1e-6, if any run did.
     let target = 1e-6;
     let shown: Vec<Vec<String>> = results
@@ -57,13 +98,16 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             vec![
                 (*m).to_owned(),
                 best.map_or("-".into(), |p| p.rhs_evals.to_string()),
-                best.map_or("-".into(), |p| short(p.h)),
+                best.map_or("-".into(), |p| match p.tol {
+                    Some(tol) => format!("tol {}", short(tol)),
+                    None => format!("dt {}", short(p.h)),
+                }),
                 short(points.iter().map(|p| p.error).fold(f64::INFINITY, f64::min)),
             ]
         })
         .collect();
     println!("{system}: error at t = {t_end} s against the {}", reference.source);
-    print!("{}", study::table(&["method", "rhs evals for error <= 1e-6", "at dt", "smallest error"], &shown));
+    print!("{}", study::table(&["method", "rhs evals for error <= 1e-6", "at", "smallest error"], &shown));
     for (name, x_label, cost) in [
         (
             "work_precision_evals",
@@ -92,7 +136,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let doc = json!({
         "system": system, "t_end": t_end, "reference": reference.source,
         "methods": results.iter().map(|(m, points)| ((*m).to_owned(), json!(points.iter().map(|p| json!({
-            "dt": p.h, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
+            "dt": p.h, "tol": p.tol, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
         })).collect::<Vec<_>>()))).collect::<serde_json::Map<_, _>>(),
     });
     study::summary(args.common.summary.as_deref(), &doc)?;

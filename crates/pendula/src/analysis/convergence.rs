@@ -1,6 +1,8 @@
 //! Global error against step size, and the order fitted to it.
 
-use crate::integrator::{Method, explicit_rk::RK4};
+use crate::control::Tolerances;
+use crate::integrator::Method;
+use crate::integrator::embedded::DOP853;
 use crate::observe::Ignore;
 use crate::system::DynModel;
 use crate::{End, Error, RunSpec};
@@ -39,24 +41,20 @@ pub struct Reference {
     pub source: &'static str,
 }
 
+/// Tolerance of the DOP853 reference runs.
+pub const REFERENCE_TOLERANCE: f64 = 1e-14;
+
 /// The state at `t_end` from `y0`: the exact solution where the model has one, otherwise
-/// RK4 at h_fine and h_fine/2 combined by Richardson extrapolation (error O(h_fine⁵)).
-pub fn reference_state(
-    model: &dyn DynModel,
-    y0: &[f64],
-    t_end: f64,
-    h_fine: f64,
-) -> Result<Reference, Error> {
+/// dop853 at rtol = atol = [`REFERENCE_TOLERANCE`] (global error ~1e-13 on the pendulums over
+/// tens of seconds; checked against mpmath in the tests).
+pub fn reference_state(model: &dyn DynModel, y0: &[f64], t_end: f64) -> Result<Reference, Error> {
     if let Some(state) = model.exact(t_end, y0) {
         return Ok(Reference { state, source: "exact solution" });
     }
-    let run = |h: f64| -> Result<Vec<f64>, Error> {
-        let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-        Ok(model.solve(&RK4, y0, &spec, &mut Ignore)?.state)
-    };
-    let (coarse, fine) = (run(h_fine)?, run(h_fine / 2.0)?);
-    let state = coarse.iter().zip(&fine).map(|(c, f)| f + (f - c) / 15.0).collect();
-    Ok(Reference { state, source: "RK4-Richardson reference" })
+    let tol =
+        Tolerances { rtol: REFERENCE_TOLERANCE, atol: REFERENCE_TOLERANCE, h_min: 0.0, h_max: f64::INFINITY };
+    let state = model.solve_adaptive(&DOP853, y0, t_end, None, &tol, &mut Ignore)?.state;
+    Ok(Reference { state, source: "dop853 reference at tolerance 1e-14" })
 }
 
 /// Max-norm error at `t_end` of `method` at each step size in `hs`, against `reference`.
@@ -74,14 +72,33 @@ pub fn convergence_errors(
 /// One run of a work-precision study.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WorkPoint {
-    /// Step size, s.
+    /// Step size, s; for an adaptive run, the mean accepted step.
     pub h: f64,
+    /// Tolerance (rtol = atol) of an adaptive run; `None` for a fixed step.
+    pub tol: Option<f64>,
     /// Max-norm error at the end time.
     pub error: f64,
     /// Right-hand-side evaluations.
     pub rhs_evals: u64,
-    /// Wall-clock time of the run, s (noisy: compare methods measured together).
+    /// Wall time of one run, s: the median of runs repeated for at least 20 ms (at most
+    /// 101 runs), so that fast runs are not timed at the clock's resolution.
     pub wall_s: f64,
+}
+
+/// Median wall time of `run`, repeated until 20 ms have passed (at least once, at most 101
+/// times), and the last run's result.
+fn timed<T>(mut run: impl FnMut() -> Result<T, Error>) -> Result<(T, f64), Error> {
+    let mut times = Vec::new();
+    let begin = std::time::Instant::now();
+    loop {
+        let start = std::time::Instant::now();
+        let out = run()?;
+        times.push(start.elapsed().as_secs_f64());
+        if begin.elapsed().as_secs_f64() >= 0.02 || times.len() >= 101 {
+            times.sort_by(f64::total_cmp);
+            return Ok((out, times[times.len() / 2]));
+        }
+    }
 }
 
 /// Error and cost of `method` at each step size in `hs`: what a work-precision diagram
@@ -97,11 +114,35 @@ pub fn work_precision(
     hs.iter()
         .map(|&h| {
             let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-            let start = std::time::Instant::now();
-            let report = model.solve(method, y0, &spec, &mut Ignore)?;
-            let wall_s = start.elapsed().as_secs_f64();
-            let error = report.state.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-            Ok(WorkPoint { h, error, rhs_evals: report.rhs_evals, wall_s })
+            let (report, wall_s) = timed(|| model.solve(method, y0, &spec, &mut Ignore))?;
+            let error = max_diff(&report.state, reference);
+            Ok(WorkPoint { h, tol: None, error, rhs_evals: report.rhs_evals, wall_s })
         })
         .collect()
+}
+
+/// Error and cost of an adaptive `method` at each tolerance in `tols` (rtol = atol): the
+/// work-precision points of an embedded pair.
+pub fn work_precision_adaptive(
+    model: &dyn DynModel,
+    method: &Method,
+    y0: &[f64],
+    t_end: f64,
+    tols: &[f64],
+    reference: &[f64],
+) -> Result<Vec<WorkPoint>, Error> {
+    tols.iter()
+        .map(|&tol| {
+            let tolerances = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
+            let (report, wall_s) =
+                timed(|| model.solve_adaptive(method, y0, t_end, None, &tolerances, &mut Ignore))?;
+            let error = max_diff(&report.state, reference);
+            let h = t_end / report.outcome.steps().max(1) as f64;
+            Ok(WorkPoint { h, tol: Some(tol), error, rhs_evals: report.rhs_evals, wall_s })
+        })
+        .collect()
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }

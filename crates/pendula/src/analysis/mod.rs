@@ -7,7 +7,8 @@ pub mod period;
 pub mod stability;
 
 pub use convergence::{
-    OrderFit, Reference, WorkPoint, convergence_errors, fit_order, reference_state, work_precision,
+    OrderFit, REFERENCE_TOLERANCE, Reference, WorkPoint, convergence_errors, fit_order, reference_state,
+    work_precision, work_precision_adaptive,
 };
 pub use energy::{EnergySeries, drift_rate, envelope, relative_error};
 pub use period::measure_period;
