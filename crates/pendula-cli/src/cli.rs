@@ -95,11 +95,12 @@ pub struct SimulateArgs {
     /// [default: trajectory.csv].
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary of the run here.
+    /// Write a JSON summary of the run here (`-`: on stdout).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
     /// Locate events and list them in the summary: `flip` (an angle passes ±π the first
-    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE`.
+    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE`; a trailing `+`
+    /// or `-` keeps only upward or downward crossings (`section:theta1=0+`).
     #[arg(long = "event", value_name = "SPEC")]
     pub events: Vec<String>,
     /// End the run at the first event.

@@ -321,7 +321,11 @@ fn unknown_system_method_and_parameter_list_the_valid_names() {
 fn unknown_events_are_rejected() {
     rejects(&["simulate", "pendulum", "--event", "zero:phi"], &["unknown name `phi`", "theta, omega"]);
     rejects(&["simulate", "oscillator", "--event", "flip"], &["flip", "no angle"]);
-    rejects(&["simulate", "--event", "crossing"], &["`crossing`", "flip, zero:NAME, section:NAME=VALUE"]);
+    rejects(
+        &["simulate", "--event", "crossing"],
+        &["`crossing`", "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]"],
+    );
+    rejects(&["simulate", "--event", "flip+"], &["`flip+`", "flip has no direction"]);
 }
 
 #[test]

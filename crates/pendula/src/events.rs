@@ -61,8 +61,30 @@ pub struct EventSpec {
 
 impl EventSpec {
     /// Parses `flip`, `zero:NAME` or `section:NAME=VALUE` against the state variable names of
-    /// `model`; angles of `Flip` are the variables in rad.
+    /// `model`; angles of `Flip` are the variables in rad. A trailing `+` or `-` on `zero` and
+    /// `section` keeps only rising or falling crossings (`section:theta1=0+`: θ₁ passes 0
+    /// upwards, as a Poincaré section usually wants).
     pub fn parse(text: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
+        let (body, direction) = match text.strip_suffix('+') {
+            Some(body) if text != "flip" => (body, Direction::Rising),
+            _ => match text.strip_suffix('-') {
+                Some(body) => (body, Direction::Falling),
+                None => (text, Direction::Both),
+            },
+        };
+        let mut spec = Self::parse_kind(body, text, model, terminal)?;
+        if direction != Direction::Both && spec.kind == EventKind::Flip {
+            return Err(Error::UnknownName {
+                system: model.info().name,
+                name: text.to_owned(),
+                valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-] (flip has no direction)".into(),
+            });
+        }
+        spec.direction = direction;
+        Ok(spec)
+    }
+
+    fn parse_kind(text: &str, full: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
         let state = model.info().state;
         let index_of = |name: &str| {
             state.iter().position(|q| q.name == name).ok_or_else(|| Error::UnknownName {
@@ -86,7 +108,7 @@ impl EventSpec {
             let (name, value) = rest.split_once('=').ok_or_else(|| Error::UnknownName {
                 system: model.info().name,
                 name: text.to_owned(),
-                valid: "flip, zero:NAME, section:NAME=VALUE".into(),
+                valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]".into(),
             })?;
             let value: f64 = value.trim().parse().map_err(|_| Error::InvalidValue {
                 name: text.to_owned(),
@@ -101,10 +123,10 @@ impl EventSpec {
             return Err(Error::UnknownName {
                 system: model.info().name,
                 name: text.to_owned(),
-                valid: "flip, zero:NAME, section:NAME=VALUE".into(),
+                valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]".into(),
             });
         };
-        Ok(EventSpec { name: text.to_owned(), kind, direction: Direction::Both, terminal })
+        Ok(EventSpec { name: full.to_owned(), kind, direction: Direction::Both, terminal })
     }
 }
 

@@ -53,6 +53,30 @@ fn ref_zero_events_on_dense_output_give_the_exact_period() {
     }
 }
 
+/// Directions: `zero:theta+` keeps the upward crossings only (one per period, θ' > 0 there),
+/// `zero:theta-` the downward ones; `section:theta=0.5-` the downward passes through 0.5.
+#[test]
+fn directed_events_keep_one_crossing_per_period() {
+    let v = values("pendulum", &[("theta", 170f64.to_radians())]);
+    let model = v.build();
+    let run = RunSpec { t0: 0.0, h: 1e-3, end: End::Time(12.0) };
+    let period = 4.893524274105486164;
+    for (text, sign) in [("zero:theta+", 1.0), ("zero:theta-", -1.0), ("section:theta=0.5-", -1.0)] {
+        let spec = EventSpec::parse(text, &*model, false).unwrap();
+        let mut events = EventLocator::new(&*model, vec![spec]);
+        model.solve(&RK4, v.initial_state(), &run, &mut events).unwrap();
+        // Within 12 s (2.45 periods): 2 or 3 of each kind, one period apart.
+        assert!((2..=3).contains(&events.found.len()), "{text}: {:?}", events.found);
+        for pair in events.found.windows(2) {
+            assert!(((pair[1].t - pair[0].t) / period - 1.0).abs() < 1e-9, "{text}");
+        }
+        for e in &events.found {
+            assert_eq!(e.name, text);
+            assert!(e.state[1] * sign > 0.0, "{text}: omega {}", e.state[1]);
+        }
+    }
+}
+
 /// The double pendulum from (120°, −10°) flips once: the flip event is recorded once, at a
 /// state where an angle is ±π, and the same at half the step (chaos amplifies only round-off
 /// and the O(h⁴) error at this early time).
