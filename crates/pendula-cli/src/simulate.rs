@@ -137,9 +137,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         });
         match summary_file {
             Some(f) => {
-                let mut handle = f.handle()?;
+                // Serialised whole, then written at once: a File takes one syscall per token.
+                let mut handle = std::io::BufWriter::new(f.handle()?);
                 serde_json::to_writer_pretty(&mut handle, &doc)?;
                 writeln!(handle)?;
+                handle.into_inner().map_err(|e| e.into_error())?;
                 f.commit()?;
             }
             None => {
@@ -150,7 +152,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         }
     }
 
-    let mut err = std::io::stderr().lock();
+    // The human summary is composed first and written at once (stderr is unbuffered).
+    let mut err = Vec::new();
     writeln!(
         err,
         "{} with {}: {steps} steps {} to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
@@ -182,5 +185,6 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(p) = summary.as_deref().filter(|_| !to_stdout) {
         writeln!(err, "wrote {}", p.display())?;
     }
+    std::io::stderr().write_all(&err)?;
     Ok(())
 }

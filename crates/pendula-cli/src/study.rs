@@ -171,9 +171,11 @@ impl OutDir {
 pub fn summary(path: Option<&Path>, doc: &serde_json::Value) -> Result<()> {
     if let Some(path) = path {
         let file = AtomicFile::create(path, "--summary")?;
-        let mut handle = file.handle()?;
+        // Serialised through a buffer: a File takes one syscall per token.
+        let mut handle = std::io::BufWriter::new(file.handle()?);
         serde_json::to_writer_pretty(&mut handle, doc)?;
         std::io::Write::write_all(&mut handle, b"\n")?;
+        handle.into_inner().map_err(|e| e.into_error())?;
         file.commit()?;
     }
     Ok(())

@@ -1,0 +1,90 @@
+//! Integrator kernels against the `ode_solvers` crate on the bench's workloads
+//! (`../shared/bench/SPEC.md`), in one process so that the ratios are fair:
+//!
+//! - W2: the double pendulum from (120°, −10°) to t = 10 s, adaptive 8th order at
+//!   rtol = atol = 1e-10 (`dop853` vs `ode_solvers::Dop853`, the same steps);
+//! - W1 (shortened): RK4 at h = 1 ms for 10⁴ steps (`rk4` vs `ode_solvers::Rk4`).
+//!
+//! Run: `cargo bench -p pendula --bench integrators`.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use ode_solvers::dop_shared::OutputType;
+use ode_solvers::{Dop853, Rk4, System as OdeSystem, Vector4};
+use pendula::control::Tolerances;
+use pendula::integrator::embedded::DOP853;
+use pendula::integrator::explicit_rk::RK4;
+use pendula::observe::Ignore;
+use pendula::system::find;
+use pendula::{End, RunSpec};
+
+/// The SPEC's equations for `ode_solvers`.
+struct W;
+
+impl OdeSystem<f64, Vector4<f64>> for W {
+    fn system(&self, _t: f64, y: &Vector4<f64>, dy: &mut Vector4<f64>) {
+        let (m1, m2, l1, l2, g) = (1.0, 1.0, 1.0, 1.0, 9.81);
+        let (s1, s2, sd, cd) = (y[0].sin(), y[1].sin(), (y[0] - y[1]).sin(), (y[0] - y[1]).cos());
+        let (m11, m12, m21, m22) = ((m1 + m2) * l1, m2 * l2 * cd, l1 * cd, l2);
+        let r1 = -m2 * l2 * y[3] * y[3] * sd - (m1 + m2) * g * s1;
+        let r2 = l1 * y[2] * y[2] * sd - g * s2;
+        let det = m11 * m22 - m12 * m21;
+        *dy = Vector4::new(y[2], y[3], (r1 * m22 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det);
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let values = find("double").unwrap().values(&[]).unwrap();
+    let model = values.build();
+    let y0 = values.initial_state().to_vec();
+    let v0 = Vector4::new(y0[0], y0[1], y0[2], y0[3]);
+
+    let mut w2 = c.benchmark_group("W2 dop853 rtol=atol=1e-10 t=10");
+    let tol = Tolerances { rtol: 1e-10, atol: 1e-10, h_min: 0.0, h_max: f64::INFINITY };
+    w2.bench_function("pendula", |b| {
+        b.iter(|| model.solve_adaptive(&DOP853, black_box(&y0), 10.0, None, &tol, &mut Ignore).unwrap())
+    });
+    w2.bench_function("ode_solvers", |b| {
+        b.iter(|| {
+            let mut s = Dop853::from_param(
+                W,
+                0.0,
+                10.0,
+                10.0,
+                black_box(v0),
+                1e-10,
+                1e-10,
+                0.9,
+                0.0,
+                0.333,
+                6.0,
+                10.0,
+                0.0,
+                100_000_000,
+                1000,
+                OutputType::Sparse,
+            );
+            s.integrate().unwrap();
+            *s.y_out().last().unwrap()
+        })
+    });
+    w2.finish();
+
+    let mut w1 = c.benchmark_group("W1 rk4 h=1e-3 10^4 steps");
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Steps(10_000) };
+    w1.bench_function("pendula", |b| {
+        b.iter(|| model.solve(&RK4, black_box(&y0), &spec, &mut Ignore).unwrap())
+    });
+    w1.bench_function("ode_solvers", |b| {
+        b.iter(|| {
+            let mut s = Rk4::new(W, 0.0, black_box(v0), 10.0, 1e-3);
+            s.integrate().unwrap();
+            *s.y_out().last().unwrap()
+        })
+    });
+    w1.finish();
+}
+
+criterion_group!(integrators, benches);
+criterion_main!(integrators);
