@@ -338,3 +338,28 @@ fn tableaus_are_consistent() {
         }
     }
 }
+
+/// Compositions (Yoshida over Verlet, Tao's triple jump): the weights sum to 1 and are
+/// symmetric (wᵢ = wₛ₊₁₋ᵢ), which makes the composition symmetric; for order p > 2 built
+/// from a second-order symmetric map, Σ wᵢ³ = 0 (the h³ error term cancels).
+#[test]
+fn composition_weights_are_consistent() {
+    use pendula::integrator::partitioned::Partition;
+    let mut checked = 0;
+    for method in METHODS {
+        let weights: &[f64] = match method.scheme {
+            Scheme::Partitioned(Partition::Composition(w)) => w,
+            Scheme::Tao(t) => t.weights,
+            _ => continue,
+        };
+        let name = method.name;
+        assert!((weights.iter().sum::<f64>() - 1.0).abs() < 1e-14, "{name}: Σw");
+        assert!(weights.iter().zip(weights.iter().rev()).all(|(a, b)| a == b), "{name}: not symmetric");
+        if method.order > 2 {
+            let cubes: f64 = weights.iter().map(|w| w * w * w).sum();
+            assert!(cubes.abs() < 1e-13, "{name}: Σw³ = {cubes}");
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 5);
+}
