@@ -33,6 +33,11 @@ pub enum Command {
     OscillatorRegimes(Box<crate::commands::regimes::RegimesArgs>),
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
     Animate(Box<crate::commands::animate::AnimateArgs>),
+    /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
+    /// pendulum with rk4) into one .npy array, or one shard of it.
+    Sweep(Box<crate::commands::sweep::SweepArgs>),
+    /// Assemble the shards of a sweep into the full array.
+    Merge(Box<crate::commands::merge::MergeArgs>),
     /// The paper's whole numerical study as one self-contained HTML page.
     Report(Box<crate::commands::report::ReportArgs>),
     /// List the systems or the methods, with parameters, units, defaults and requirements.

@@ -27,6 +27,8 @@ fn main() -> ExitCode {
         Command::OscillatorRegimes(args) => commands::regimes::run(args),
         Command::Animate(args) => commands::animate::run(args),
         Command::Report(args) => commands::report::run(args),
+        Command::Sweep(args) => commands::sweep::run(args),
+        Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
     };
     match result {

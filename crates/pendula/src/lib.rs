@@ -41,6 +41,7 @@
 
 pub mod analysis;
 pub mod control;
+pub mod ensemble;
 pub mod error;
 pub mod events;
 pub mod integrator;

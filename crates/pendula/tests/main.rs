@@ -12,6 +12,7 @@ mod analysis;
 mod architecture;
 mod conformance;
 mod energy;
+mod ensemble;
 mod events;
 mod exact;
 mod formulations;

@@ -3,8 +3,10 @@
 pub mod animate;
 pub mod compare;
 pub mod convergence;
+pub mod merge;
 pub mod period;
 pub mod regimes;
 pub mod report;
 pub mod stability;
+pub mod sweep;
 pub mod work_precision;

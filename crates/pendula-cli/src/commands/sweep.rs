@@ -1,0 +1,497 @@
+//! `pendula sweep`: one system integrated from every cell of a grid over parameters and
+//! initial-state variables, in parallel, into one .npy array — whole, or one deterministic
+//! shard of it (`--shard K/N`, assembled by `pendula merge`).
+//!
+//! The double pendulum with rk4 runs on the SIMD ensemble engine (`pendula::ensemble`);
+//! everything else runs the scalar integrators cell by cell, also in parallel. Either way a
+//! cell's result does not depend on the thread count or the sharding.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use pendula::ensemble::{self, BatchMethod, BatchSpec, Member};
+use pendula::integrator::{self, Method};
+use pendula::observe::{Observer, Sample};
+use pendula::system::double::DoublePendulum;
+use pendula::system::{self, SystemInfo, Values};
+use pendula::{End, RunSpec};
+use rayon::prelude::*;
+use serde_json::json;
+
+use crate::config::{f64_arg, parse_number, parse_settings, parse_value};
+use crate::output::AtomicFile;
+
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    /// System [default: double].
+    pub system: Option<String>,
+    /// An axis: NAME=LO:HI:N samples the N cell centres LO + (i + 1/2)(HI - LO)/N of a
+    /// parameter or initial-state variable (`pi` and `deg` accepted for angles). Repeat for
+    /// more axes; the first varies fastest in the output.
+    #[arg(long = "grid", value_name = "NAME=LO:HI:N", required = true)]
+    pub grids: Vec<String>,
+    /// Set a parameter or initial-state variable for every cell (`--set m2=2`).
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Integration method [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s [default: 0.01].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// Number of steps.
+    #[arg(long, value_name = "N", conflicts_with = "t_end")]
+    pub steps: Option<String>,
+    /// End time, s [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    /// Stop each cell when it first flips (an angle passes ±π): `flip`.
+    #[arg(long, value_name = "EVENT")]
+    pub until: Option<String>,
+    /// What to record per cell, comma-separated, in this order along the last axis: `final`
+    /// (the state, one column per variable), `flip-time` (s, NaN if no flip),
+    /// `energy-error` (E_end − E_0, J) [default: final].
+    #[arg(long, value_name = "LIST")]
+    pub record: Option<String>,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<String>,
+    /// Compute only shard K of N (K = 1 … N): a contiguous slice of the cells, written with a
+    /// FILE.json description for `pendula merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Output .npy file [default: sweep.npy].
+    #[arg(long, value_name = "FILE.npy")]
+    pub out: Option<PathBuf>,
+    /// Write a JSON summary here.
+    #[arg(long, value_name = "FILE.json")]
+    pub summary: Option<PathBuf>,
+}
+
+/// One axis of the grid.
+#[derive(Debug, Clone, PartialEq)]
+struct Axis {
+    name: String,
+    lo: f64,
+    hi: f64,
+    n: usize,
+}
+
+impl Axis {
+    fn centre(&self, i: usize) -> f64 {
+        self.lo + (i as f64 + 0.5) * (self.hi - self.lo) / self.n as f64
+    }
+}
+
+/// A recorded quantity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Record {
+    Final,
+    FlipTime,
+    EnergyError,
+}
+
+/// The validated sweep.
+struct Sweep {
+    info: &'static SystemInfo,
+    base: Vec<(String, f64)>,
+    axes: Vec<Axis>,
+    method: &'static Method,
+    h: f64,
+    steps: u64,
+    until_flip: bool,
+    records: Vec<Record>,
+    columns: Vec<String>,
+    shard: (usize, usize),
+}
+
+impl Sweep {
+    fn cells(&self) -> usize {
+        self.axes.iter().map(|a| a.n).product()
+    }
+
+    /// The values of cell `index` (flattened, first axis fastest).
+    fn values(&self, index: usize) -> Result<Values, pendula::Error> {
+        let mut settings = self.base.clone();
+        let mut rest = index;
+        for axis in &self.axes {
+            settings.push((axis.name.clone(), axis.centre(rest % axis.n)));
+            rest /= axis.n;
+        }
+        self.info.values(&settings)
+    }
+
+    /// The output's shape: the axes, slowest first, then the columns.
+    fn shape(&self) -> Vec<usize> {
+        let mut shape: Vec<usize> = self.axes.iter().rev().map(|a| a.n).collect();
+        shape.push(self.columns.len());
+        shape
+    }
+
+    /// Cells [start, end) of this shard: N contiguous slices as equal as possible.
+    fn range(&self) -> (usize, usize) {
+        let (k, n) = self.shard;
+        let cells = self.cells();
+        ((k - 1) * cells / n, k * cells / n)
+    }
+
+    /// A digest of everything that determines the full array, so that `merge` refuses
+    /// shards of different sweeps.
+    fn fingerprint(&self) -> String {
+        let text = format!(
+            "{}|{:?}|{:?}|{}|{:e}|{}|{}|{:?}",
+            self.info.name,
+            self.base,
+            self.axes,
+            self.method.name,
+            self.h,
+            self.steps,
+            self.until_flip,
+            self.records
+        );
+        // FNV-1a, 64 bits: a label, not a security measure.
+        let hash = text
+            .bytes()
+            .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        format!("{hash:016x}")
+    }
+}
+
+fn parse_axis(info: &'static SystemInfo, text: &str) -> Result<Axis> {
+    let bad = || anyhow!("invalid --grid `{text}`: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256");
+    let (name, range) = text.split_once('=').ok_or_else(bad)?;
+    let name = name.trim();
+    let q = info.quantity(name)?;
+    let parts: Vec<&str> = range.split(':').collect();
+    let [lo, hi, n] = parts[..] else { return Err(bad()) };
+    let (lo, hi) = (parse_value(name, lo, Some(q))?, parse_value(name, hi, Some(q))?);
+    let n: usize = parse_number("--grid", n, "a whole number of cells >= 1")?;
+    if n == 0 {
+        bail!("invalid --grid `{text}`: the number of cells must be >= 1");
+    }
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        bail!("invalid --grid `{text}`: need finite LO < HI (got {lo} and {hi})");
+    }
+    Ok(Axis { name: name.to_owned(), lo, hi, n })
+}
+
+fn parse(args: &SweepArgs) -> Result<Sweep> {
+    let info = system::find(args.system.as_deref().unwrap_or("double"))?;
+    let base = parse_settings(info, &args.set)?;
+    let axes = args.grids.iter().map(|g| parse_axis(info, g)).collect::<Result<Vec<_>>>()?;
+    for (i, a) in axes.iter().enumerate() {
+        if axes[..i].iter().any(|b| b.name == a.name) {
+            bail!("invalid --grid: `{}` is given twice", a.name);
+        }
+    }
+    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    if matches!(method.scheme, integrator::Scheme::Embedded(_)) {
+        bail!("sweep takes fixed steps: {} runs here as a fixed-step method only with --dt", method.name);
+    }
+    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    let end = match &args.steps {
+        Some(text) => End::Steps(parse_number("--steps", text, "a whole number of steps >= 1")?),
+        None => End::Time(f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?),
+    };
+    let schedule = RunSpec { t0: 0.0, h, end }.schedule()?;
+    if schedule.last_h != h {
+        bail!("invalid --t-end {}: it must be a whole number of steps of --dt {h}", schedule.t_end);
+    }
+    let until_flip = match args.until.as_deref() {
+        None => false,
+        Some("flip") if info.state.iter().any(|q| q.is_angle()) => true,
+        Some("flip") => bail!("invalid --until flip: the `{}` system has no angle", info.name),
+        Some(other) => bail!("invalid --until `{other}`: expected flip"),
+    };
+    let mut records = Vec::new();
+    for name in args.record.as_deref().unwrap_or("final").split(',').map(str::trim) {
+        let record = match name {
+            "final" => Record::Final,
+            "flip-time" if info.state.iter().any(|q| q.is_angle()) => Record::FlipTime,
+            "flip-time" => bail!("invalid --record flip-time: the `{}` system has no angle", info.name),
+            "energy-error" => Record::EnergyError,
+            other => bail!("invalid --record `{other}`: expected final, flip-time or energy-error"),
+        };
+        if records.contains(&record) {
+            bail!("invalid --record: `{name}` is given twice");
+        }
+        records.push(record);
+    }
+    let mut columns = Vec::new();
+    for r in &records {
+        match r {
+            Record::Final => columns.extend(info.state.iter().map(|q| q.name.to_owned())),
+            Record::FlipTime => columns.push("flip_time".into()),
+            Record::EnergyError => columns.push("energy_error".into()),
+        }
+    }
+    let shard = match &args.shard {
+        None => (1, 1),
+        Some(text) => {
+            let bad = || anyhow!("invalid --shard `{text}`: expected K/N with 1 <= K <= N, e.g. 3/8");
+            let (k, n) = text.split_once('/').ok_or_else(bad)?;
+            let (k, n): (usize, usize) =
+                (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+            if !(1 <= k && k <= n) {
+                return Err(bad());
+            }
+            (k, n)
+        }
+    };
+    let sweep =
+        Sweep { info, base, axes, method, h, steps: schedule.steps, until_flip, records, columns, shard };
+    if sweep.shard.1 > sweep.cells() {
+        bail!("invalid --shard {}/{}: more shards than the {} cells", shard.0, shard.1, sweep.cells());
+    }
+    // Every cell's values are in their domains if the extreme cell centres are (the
+    // domains are intervals): check both corners now, before any work.
+    sweep.values(0)?;
+    sweep.values(sweep.cells() - 1)?;
+    // A method that needs what the system lacks is refused now, on one step of one cell.
+    let probe = sweep.values(0)?;
+    probe.build().solve(
+        method,
+        probe.initial_state(),
+        &RunSpec { t0: 0.0, h, end: End::Steps(1) },
+        &mut pendula::observe::Ignore,
+    )?;
+    Ok(sweep)
+}
+
+/// Watches a scalar run for the first flip (linear interpolation of |θ| within the step).
+struct FlipWatch {
+    angles: Vec<usize>,
+    previous: Vec<f64>,
+    t_previous: f64,
+    flip_time: f64,
+    stop: bool,
+}
+
+impl Observer for FlipWatch {
+    fn observe(&mut self, s: &Sample<'_>) -> std::ops::ControlFlow<()> {
+        use std::f64::consts::PI;
+        if s.step > 0 && self.flip_time.is_nan() {
+            let mut fraction = f64::INFINITY;
+            for (&i, &old) in self.angles.iter().zip(&self.previous) {
+                let (a, b) = (old.abs(), s.y[i].abs());
+                if a <= PI && b > PI {
+                    fraction = fraction.min((PI - a) / (b - a));
+                }
+            }
+            if fraction.is_finite() {
+                self.flip_time = self.t_previous + fraction * (s.t - self.t_previous);
+                if self.stop {
+                    return std::ops::ControlFlow::Break(());
+                }
+            }
+        }
+        for (p, &i) in self.previous.iter_mut().zip(&self.angles) {
+            *p = s.y[i];
+        }
+        self.t_previous = s.t;
+        std::ops::ControlFlow::Continue(())
+    }
+}
+
+pub fn run(args: &SweepArgs) -> Result<()> {
+    let sweep = parse(args)?;
+    let threads = match &args.threads {
+        Some(text) => {
+            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
+            if n == 0 {
+                bail!("invalid --threads 0: need at least 1");
+            }
+            n
+        }
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
+    if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
+        bail!("invalid --out {}: sweep writes .npy", out_path.display());
+    }
+    let out_file = AtomicFile::create(&out_path, "--out")?;
+    let sharded = sweep.shard != (1, 1);
+    let side_path = PathBuf::from(format!("{}.json", out_path.display()));
+    let side_file =
+        if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
+    let summary_file = args.summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+
+    let (start, end) = sweep.range();
+    let cols = sweep.columns.len();
+    let mut data = vec![0.0_f64; (end - start) * cols];
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
+    let begin = Instant::now();
+    let simd = sweep.info.name == "double" && sweep.method.name == "rk4";
+    pool.install(|| {
+        if simd { run_simd(&sweep, start, &mut data) } else { run_scalar(&sweep, start, &mut data) }
+    })?;
+    let wall_s = begin.elapsed().as_secs_f64();
+
+    let mut shape = sweep.shape();
+    if sharded {
+        shape = vec![end - start, cols];
+    }
+    write_npy(&out_file, &shape, data)?;
+    out_file.commit()?;
+    let description = json!({
+        "pendula_sweep": 1,
+        "system": sweep.info.name,
+        "method": sweep.method.name,
+        "dt": sweep.h,
+        "steps": sweep.steps,
+        "axes": sweep.axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
+        "columns": sweep.columns,
+        "shape": sweep.shape(),
+        "shard": sweep.shard.0,
+        "shards": sweep.shard.1,
+        "offset": start,
+        "count": end - start,
+        "fingerprint": sweep.fingerprint(),
+        "kernel": if simd { "simd rk4 (ensemble engine)" } else { "scalar, per cell" },
+        "threads": threads,
+        "wall_s": wall_s,
+    });
+    if let Some(f) = side_file {
+        write_json(&f, &description)?;
+        f.commit()?;
+    }
+    if let Some(f) = summary_file {
+        write_json(&f, &description)?;
+        f.commit()?;
+    }
+    eprintln!(
+        "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
+        sweep.info.name,
+        end - start,
+        if sharded {
+            format!(" (shard {}/{} of {})", sweep.shard.0, sweep.shard.1, sweep.cells())
+        } else {
+            String::new()
+        },
+        sweep.method.name,
+        sweep.steps,
+        sweep.h,
+        out_path.display(),
+        shape,
+        if sharded { format!(" and {}", side_path.display()) } else { String::new() },
+    );
+    Ok(())
+}
+
+/// Writes a row of results: the recorded columns (`energy_error` is called only if needed).
+fn store(sweep: &Sweep, state: &[f64], flip_time: f64, energy_error: impl FnOnce() -> f64, row: &mut [f64]) {
+    let mut c = 0;
+    let mut energy_error = Some(energy_error);
+    for r in &sweep.records {
+        match r {
+            Record::Final => {
+                row[c..c + state.len()].copy_from_slice(state);
+                c += state.len();
+            }
+            Record::FlipTime => {
+                row[c] = flip_time;
+                c += 1;
+            }
+            Record::EnergyError => {
+                row[c] = energy_error.take().map_or(f64::NAN, |f| f());
+                c += 1;
+            }
+        }
+    }
+}
+
+fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
+    use pendula::system::Energy;
+    let cols = sweep.columns.len();
+    let count = data.len() / cols;
+    let spec = BatchSpec {
+        method: BatchMethod::Rk4,
+        h: sweep.h,
+        steps: sweep.steps,
+        stop_at_flip: sweep.until_flip,
+    };
+    // The cell's 9 values in catalogue order (m1, m2, l1, l2, g, θ1, θ2, ω1, ω2), from the base
+    // values and the axes: no allocation per cell. Cell values are in their domains (checked
+    // at the corners).
+    let names: Vec<&str> = sweep.info.quantities().map(|q| q.name).collect();
+    let base_values = sweep.info.values(&sweep.base)?;
+    let base: [f64; 9] = std::array::from_fn(|k| base_values.get(names[k]));
+    let slots: Vec<usize> =
+        sweep.axes.iter().map(|a| names.iter().position(|n| *n == a.name).expect("a checked name")).collect();
+    let member = |i: usize| {
+        let mut v = base;
+        let mut rest = start + i;
+        for (axis, &slot) in sweep.axes.iter().zip(&slots) {
+            v[slot] = axis.centre(rest % axis.n);
+            rest /= axis.n;
+        }
+        Member {
+            pendulum: DoublePendulum { m1: v[0], m2: v[1], l1: v[2], l2: v[3], g: v[4] },
+            state: [v[5], v[6], v[7], v[8]],
+        }
+    };
+    let store_row = |m: &Member, r: &ensemble::MemberResult, row: &mut [f64]| {
+        let energy = || m.pendulum.energy(0.0, &r.state) - m.pendulum.energy(0.0, &m.state);
+        store(sweep, &r.state, r.flip_time, energy, row);
+    };
+    ensemble::run_into(count, &member, &spec, data, cols, &store_row).map_err(|e| {
+        anyhow::Error::new(pendula::Error::NonFinite { t: e.t })
+            .context(format!("cell {} of the sweep", start + e.member))
+    })
+}
+
+fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
+    let cols = sweep.columns.len();
+    let angles: Vec<usize> =
+        sweep.info.state.iter().enumerate().filter(|(_, q)| q.is_angle()).map(|(i, _)| i).collect();
+    let spec = RunSpec { t0: 0.0, h: sweep.h, end: End::Steps(sweep.steps) };
+    data.par_chunks_mut(cols).enumerate().try_for_each(|(i, row)| -> Result<()> {
+        let v = sweep.values(start + i)?;
+        let model = v.build();
+        let mut watch = FlipWatch {
+            previous: vec![0.0; angles.len()],
+            angles: angles.clone(),
+            t_previous: 0.0,
+            flip_time: f64::NAN,
+            stop: sweep.until_flip,
+        };
+        let report = model
+            .solve(sweep.method, v.initial_state(), &spec, &mut watch)
+            .with_context(|| format!("cell {} of the sweep", start + i))?;
+        let energy = || model.energy(0.0, &report.state) - model.energy(0.0, v.initial_state());
+        store(sweep, &report.state, watch.flip_time, energy, row);
+        Ok(())
+    })
+}
+
+fn write_npy(file: &AtomicFile, shape: &[usize], data: Vec<f64>) -> Result<()> {
+    use ndarray_npy::WriteNpyExt;
+    use std::io::Write;
+    let array =
+        ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), data).expect("the shape fits the data");
+    let mut w = std::io::BufWriter::new(file.handle()?);
+    array.write_npy(&mut w)?;
+    w.flush()?;
+    Ok(())
+}
+
+fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {
+    use std::io::Write;
+    let mut w = std::io::BufWriter::new(file.handle()?);
+    serde_json::to_writer_pretty(&mut w, doc)?;
+    writeln!(w)?;
+    w.into_inner().map_err(|e| e.into_error())?;
+    Ok(())
+}
+
+/// Reads a shard's description (FILE.npy.json).
+pub fn read_description(npy: &Path) -> Result<serde_json::Value> {
+    let path = PathBuf::from(format!("{}.json", npy.display()));
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!("cannot read {} (the shard's description, written by sweep --shard)", path.display())
+    })?;
+    serde_json::from_str(&text).with_context(|| format!("invalid shard description {}", path.display()))
+}
