@@ -3,7 +3,9 @@
 //!
 //! - W2: the double pendulum from (120°, −10°) to t = 10 s, adaptive 8th order at
 //!   rtol = atol = 1e-10 (`dop853` vs `ode_solvers::Dop853`, the same steps);
-//! - W1 (shortened): RK4 at h = 1 ms for 10⁴ steps (`rk4` vs `ode_solvers::Rk4`).
+//! - W1 (shortened): RK4 at h = 1 ms for 10⁴ steps (`rk4` vs `ode_solvers::Rk4`);
+//! - W3 (shortened): a 64 × 64 grid of initial angles from rest, RK4 at h = 10 ms for 100
+//!   steps, on one thread (the ensemble engine vs `ode_solvers::Rk4` cell by cell).
 //!
 //! Run: `cargo bench -p pendula --bench integrators`.
 
@@ -13,6 +15,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use ode_solvers::dop_shared::OutputType;
 use ode_solvers::{Dop853, Rk4, System as OdeSystem, Vector4};
 use pendula::control::Tolerances;
+use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
 use pendula::integrator::embedded::DOP853;
 use pendula::integrator::explicit_rk::RK4;
 use pendula::observe::Ignore;
@@ -84,6 +87,33 @@ fn benches(c: &mut Criterion) {
         })
     });
     w1.finish();
+
+    let mut w3 = c.benchmark_group("W3 64x64 rk4 h=1e-2 100 steps, 1 thread");
+    w3.sample_size(10);
+    let cell = |i: usize| -std::f64::consts::PI + (i as f64 + 0.5) * (2.0 * std::f64::consts::PI / 64.0);
+    let pendulum = pendula::system::double::DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
+    let members: Vec<Member> =
+        (0..64 * 64).map(|c| Member { pendulum, state: [cell(c % 64), cell(c / 64), 0.0, 0.0] }).collect();
+    let spec = BatchSpec { method: BatchMethod::Rk4, h: 1e-2, steps: 100, stop_at_flip: false };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; members.len()];
+    w3.bench_function("pendula ensemble", |b| {
+        b.iter(|| pool.install(|| ensemble::run(black_box(&members), &spec, &mut out).unwrap()))
+    });
+    w3.bench_function("ode_solvers per cell", |b| {
+        b.iter(|| {
+            members
+                .iter()
+                .map(|m| {
+                    let y = Vector4::new(m.state[0], m.state[1], 0.0, 0.0);
+                    let mut s = Rk4::new(W, 0.0, black_box(y), 1.0, 1e-2);
+                    s.integrate().unwrap();
+                    s.y_out().last().unwrap()[0]
+                })
+                .sum::<f64>()
+        })
+    });
+    w3.finish();
 }
 
 criterion_group!(integrators, benches);
