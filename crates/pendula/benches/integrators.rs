@@ -94,7 +94,8 @@ fn benches(c: &mut Criterion) {
     let pendulum = pendula::system::double::DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
     let members: Vec<Member> =
         (0..64 * 64).map(|c| Member { pendulum, state: [cell(c % 64), cell(c / 64), 0.0, 0.0] }).collect();
-    let spec = BatchSpec { method: BatchMethod::Rk4, h: 1e-2, steps: 100, stop_at_flip: false };
+    let spec =
+        BatchSpec { method: BatchMethod::Rk4, h: 1e-2, steps: 100, stop_at_flip: false, track_flips: true };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; members.len()];
     w3.bench_function("pendula ensemble", |b| {

@@ -54,7 +54,7 @@ fn members() -> Vec<Member> {
 }
 
 fn run(members: &[Member], steps: u64, stop_at_flip: bool) -> Vec<MemberResult> {
-    let spec = BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps, stop_at_flip };
+    let spec = BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps, stop_at_flip, track_flips: true };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; members.len()];
     ensemble::run(members, &spec, &mut out).unwrap();
     out
@@ -143,7 +143,8 @@ fn results_are_bitwise_identical_whatever_the_threads_and_chunks() {
 fn a_non_finite_member_is_named() {
     let mut ms = members();
     ms[13].state[2] = f64::INFINITY;
-    let spec = BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false };
+    let spec =
+        BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips: true };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
     let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
     assert_eq!(err.member, 13);

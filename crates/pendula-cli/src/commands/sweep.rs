@@ -412,6 +412,7 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
         h: sweep.h,
         steps: sweep.steps,
         stop_at_flip: sweep.until_flip,
+        track_flips: sweep.records.contains(&Record::FlipTime),
     };
     // The cell's 9 values in catalogue order (m1, m2, l1, l2, g, θ1, θ2, ω1, ω2), from the base
     // values and the axes: no allocation per cell. Cell values are in their domains (checked

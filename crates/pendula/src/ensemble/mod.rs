@@ -55,6 +55,9 @@ pub struct BatchSpec {
     pub steps: u64,
     /// Retire a member when it first flips (an angle passes ±π).
     pub stop_at_flip: bool,
+    /// Record flip times (implied by `stop_at_flip`); without, `flip_time` is NaN and the
+    /// kernel skips the bookkeeping.
+    pub track_flips: bool,
 }
 
 /// A member's results.
@@ -131,7 +134,7 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
             params: std::array::from_fn(|p| {
                 std::array::from_fn(|i| {
                     let d = pick(i).pendulum;
-                    [d.m1, d.m2, d.l1, d.l2, d.g][p]
+                    [(d.m1 + d.m2) * d.l1, d.m2 * d.l2, -d.m2 * d.l2, (d.m1 + d.m2) * d.g, d.l1, d.l2, d.g][p]
                 })
             }),
             state: std::array::from_fn(|k| std::array::from_fn(|i| pick(i).state[k])),
@@ -139,7 +142,13 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
             failed_at: [f64::NAN; LANES],
         };
         match spec.method {
-            BatchMethod::Rk4 => rk4_lanes(&mut lanes, spec.h, spec.steps, spec.stop_at_flip),
+            BatchMethod::Rk4 => rk4_lanes(
+                &mut lanes,
+                spec.h,
+                spec.steps,
+                spec.stop_at_flip,
+                spec.track_flips || spec.stop_at_flip,
+            ),
         }
         for (i, r) in results.iter_mut().enumerate() {
             *r = MemberResult {
@@ -154,10 +163,11 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
     first_failure.map_or(Ok(()), Err)
 }
 
-/// A lane group: parameters (m₁, m₂, l₁, l₂, g), state (θ₁, θ₂, ω₁, ω₂), and per-lane
+/// A lane group: parameter products (see `params`), state (θ₁, θ₂, ω₁, ω₂), and per-lane
 /// records, each an array over the lanes.
 struct Lanes {
-    params: [[f64; LANES]; 5],
+    /// m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g, l1, l2, g.
+    params: [[f64; LANES]; 7],
     state: [[f64; LANES]; 4],
     flip_time: [f64; LANES],
     /// Time at which the lane's state became non-finite (NaN: never).
@@ -170,20 +180,23 @@ type V = [f64; LANES];
 /// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC), with the branch-free sine and
 /// cosine (θ' = ω needs no work).
 #[inline(always)]
-fn accelerations<const FMA: bool>(p: &[V; 5], th1: &V, th2: &V, w1: &V, w2: &V, a1: &mut V, a2: &mut V) {
+fn accelerations<const FMA: bool>(p: &[V; 7], th1: &V, th2: &V, w1: &V, w2: &V, a1: &mut V, a2: &mut V) {
     for i in 0..LANES {
-        let (m1, m2, l1, l2, g) = (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i]);
+        // The parameter products that do not change, computed once per lane group in the same
+        // grouping as the scalar expressions: m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g.
+        let (m11, m2l2, neg_m2l2, m12g, l1, l2, g) =
+            (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i]);
         let (sd, cd) = trig::sin_cos_with::<FMA>(th1[i] - th2[i]);
         let (s1, s2) = (trig::sin_with::<FMA>(th1[i]), trig::sin_with::<FMA>(th2[i]));
-        let m11 = (m1 + m2) * l1;
-        let m12 = m2 * l2 * cd;
+        let m12 = m2l2 * cd;
         let m21 = l1 * cd;
         let m22 = l2;
-        let r1 = -m2 * l2 * w2[i] * w2[i] * sd - (m1 + m2) * g * s1;
+        let r1 = neg_m2l2 * w2[i] * w2[i] * sd - m12g * s1;
         let r2 = l1 * w1[i] * w1[i] * sd - g * s2;
-        let det = m11 * m22 - m12 * m21;
-        a1[i] = (r1 * m22 - m12 * r2) / det;
-        a2[i] = (m11 * r2 - m21 * r1) / det;
+        // One division, two products: division is the slowest vector operation here.
+        let inverse = 1.0 / (m11 * m22 - m12 * m21);
+        a1[i] = (r1 * m22 - m12 * r2) * inverse;
+        a2[i] = (m11 * r2 - m21 * r1) * inverse;
     }
 }
 
@@ -213,11 +226,12 @@ fn has_fma() -> bool {
 }
 
 /// RK4 steps for a lane group, with the kernel for this CPU.
-fn rk4_lanes(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool) {
-    if has_fma() {
-        rk4_kernel::<true>(lanes, h, steps, stop_at_flip);
-    } else {
-        rk4_kernel::<false>(lanes, h, steps, stop_at_flip);
+fn rk4_lanes(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool, track: bool) {
+    match (has_fma(), track) {
+        (true, true) => rk4_kernel::<true, true>(lanes, h, steps, stop_at_flip),
+        (true, false) => rk4_kernel::<true, false>(lanes, h, steps, stop_at_flip),
+        (false, true) => rk4_kernel::<false, true>(lanes, h, steps, stop_at_flip),
+        (false, false) => rk4_kernel::<false, false>(lanes, h, steps, stop_at_flip),
     }
 }
 
@@ -232,7 +246,7 @@ fn rk4_lanes(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool) {
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-fn rk4_kernel<const FMA: bool>(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool) {
+fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool) {
     use std::f64::consts::PI;
     let p = lanes.params;
     let [mut th1, mut th2, mut w1, mut w2] = lanes.state;
@@ -271,15 +285,18 @@ fn rk4_kernel<const FMA: bool>(lanes: &mut Lanes, h: f64, steps: u64, stop_at_fl
             let next = [update(th1[i], &u1), update(th2[i], &u2), update(w1[i], &a1), update(w2[i], &a2)];
             let finite =
                 next[0].is_finite() & next[1].is_finite() & next[2].is_finite() & next[3].is_finite();
-            let (o1, n1, o2, n2) = (th1[i].abs(), next[0].abs(), th2[i].abs(), next[1].abs());
-            let (cross1, cross2) = ((o1 <= PI) & (n1 > PI), (o2 <= PI) & (n2 > PI));
-            let flips = active[i] & finite & (cross1 | cross2) & (flip_step[i] < 0.0);
-            // Of two angles crossing in one step, the one crossing first: fractions
-            // (π − old)/(new − old) compared by cross-multiplication (no division per step).
-            let use1 = cross1 & (!cross2 | ((PI - o1) * (n2 - o2) <= (PI - o2) * (n1 - o1)));
-            flip_step[i] = if flips { step_f } else { flip_step[i] };
-            flip_old[i] = if flips { if use1 { o1 } else { o2 } } else { flip_old[i] };
-            flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
+            let mut flips = false;
+            if TRACK {
+                let (o1, n1, o2, n2) = (th1[i].abs(), next[0].abs(), th2[i].abs(), next[1].abs());
+                let (cross1, cross2) = ((o1 <= PI) & (n1 > PI), (o2 <= PI) & (n2 > PI));
+                flips = active[i] & finite & (cross1 | cross2) & (flip_step[i] < 0.0);
+                // Of two angles crossing in one step, the one crossing first: fractions
+                // (π − old)/(new − old) compared by cross-multiplication (no division per step).
+                let use1 = cross1 & (!cross2 | ((PI - o1) * (n2 - o2) <= (PI - o2) * (n1 - o1)));
+                flip_step[i] = if flips { step_f } else { flip_step[i] };
+                flip_old[i] = if flips { if use1 { o1 } else { o2 } } else { flip_old[i] };
+                flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
+            }
             failed_step[i] = if active[i] & !finite { step_f } else { failed_step[i] };
             let keep = active[i] & finite;
             th1[i] = if keep { next[0] } else { th1[i] };
