@@ -324,7 +324,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let simd = sweep.info.name == "double" && sweep.method.name == "rk4";
+    let simd = sweep.info.name == "double" && batch_method(sweep.method).is_some();
     pool.install(|| {
         if simd { run_simd(&sweep, start, &mut data) } else { run_scalar(&sweep, start, &mut data) }
     })?;
@@ -350,7 +350,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         "offset": start,
         "count": end - start,
         "fingerprint": sweep.fingerprint(),
-        "kernel": if simd { "simd rk4 (ensemble engine)" } else { "scalar, per cell" },
+        "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per cell" },
         "threads": threads,
         "wall_s": wall_s,
     });
@@ -403,12 +403,21 @@ fn store(sweep: &Sweep, state: &[f64], flip_time: f64, energy_error: impl FnOnce
     }
 }
 
+/// The ensemble engine's form of `method`, if it has one (rk4, tao-2, tao-4).
+fn batch_method(method: &Method) -> Option<BatchMethod> {
+    match method.scheme {
+        _ if method.name == "rk4" => Some(BatchMethod::Rk4),
+        integrator::Scheme::Tao(scheme) => Some(BatchMethod::Tao(scheme)),
+        _ => None,
+    }
+}
+
 fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
     use pendula::system::Energy;
     let cols = sweep.columns.len();
     let count = data.len() / cols;
     let spec = BatchSpec {
-        method: BatchMethod::Rk4,
+        method: batch_method(sweep.method).expect("a method of the ensemble engine"),
         h: sweep.h,
         steps: sweep.steps,
         stop_at_flip: sweep.until_flip,

@@ -42,6 +42,9 @@ pub struct Member {
 pub enum BatchMethod {
     /// The classical Runge–Kutta method.
     Rk4,
+    /// Tao's explicit symplectic map (tao-2, tao-4) on the Hamiltonian form (θ, p), with its
+    /// composition weights and binding constant ω (see [`crate::integrator::tao`]).
+    Tao(crate::integrator::tao::TaoScheme),
 }
 
 /// What to run: method, step and length.
@@ -149,6 +152,10 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
                 spec.stop_at_flip,
                 spec.track_flips || spec.stop_at_flip,
             ),
+            BatchMethod::Tao(scheme) => {
+                let pendulums: [DoublePendulum; LANES] = std::array::from_fn(|i| pick(i).pendulum);
+                tao_lanes(&mut lanes, &pendulums, scheme, spec.h, spec.steps, spec.stop_at_flip)
+            }
         }
         for (i, r) in results.iter_mut().enumerate() {
             *r = MemberResult {
@@ -319,4 +326,181 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
         }
     }
     lanes.state = [th1, th2, w1, w2];
+}
+
+/// The gradient (∂H/∂q₁, ∂H/∂q₂, ∂H/∂p₁, ∂H/∂p₂) of the double pendulum's Hamiltonian at
+/// (q, p) for every lane, in the expressions of `DoublePendulumForm`'s `dh_dq` and `dh_dp`
+/// (raw parameters m₁, m₂, l₁, l₂, g per lane).
+#[inline(always)]
+fn gradient<const FMA: bool>(raw: &[V; 5], q1: &V, q2: &V, p1: &V, p2: &V, out: &mut [V; 4]) {
+    for i in 0..LANES {
+        let (m1, m2, l1, l2, g) = (raw[0][i], raw[1][i], raw[2][i], raw[3][i], raw[4][i]);
+        let (s, c) = trig::sin_cos_with::<FMA>(q1[i] - q2[i]);
+        let d = m1 + m2 * s * s;
+        let (a, b) = (p1[i], p2[i]);
+        let bracket = m2 * c / (l1 * l1) * a * a - (m2 * c * c + (m1 + m2)) / (l1 * l2) * a * b
+            + (m1 + m2) * c / (l2 * l2) * b * b;
+        let coupling = s / (d * d) * bracket;
+        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA>(q1[i]);
+        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA>(q2[i]);
+        let det = m2 * l1 * l1 * l2 * l2 * d;
+        let bc = m2 * l1 * l2 * c;
+        out[2][i] = (m2 * l2 * l2 * a - bc * b) / det;
+        out[3][i] = (-bc * a + l1 * l1 * (m1 + m2) * b) / det;
+    }
+}
+
+/// Tao steps for a lane group: (θ, ω) → (q, p) with the libm cosine, the extended-space map
+/// with the branch-free trigonometry, and back.
+fn tao_lanes(
+    lanes: &mut Lanes,
+    pendulums: &[DoublePendulum; LANES],
+    scheme: crate::integrator::tao::TaoScheme,
+    h: f64,
+    steps: u64,
+    stop_at_flip: bool,
+) {
+    let mut z = [[0.0; LANES]; 4];
+    for (i, d) in pendulums.iter().enumerate() {
+        let y: [f64; 4] = std::array::from_fn(|k| lanes.state[k][i]);
+        let p = d.momenta(&y);
+        z[0][i] = y[0];
+        z[1][i] = y[1];
+        z[2][i] = p[0];
+        z[3][i] = p[1];
+    }
+    let raw: [V; 5] = std::array::from_fn(|k| {
+        std::array::from_fn(|i| {
+            let d = pendulums[i];
+            [d.m1, d.m2, d.l1, d.l2, d.g][k]
+        })
+    });
+    if has_fma() {
+        tao_kernel::<true>(lanes, &raw, &mut z, scheme, h, steps, stop_at_flip);
+    } else {
+        tao_kernel::<false>(lanes, &raw, &mut z, scheme, h, steps, stop_at_flip);
+    }
+    for (i, d) in pendulums.iter().enumerate() {
+        let mut w = [0.0; 2];
+        crate::system::Hamiltonian::dh_dp(&d.form(), 0.0, &[z[0][i], z[1][i]], &[z[2][i], z[3][i]], &mut w);
+        lanes.state[0][i] = z[0][i];
+        lanes.state[1][i] = z[1][i];
+        lanes.state[2][i] = w[0];
+        lanes.state[3][i] = w[1];
+    }
+}
+
+/// The Tao map for a lane group on (q, p) in `z`, with the copies (x, y) kept here.
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx2+fma",
+    "x86_64+avx2+fma",
+    "x86_64+avx+fma",
+    "x86_64+avx",
+    "x86_64+sse4.1",
+    "aarch64+neon"
+))]
+fn tao_kernel<const FMA: bool>(
+    lanes: &mut Lanes,
+    raw: &[V; 5],
+    z: &mut [V; 4],
+    scheme: crate::integrator::tao::TaoScheme,
+    h: f64,
+    steps: u64,
+    stop_at_flip: bool,
+) {
+    use std::f64::consts::PI;
+    let [mut q1, mut q2, mut p1, mut p2] = *z;
+    let (mut x1, mut x2, mut y1, mut y2) = (q1, q2, p1, p2);
+    let mut grad = [[0.0; LANES]; 4];
+    let mut active = [true; LANES];
+    let mut flip_step = [-1.0; LANES];
+    let (mut flip_old, mut flip_new) = ([0.0; LANES], [0.0; LANES]);
+    let mut failed_step = [-1.0; LANES];
+    for step in 0..steps {
+        let old = [q1, q2, p1, p2];
+        let (old_x, old_y) = ([x1, x2], [y1, y2]);
+        for &w in scheme.weights {
+            let half = 0.5 * w * h;
+            // φ_A(δ/2) φ_B(δ/2) φ_C(δ) φ_B(δ/2) φ_A(δ/2), δ = w h.
+            for phase in 0..5 {
+                match phase {
+                    0 | 4 => {
+                        gradient::<FMA>(raw, &q1, &q2, &y1, &y2, &mut grad);
+                        for i in 0..LANES {
+                            p1[i] -= half * grad[0][i];
+                            p2[i] -= half * grad[1][i];
+                            x1[i] += half * grad[2][i];
+                            x2[i] += half * grad[3][i];
+                        }
+                    }
+                    1 | 3 => {
+                        gradient::<FMA>(raw, &x1, &x2, &p1, &p2, &mut grad);
+                        for i in 0..LANES {
+                            q1[i] += half * grad[2][i];
+                            q2[i] += half * grad[3][i];
+                            y1[i] -= half * grad[0][i];
+                            y2[i] -= half * grad[1][i];
+                        }
+                    }
+                    _ => {
+                        let (sin, cos) = (2.0 * scheme.binding * w * h).sin_cos();
+                        for (q, p, x, y) in
+                            [(&mut q1, &mut p1, &mut x1, &mut y1), (&mut q2, &mut p2, &mut x2, &mut y2)]
+                        {
+                            for i in 0..LANES {
+                                let (sq, sp) = (q[i] + x[i], p[i] + y[i]);
+                                let (dq, dp) = (q[i] - x[i], p[i] - y[i]);
+                                let (rq, rp) = (cos * dq + sin * dp, -sin * dq + cos * dp);
+                                q[i] = 0.5 * (sq + rq);
+                                x[i] = 0.5 * (sq - rq);
+                                p[i] = 0.5 * (sp + rp);
+                                y[i] = 0.5 * (sp - rp);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let step_f = step as f64;
+        for i in 0..LANES {
+            let finite = q1[i].is_finite() & q2[i].is_finite() & p1[i].is_finite() & p2[i].is_finite();
+            let (o1, n1, o2, n2) = (old[0][i].abs(), q1[i].abs(), old[1][i].abs(), q2[i].abs());
+            let (cross1, cross2) = ((o1 <= PI) & (n1 > PI), (o2 <= PI) & (n2 > PI));
+            let flips = active[i] & finite & (cross1 | cross2) & (flip_step[i] < 0.0);
+            let use1 = cross1 & (!cross2 | ((PI - o1) * (n2 - o2) <= (PI - o2) * (n1 - o1)));
+            flip_step[i] = if flips { step_f } else { flip_step[i] };
+            flip_old[i] = if flips { if use1 { o1 } else { o2 } } else { flip_old[i] };
+            flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
+            failed_step[i] = if active[i] & !finite { step_f } else { failed_step[i] };
+            let keep = active[i] & finite;
+            // A lane that stopped keeps its state (and copy) from before this step.
+            q1[i] = if keep { q1[i] } else { old[0][i] };
+            q2[i] = if keep { q2[i] } else { old[1][i] };
+            p1[i] = if keep { p1[i] } else { old[2][i] };
+            p2[i] = if keep { p2[i] } else { old[3][i] };
+            x1[i] = if keep { x1[i] } else { old_x[0][i] };
+            x2[i] = if keep { x2[i] } else { old_x[1][i] };
+            y1[i] = if keep { y1[i] } else { old_y[0][i] };
+            y2[i] = if keep { y2[i] } else { old_y[1][i] };
+            // Unlike RK4, a flipped lane stopped here keeps the state after the flip.
+            if keep & flips & stop_at_flip {
+                active[i] = false;
+            } else {
+                active[i] = keep;
+            }
+        }
+        if !active.iter().any(|&a| a) {
+            break;
+        }
+    }
+    for i in 0..LANES {
+        if flip_step[i] >= 0.0 {
+            let fraction = (PI - flip_old[i]) / (flip_new[i] - flip_old[i]);
+            lanes.flip_time[i] = flip_step[i] * h + fraction * h;
+        }
+        if failed_step[i] >= 0.0 {
+            lanes.failed_at[i] = (failed_step[i] + 1.0) * h;
+        }
+    }
+    *z = [q1, q2, p1, p2];
 }
