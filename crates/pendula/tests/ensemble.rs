@@ -143,13 +143,15 @@ fn results_are_bitwise_identical_whatever_the_threads_and_chunks() {
 fn a_non_finite_member_is_named() {
     let mut ms = members();
     ms[13].state[2] = f64::INFINITY;
-    let spec =
-        BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips: true };
-    let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
-    let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
-    assert_eq!(err.member, 13);
-    assert_eq!(err.t, 0.01);
-    assert!(err.to_string().contains("member 13"), "{err}");
+    for track_flips in [true, false] {
+        let spec =
+            BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips };
+        let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
+        let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
+        assert_eq!(err.member, 13);
+        assert_eq!(err.t, 0.01);
+        assert!(err.to_string().contains("member 13"), "{err}");
+    }
 }
 
 /// tao-4 lanes (branch-free trigonometry) agree with the scalar tao-4 (libm) over 100 steps of

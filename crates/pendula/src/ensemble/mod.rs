@@ -207,11 +207,11 @@ fn accelerations<const FMA: bool>(p: &[V; 7], th1: &V, th2: &V, w1: &V, w2: &V, 
     }
 }
 
-/// out = y + a k, lane by lane.
+/// out = y + a k, lane by lane (fused where `FMA`).
 #[inline(always)]
-fn axpy(out: &mut V, y: &V, a: f64, k: &V) {
+fn axpy<const FMA: bool>(out: &mut V, y: &V, a: f64, k: &V) {
     for i in 0..LANES {
-        out[i] = y[i] + a * k[i];
+        out[i] = trig::madd::<FMA>(a, k[i], y[i]);
     }
 }
 
@@ -277,10 +277,10 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
         accelerations::<FMA>(&p, &th1, &th2, &w1, &w2, &mut b1[0], &mut c1[0]);
         for (s, factor) in [(1, hh), (2, hh), (3, h)] {
             let (prev_a1, prev_a2) = if s == 1 { (&b1[0], &c1[0]) } else { (&b2[s - 2], &c2[s - 2]) };
-            axpy(&mut t1, &th1, factor, &u1[s - 1]);
-            axpy(&mut t2, &th2, factor, &u2[s - 1]);
-            axpy(&mut v1, &w1, factor, prev_a1);
-            axpy(&mut v2, &w2, factor, prev_a2);
+            axpy::<FMA>(&mut t1, &th1, factor, &u1[s - 1]);
+            axpy::<FMA>(&mut t2, &th2, factor, &u2[s - 1]);
+            axpy::<FMA>(&mut v1, &w1, factor, prev_a1);
+            axpy::<FMA>(&mut v2, &w2, factor, prev_a2);
             u1[s] = v1;
             u2[s] = v2;
             let (x1, x2) = (&mut b2[s - 1], &mut c2[s - 1]);
@@ -288,7 +288,10 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
         }
         let step_f = step as f64;
         for i in 0..LANES {
-            let update = |y: f64, k: &[V; 4]| y + h6 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+            let update = |y: f64, k: &[V; 4]| {
+                let m = trig::madd::<FMA>;
+                m(h6, m(2.0, k[1][i] + k[2][i], k[0][i]) + k[3][i], y)
+            };
             let next = [update(th1[i], &u1), update(th2[i], &u2), update(w1[i], &a1), update(w2[i], &a2)];
             let finite =
                 next[0].is_finite() & next[1].is_finite() & next[2].is_finite() & next[3].is_finite();
@@ -305,14 +308,21 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
                 flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
             }
             failed_step[i] = if active[i] & !finite { step_f } else { failed_step[i] };
-            let keep = active[i] & finite;
-            th1[i] = if keep { next[0] } else { th1[i] };
-            th2[i] = if keep { next[1] } else { th2[i] };
-            w1[i] = if keep { next[2] } else { w1[i] };
-            w2[i] = if keep { next[3] } else { w2[i] };
-            active[i] = keep & !(stop_at_flip & flips);
+            if TRACK {
+                let keep = active[i] & finite;
+                th1[i] = if keep { next[0] } else { th1[i] };
+                th2[i] = if keep { next[1] } else { th2[i] };
+                w1[i] = if keep { next[2] } else { w1[i] };
+                w2[i] = if keep { next[3] } else { w2[i] };
+                active[i] = keep & !(stop_at_flip & flips);
+            } else {
+                // Nothing retires: a non-finite lane makes the whole run an error, so its
+                // state need not be kept; only the step it failed at (once) is.
+                [th1[i], th2[i], w1[i], w2[i]] = next;
+                active[i] &= finite;
+            }
         }
-        if !active.iter().any(|&a| a) {
+        if TRACK && !active.iter().any(|&a| a) {
             break;
         }
     }
