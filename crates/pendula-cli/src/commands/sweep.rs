@@ -325,9 +325,15 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
     let simd = sweep.info.name == "double" && batch_method(sweep.method).is_some();
+    let progress = Progress::new((end - start) as u64);
     pool.install(|| {
-        if simd { run_simd(&sweep, start, &mut data) } else { run_scalar(&sweep, start, &mut data) }
+        if simd {
+            run_simd(&sweep, start, &mut data, &progress)
+        } else {
+            run_scalar(&sweep, start, &mut data, &progress)
+        }
     })?;
+    progress.bar.finish_and_clear();
     let wall_s = begin.elapsed().as_secs_f64();
 
     let mut shape = sweep.shape();
@@ -412,7 +418,27 @@ fn batch_method(method: &Method) -> Option<BatchMethod> {
     }
 }
 
-fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
+/// A progress bar over the cells (invisible off a terminal), advanced in steps of 1024 cells
+/// so that counting costs nothing measurable.
+struct Progress {
+    bar: indicatif::ProgressBar,
+    done: std::sync::atomic::AtomicU64,
+}
+
+impl Progress {
+    fn new(cells: u64) -> Self {
+        Progress { bar: crate::study::progress(cells, "sweep"), done: std::sync::atomic::AtomicU64::new(0) }
+    }
+
+    fn cell_done(&self) {
+        let n = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if n.is_multiple_of(1024) {
+            self.bar.set_position(n);
+        }
+    }
+}
+
+fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) -> Result<()> {
     use pendula::system::Energy;
     let cols = sweep.columns.len();
     let count = data.len() / cols;
@@ -446,6 +472,7 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
     let store_row = |m: &Member, r: &ensemble::MemberResult, row: &mut [f64]| {
         let energy = || m.pendulum.energy(0.0, &r.state) - m.pendulum.energy(0.0, &m.state);
         store(sweep, &r.state, r.flip_time, energy, row);
+        progress.cell_done();
     };
     ensemble::run_into(count, &member, &spec, data, cols, &store_row).map_err(|e| {
         anyhow::Error::new(pendula::Error::NonFinite { t: e.t })
@@ -453,7 +480,7 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
     })
 }
 
-fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
+fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) -> Result<()> {
     let cols = sweep.columns.len();
     let angles: Vec<usize> =
         sweep.info.state.iter().enumerate().filter(|(_, q)| q.is_angle()).map(|(i, _)| i).collect();
@@ -473,6 +500,7 @@ fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64]) -> Result<()> {
             .with_context(|| format!("cell {} of the sweep", start + i))?;
         let energy = || model.energy(0.0, &report.state) - model.energy(0.0, v.initial_state());
         store(sweep, &report.state, watch.flip_time, energy, row);
+        progress.cell_done();
         Ok(())
     })
 }

@@ -108,7 +108,7 @@ const SIN_POLY: [f64; 8] = [
 
 /// sin x alone, branch-free and cheaper than [`sin_cos`]: x = qπ + r with |r| ≤ π/2 (the same
 /// three-part reduction with 2P₁, 2P₂, 2P₃), sin x = (−1)^q sin r, and sin r by the
-/// polynomial [`SIN_POLY`] — one polynomial and no select.
+/// polynomial `SIN_POLY` (degree 7 in r²) — one polynomial and no select.
 #[inline(always)]
 pub fn sin(x: f64) -> f64 {
     sin_with::<false>(x)
