@@ -24,7 +24,13 @@ struct Writer<F> {
 
 impl<F: FnMut(f64, &[f64]) -> f64> Observer for Writer<F> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = self.energy.track(s.t, s.y);
+        let e = match s.energy {
+            Some(e) => {
+                self.energy.record(e);
+                e
+            }
+            None => self.energy.track(s.t, s.y),
+        };
         if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
             let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
             if let Err(err) = self.sink.row(row) {
@@ -74,6 +80,18 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         Some(tol) => {
             let t_end = spec.schedule()?.t_end;
             model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, &mut observers)
+        }
+        // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
+        None if info.name == "double" && method.name == "rk4" => {
+            let g = |n: &str| values.get(n);
+            let pendulum = pendula::system::double::DoublePendulum {
+                m1: g("m1"),
+                m2: g("m2"),
+                l1: g("l1"),
+                l2: g("l2"),
+                g: g("g"),
+            };
+            pendula::ensemble::rk4_trajectory(&pendulum, values.initial_state(), spec, &mut observers)
         }
         None => model.solve(method, values.initial_state(), spec, &mut observers),
     };

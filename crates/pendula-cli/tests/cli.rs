@@ -26,6 +26,32 @@ fn files(dir: &Path) -> Vec<String> {
     names
 }
 
+/// `simulate double --method rk4` takes the ensemble engine's single-trajectory kernel
+/// (polynomial sine/cosine): at t = 10 s it is within 1e-10 of the bench's C reference (glibc;
+/// the library's general path matches it bit for bit, tests/schedule.rs), as the bench's own
+/// check allows for another sine; its energy error is as small as the general path's.
+#[test]
+fn fast_rk4_path_agrees_with_the_c_reference() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path())
+        .args(["simulate", "double", "--method", "rk4", "--dt", "1e-3", "--t-end", "10", "--every", "0"])
+        .args(["--summary", "-"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let s: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let reference = [-0.80261226093658078, -2.4815017590829602, -1.9522459590552914, -2.3287480204624753];
+    for (name, want) in ["theta1", "theta2", "omega1", "omega2"].iter().zip(reference) {
+        let got = s["final"][name].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-10, "{name}: {got} vs {want}");
+    }
+    assert_eq!(s["rhs_evals"], 40_000);
+    let de = s["energy"]["max_abs_error"].as_f64().unwrap();
+    assert!(de > 1e-9 && de < 1e-7, "{de}");
+}
+
 #[test]
 fn default_run_writes_trajectory_csv() {
     let dir = TempDir::new().unwrap();

@@ -342,7 +342,7 @@ pub fn solve_adaptive<M: Model>(
                 if y.iter().any(|v| !v.is_finite()) {
                     return Err(Error::NonFinite { t });
                 }
-                let sample = Sample { step: accepted, t, y: &y, last, dense: stepper.dense_output() };
+                let sample = Sample { dense: stepper.dense_output(), ..Sample::new(accepted, t, &y, last) };
                 if observer.observe(&sample).is_break() {
                     let outcome = Outcome::Stopped { steps: accepted, t };
                     return Ok(Report {
@@ -440,7 +440,7 @@ struct ToVelocities<'a, M> {
 impl<M: Model> Observer for ToVelocities<'_, M> {
     fn observe(&mut self, sample: &Sample<'_>) -> std::ops::ControlFlow<()> {
         self.model.to_velocities(sample.y, &mut self.y);
-        self.inner.observe(&Sample { y: &self.y, dense: None, ..*sample })
+        self.inner.observe(&Sample { y: &self.y, dense: None, energy: None, ..*sample })
     }
 }
 
