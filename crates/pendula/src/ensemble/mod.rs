@@ -573,23 +573,31 @@ fn energy_from(p: &[f64; 5], y: &[f64; 4], tr: &[(f64, f64); 3]) -> f64 {
 /// The accelerations of one double pendulum (the lanes' expressions, one lane) from
 /// sin(θ₁ − θ₂), cos(θ₁ − θ₂), sin θ₁, sin θ₂.
 #[inline(always)]
-fn accelerations_from(p: &[f64; 5], y: &[f64; 4], sd: f64, cd: f64, s1: f64, s2: f64) -> [f64; 4] {
+fn accelerations_from<const FMA: bool>(
+    p: &[f64; 5],
+    y: &[f64; 4],
+    sd: f64,
+    cd: f64,
+    s1: f64,
+    s2: f64,
+) -> [f64; 4] {
+    let m = trig::madd::<FMA>;
     let [m1, m2, l1, l2, g] = *p;
     let m11 = (m1 + m2) * l1;
     let m12 = m2 * l2 * cd;
     let m21 = l1 * cd;
     let m22 = l2;
-    let r1 = -m2 * l2 * y[3] * y[3] * sd - (m1 + m2) * g * s1;
-    let r2 = l1 * y[2] * y[2] * sd - g * s2;
-    let inverse = 1.0 / (m11 * m22 - m12 * m21);
-    [y[2], y[3], (r1 * m22 - m12 * r2) * inverse, (m11 * r2 - m21 * r1) * inverse]
+    let r1 = m(-m2 * l2 * y[3] * y[3], sd, -((m1 + m2) * g * s1));
+    let r2 = m(l1 * y[2] * y[2], sd, -(g * s2));
+    let inverse = 1.0 / m(m11, m22, -(m12 * m21));
+    [y[2], y[3], m(r1, m22, -(m12 * r2)) * inverse, m(m11, r2, -(m21 * r1)) * inverse]
 }
 
 /// The accelerations of one double pendulum at y.
 #[inline(always)]
 fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
     let (sd, cd) = trig::sin_cos_with::<FMA>(y[0] - y[1]);
-    accelerations_from(p, y, sd, cd, trig::sin_with::<FMA>(y[0]), trig::sin_with::<FMA>(y[1]))
+    accelerations_from::<FMA>(p, y, sd, cd, trig::sin_with::<FMA>(y[0]), trig::sin_with::<FMA>(y[1]))
 }
 
 #[multiversion::multiversion(targets(
@@ -621,7 +629,7 @@ fn trajectory_kernel<const FMA: bool>(
         let last = k == schedule.steps;
         let step = if last { schedule.last_h } else { h };
         let (hh, h6) = (0.5 * step, step / 6.0);
-        let k1 = accelerations_from(p, y, tr[0].0, tr[0].1, tr[1].0, tr[2].0);
+        let k1 = accelerations_from::<FMA>(p, y, tr[0].0, tr[0].1, tr[1].0, tr[2].0);
         let k2 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k1[c], y[c])));
         let k3 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k2[c], y[c])));
         let k4 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(step, k3[c], y[c])));
