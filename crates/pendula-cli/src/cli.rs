@@ -33,6 +33,8 @@ pub enum Command {
     OscillatorRegimes(Box<crate::commands::regimes::RegimesArgs>),
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
     Animate(Box<crate::commands::animate::AnimateArgs>),
+    /// Distance between two trajectories started close together, and its growth rate.
+    Divergence(Box<crate::commands::divergence::DivergenceArgs>),
     /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
     /// pendulum with rk4) into one .npy array, or one shard of it.
     Sweep(Box<crate::commands::sweep::SweepArgs>),

@@ -28,6 +28,7 @@ fn main() -> ExitCode {
         Command::Animate(args) => commands::animate::run(args),
         Command::Report(args) => commands::report::run(args),
         Command::Sweep(args) => commands::sweep::run(args),
+        Command::Divergence(args) => commands::divergence::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
     };

@@ -258,3 +258,39 @@ fn regress_small_run_csv() {
     0.5,0.11407908857496957,-3.076687450993198,-5.013232503852725
     ");
 }
+
+/// `pendula divergence`: for the damped oscillator the separation of two solutions is itself a
+/// solution, whose envelope decays as e^(−c t / 2m): the fitted rate is −c/2m = −0.1 (closed
+/// form); the chaotic double pendulum's separation grows at about 1/s (the bench's SPEC gives
+/// ≈ 1 s⁻¹ for its largest Lyapunov exponent from this state).
+#[test]
+fn ref_divergence_rates() {
+    let dir = TempDir::new().unwrap();
+    let run = |args: &[&str]| {
+        let mut all = args.to_vec();
+        all.extend_from_slice(&["--out-dir", "d", "--summary", "s.json"]);
+        pendula(dir.path(), &all).success();
+        json(&dir.path().join("s.json"))
+    };
+    let damped = run(&[
+        "divergence",
+        "oscillator",
+        "--set",
+        "c=0.2",
+        "--delta",
+        "1e-3",
+        "--t-end",
+        "60",
+        "--saturation",
+        "1",
+    ]);
+    let rate = damped["growth_rate"].as_f64().unwrap();
+    assert!((rate + 0.1).abs() < 0.005, "{rate}");
+    let chaotic = run(&["divergence"]);
+    let rate = chaotic["growth_rate"].as_f64().unwrap();
+    assert!((0.6..1.5).contains(&rate), "{rate}");
+    assert_eq!(header(&dir.path().join("d/divergence.csv")), "t,distance");
+    assert_eq!(png_size(&dir.path().join("d/divergence.png")), (960, 600));
+    pendula(dir.path(), &["divergence", "--delta", "0"]).code(2);
+    pendula(dir.path(), &["divergence", "--variable", "phi"]).code(2);
+}

@@ -3,6 +3,7 @@
 pub mod animate;
 pub mod compare;
 pub mod convergence;
+pub mod divergence;
 pub mod merge;
 pub mod period;
 pub mod regimes;

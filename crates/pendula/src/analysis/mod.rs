@@ -1,7 +1,8 @@
-//! Analyses of runs: convergence order, energy error and drift, largest stable step, and
-//! periods from zero crossings. Each works on any catalogued model and method.
+//! Analyses of runs: convergence order, energy error and drift, largest stable step,
+//! periods from zero crossings, and the divergence of nearby trajectories. Each works on any catalogued model and method.
 
 pub mod convergence;
+pub mod divergence;
 pub mod energy;
 pub mod period;
 pub mod stability;
@@ -10,6 +11,7 @@ pub use convergence::{
     OrderFit, REFERENCE_TOLERANCE, Reference, WorkPoint, convergence_errors, fit_order, reference_state,
     work_precision, work_precision_adaptive,
 };
+pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
 pub use energy::{EnergySeries, drift_rate, envelope, relative_error};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

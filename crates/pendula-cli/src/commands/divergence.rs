@@ -1,0 +1,130 @@
+//! `pendula divergence`: the distance between two trajectories started `--delta` apart, on a
+//! log scale against time, with the exponential growth rate fitted before it saturates.
+
+use anyhow::{Result, bail};
+use clap::Args;
+use pendula::analysis::{divergence, growth_rate};
+use pendula::integrator;
+use pendula::{End, RunSpec};
+use pendula_viz::{Figure, Kind, Legend, Scale, palette};
+use serde_json::json;
+
+use crate::config::f64_arg;
+use crate::study::{self, Common, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct DivergenceArgs {
+    /// System [default: double].
+    pub system: Option<String>,
+    /// The initial separation, added to the first state variable (or `--variable`) [default: 1e-9].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub delta: Option<String>,
+    /// The state variable to perturb [default: the first, e.g. theta1].
+    #[arg(long, value_name = "NAME")]
+    pub variable: Option<String>,
+    /// Method [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s [default: 0.001].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// End time, s [default: 30].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    /// The fit uses the distances before they first exceed this [default: 0.01].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub saturation: Option<String>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub fn run(args: &DivergenceArgs) -> Result<()> {
+    let system = args.system.as_deref().unwrap_or("double");
+    let values = study::values(system, &args.common.set)?;
+    let info = values.info();
+    let delta = f64_arg("--delta", args.delta.as_deref(), 1e-9, "a separation")?;
+    if !(delta.is_finite() && delta != 0.0) {
+        bail!("invalid --delta {delta}: must be finite and not 0");
+    }
+    let saturation = f64_arg("--saturation", args.saturation.as_deref(), 1e-2, "a distance")?;
+    if !(saturation.is_finite() && saturation > delta.abs()) {
+        bail!("invalid --saturation {saturation}: must be finite and larger than |delta| = {}", delta.abs());
+    }
+    let index = match &args.variable {
+        None => 0,
+        Some(name) => {
+            info.state.iter().position(|q| q.name == name).ok_or_else(|| pendula::Error::UnknownName {
+                system: info.name,
+                name: name.clone(),
+                valid: info.state.iter().map(|q| q.name).collect::<Vec<_>>().join(", "),
+            })?
+        }
+    };
+    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 30.0, "an end time in seconds")?;
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
+    let schedule = spec.schedule()?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
+    let model = values.build();
+    // About 2000 samples, whatever the step.
+    let every = (schedule.steps / 2000).max(1);
+    let d = divergence(&*model, method, values.initial_state(), index, delta, &spec, every)?;
+    let fit = growth_rate(&d, saturation);
+
+    let rows: Vec<Vec<String>> = d.t.iter().zip(&d.distance).map(|(t, x)| vec![num(*t), num(*x)]).collect();
+    out.csv("divergence.csv", &["t", "distance"], &rows)?;
+    let variable = info.state[index].name;
+    match fit {
+        Some(f) => println!(
+            "{system}: separation {delta:e} in {variable}; growth rate {:.4} 1/s fitted over t = {:.2} … {:.2} s",
+            f.rate, f.t_start, f.t_end
+        ),
+        None => println!(
+            "{system}: separation {delta:e} in {variable}; too few samples below --saturation to fit"
+        ),
+    }
+    let mut fig = Figure::new(
+        format!("{system}: divergence of trajectories {delta:e} apart in {variable} ({})", method.name),
+        "t (s)",
+        "distance in state space",
+    )
+    .scales(Scale::Linear, Scale::Log)
+    .legend(Legend::LowerRight);
+    let positive: Vec<(f64, f64)> =
+        d.t.iter().zip(&d.distance).filter(|(_, x)| **x > 0.0).map(|(t, x)| (*t, *x)).collect();
+    fig = fig.with("distance", palette(1), Kind::Line, positive);
+    if let Some(f) = fit {
+        // The fitted line through the fit window's mean, drawn over the window.
+        let (t0, t1) = (f.t_start, f.t_end);
+        let mean_log = {
+            let window: Vec<f64> =
+                d.t.iter()
+                    .zip(&d.distance)
+                    .filter(|(t, x)| **t >= t0 && **t <= t1 && **x > 0.0)
+                    .map(|(_, x)| x.ln())
+                    .collect();
+            window.iter().sum::<f64>() / window.len().max(1) as f64
+        };
+        let tm = 0.5 * (t0 + t1);
+        let line = |t: f64| (mean_log + f.rate * (t - tm)).exp();
+        fig = fig.with(
+            format!("fit: rate {:.3} 1/s", f.rate),
+            palette(0),
+            Kind::Dashed,
+            (0..=50).map(|k| t0 + (t1 - t0) * k as f64 / 50.0).map(|t| (t, line(t))).collect(),
+        );
+    }
+    out.figure("divergence", &fig)?;
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({
+            "system": system, "method": method.name, "dt": h, "t_end": t_end,
+            "delta": delta, "variable": variable, "saturation": saturation,
+            "growth_rate": fit.map(|f| f.rate),
+            "fit_window": fit.map(|f| [f.t_start, f.t_end]),
+        }),
+    )?;
+    out.report();
+    Ok(())
+}
