@@ -85,16 +85,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, observers)
         }
         // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
-        None if info.name == "double" && method.name == "rk4" => {
-            let g = |n: &str| values.get(n);
-            let pendulum = pendula::system::double::DoublePendulum {
-                m1: g("m1"),
-                m2: g("m2"),
-                l1: g("l1"),
-                l2: g("l2"),
-                g: g("g"),
-            };
-            pendula::ensemble::rk4_trajectory(&pendulum, values.initial_state(), spec, observers)
+        // It implements the free equations: damped or driven runs take the general path.
+        None if info.name == "double" && method.name == "rk4" && !double(values).is_forced() => {
+            pendula::ensemble::rk4_trajectory(&double(values), values.initial_state(), spec, observers)
         }
         None => model.solve(method, values.initial_state(), spec, observers),
     };
@@ -208,4 +201,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     std::io::stderr().write_all(&err)?;
     Ok(())
+}
+
+/// The double pendulum of these values (of the `double` system).
+fn double(values: &pendula::system::Values) -> pendula::system::double::DoublePendulum {
+    <pendula::system::double::DoublePendulum as pendula::system::Model>::from_values(values)
 }

@@ -91,7 +91,14 @@ fn benches(c: &mut Criterion) {
     let mut w3 = c.benchmark_group("W3 64x64 rk4 h=1e-2 100 steps, 1 thread");
     w3.sample_size(10);
     let cell = |i: usize| -std::f64::consts::PI + (i as f64 + 0.5) * (2.0 * std::f64::consts::PI / 64.0);
-    let pendulum = pendula::system::double::DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
+    let pendulum = pendula::system::double::DoublePendulum {
+        m1: 1.0,
+        m2: 1.0,
+        l1: 1.0,
+        l2: 1.0,
+        g: 9.81,
+        ..Default::default()
+    };
     let members: Vec<Member> =
         (0..64 * 64).map(|c| Member { pendulum, state: [cell(c % 64), cell(c / 64), 0.0, 0.0] }).collect();
     let spec =

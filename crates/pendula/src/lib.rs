@@ -22,7 +22,7 @@
 //! use pendula::system::{Energy, double::DoublePendulum};
 //! use pendula::{End, RunSpec, Simulation};
 //!
-//! let pendulum = DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
+//! let pendulum = DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81, ..Default::default() };
 //! let Scheme::ExplicitRk(tableau) = RK4.scheme else { unreachable!() };
 //! let mut y = [120f64.to_radians(), -10f64.to_radians(), 0.0, 0.0];
 //! let mut energy = EnergyTracker::new(|t, y: &[f64]| pendulum.energy(t, y));

@@ -47,7 +47,14 @@ fn ref_sine_and_cosine_are_within_two_ulps_of_the_platform() {
 fn members() -> Vec<Member> {
     let mut out = Vec::new();
     for (i, (a, b)) in samples(21, -3.0, 3.0).zip(samples(21, -2.0, 2.5).skip(3)).enumerate() {
-        let pendulum = DoublePendulum { m1: 1.0, m2: 0.5 + 0.1 * i as f64, l1: 1.0, l2: 0.7, g: 9.81 };
+        let pendulum = DoublePendulum {
+            m1: 1.0,
+            m2: 0.5 + 0.1 * i as f64,
+            l1: 1.0,
+            l2: 0.7,
+            g: 9.81,
+            ..Default::default()
+        };
         out.push(Member { pendulum, state: [a, b, 0.1 * i as f64 - 1.0, 0.3] });
     }
     out
@@ -147,7 +154,9 @@ fn a_non_finite_member_is_named() {
         let spec =
             BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips };
         let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
-        let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
+        let ensemble::EnsembleError::NonFinite(err) = ensemble::run(&ms, &spec, &mut out).unwrap_err() else {
+            panic!("expected a non-finite member")
+        };
         assert_eq!(err.member, 13);
         assert_eq!(err.t, 0.01);
         assert!(err.to_string().contains("member 13"), "{err}");

@@ -18,6 +18,7 @@ fn pendulum() -> impl Strategy<Value = DoublePendulum> {
         l1,
         l2,
         g,
+        ..Default::default()
     })
 }
 
@@ -99,7 +100,7 @@ proptest! {
 /// enough that the two discretizations differ by less than 1e-12.
 #[test]
 fn ref_lagrangian_and_hamiltonian_forms_agree_over_10_s() {
-    let sys = DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81 };
+    let sys = DoublePendulum { m1: 1.0, m2: 1.0, l1: 1.0, l2: 1.0, g: 9.81, ..Default::default() };
     let form = sys.form();
     let Scheme::ExplicitRk(tableau) = RK4.scheme else { unreachable!() };
     let spec = RunSpec { t0: 0.0, h: 2e-4, end: End::Time(10.0) };

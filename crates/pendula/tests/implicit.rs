@@ -55,7 +55,7 @@ proptest! {
         (m1, m2, l1, l2, g) in (0.2..5.0, 0.2..5.0, 0.2..3.0, 0.2..3.0, 1.0..20.0),
         y in (-4.0..4.0, -4.0..4.0, -5.0..5.0, -5.0..5.0),
     ) {
-        let model = DoublePendulum { m1, m2, l1, l2, g };
+        let model = DoublePendulum { m1, m2, l1, l2, g, ..Default::default() };
         let y = [y.0, y.1, y.2, y.3];
         check_jacobian("double", &model, 0.0, &y);
         check_jacobian("double (Hamiltonian form)", &model.form(), 0.0, &y);

@@ -15,6 +15,7 @@ mod energy;
 mod ensemble;
 mod events;
 mod exact;
+mod forced;
 mod formulations;
 mod implicit;
 mod schedule;

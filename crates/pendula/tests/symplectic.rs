@@ -15,7 +15,7 @@ use pendula::system::double::{DoublePendulum, DoublePendulumForm};
 const H: f64 = 0.01;
 
 fn form() -> DoublePendulumForm {
-    DoublePendulum { m1: 1.0, m2: 1.5, l1: 1.0, l2: 0.8, g: 9.81 }.form()
+    DoublePendulum { m1: 1.0, m2: 1.5, l1: 1.0, l2: 0.8, g: 9.81, ..Default::default() }.form()
 }
 
 /// States (θ₁, θ₂, p₁, p₂) to test at.

@@ -324,7 +324,13 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let simd = sweep.info.name == "double" && batch_method(sweep.method).is_some();
+    // The lane kernels implement the free double pendulum: any damping or drive, in the base
+    // values or along an axis, takes the scalar path.
+    let forcing = ["damping", "drive_amplitude"];
+    let forced = sweep.info.name == "double"
+        && (forcing.iter().any(|n| sweep.info.values(&sweep.base).is_ok_and(|v| v.get(n) != 0.0))
+            || sweep.axes.iter().any(|a| forcing.contains(&a.name.as_str())));
+    let simd = sweep.info.name == "double" && batch_method(sweep.method).is_some() && !forced;
     let progress = Progress::new((end - start) as u64);
     pool.install(|| {
         if simd {
@@ -449,12 +455,12 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) 
         stop_at_flip: sweep.until_flip,
         track_flips: sweep.records.contains(&Record::FlipTime),
     };
-    // The cell's 9 values in catalogue order (m1, m2, l1, l2, g, θ1, θ2, ω1, ω2), from the base
-    // values and the axes: no allocation per cell. Cell values are in their domains (checked
-    // at the corners).
+    // The cell's values in catalogue order (m1, m2, l1, l2, g, damping, drive_amplitude,
+    // drive_frequency, θ1, θ2, ω1, ω2), from the base values and the axes: no allocation per
+    // cell. Cell values are in their domains (checked at the corners).
     let names: Vec<&str> = sweep.info.quantities().map(|q| q.name).collect();
     let base_values = sweep.info.values(&sweep.base)?;
-    let base: [f64; 9] = std::array::from_fn(|k| base_values.get(names[k]));
+    let base: [f64; 12] = std::array::from_fn(|k| base_values.get(names[k]));
     let slots: Vec<usize> =
         sweep.axes.iter().map(|a| names.iter().position(|n| *n == a.name).expect("a checked name")).collect();
     let member = |i: usize| {
@@ -465,8 +471,15 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) 
             rest /= axis.n;
         }
         Member {
-            pendulum: DoublePendulum { m1: v[0], m2: v[1], l1: v[2], l2: v[3], g: v[4] },
-            state: [v[5], v[6], v[7], v[8]],
+            pendulum: DoublePendulum {
+                m1: v[0],
+                m2: v[1],
+                l1: v[2],
+                l2: v[3],
+                g: v[4],
+                ..Default::default()
+            },
+            state: [v[8], v[9], v[10], v[11]],
         }
     };
     let store_row = |m: &Member, r: &ensemble::MemberResult, row: &mut [f64]| {
@@ -474,9 +487,10 @@ fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) 
         store(sweep, &r.state, r.flip_time, energy, row);
         progress.cell_done();
     };
-    ensemble::run_into(count, &member, &spec, data, cols, &store_row).map_err(|e| {
-        anyhow::Error::new(pendula::Error::NonFinite { t: e.t })
-            .context(format!("cell {} of the sweep", start + e.member))
+    ensemble::run_into(count, &member, &spec, data, cols, &store_row).map_err(|e| match e {
+        ensemble::EnsembleError::NonFinite(e) => anyhow::Error::new(pendula::Error::NonFinite { t: e.t })
+            .context(format!("cell {} of the sweep", start + e.member)),
+        other => anyhow::Error::new(other),
     })
 }
 

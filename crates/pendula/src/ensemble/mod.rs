@@ -83,11 +83,30 @@ pub struct NonFiniteMember {
     pub t: f64,
 }
 
+/// Why an ensemble run failed.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum EnsembleError {
+    /// A member's state became non-finite.
+    #[error(transparent)]
+    NonFinite(#[from] NonFiniteMember),
+    /// A member has damping or a drive, which the lane kernels do not implement (they
+    /// integrate the free double pendulum); such members run on the scalar path
+    /// ([`crate::solve`]).
+    #[error(
+        "member {member} is damped or driven; the ensemble kernels integrate the free double pendulum only (run it with pendula::solve)"
+    )]
+    Forced {
+        /// Index of the member.
+        member: usize,
+    },
+}
+
 /// Runs every member, in parallel on rayon's current pool, writing `out[i]` for `members[i]`.
 ///
 /// # Errors
-/// The first member (in index order) whose state became non-finite.
-pub fn run(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> Result<(), NonFiniteMember> {
+/// The first member (in index order) that is damped or driven, or else whose state became
+/// non-finite.
+pub fn run(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> Result<(), EnsembleError> {
     assert_eq!(members.len(), out.len(), "one result per member");
     run_into(members.len(), &|i| members[i], spec, out, 1, &|_, r, row| row[0] = *r)
 }
@@ -97,7 +116,8 @@ pub fn run(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> Re
 /// `row_len` values): memory beyond `out` is a few chunks per thread, whatever the count.
 ///
 /// # Errors
-/// The first member (in index order) whose state became non-finite.
+/// The first member (in index order) that is damped or driven, or else whose state became
+/// non-finite.
 pub fn run_into<T: Send>(
     count: usize,
     member: &(dyn Fn(usize) -> Member + Sync),
@@ -105,8 +125,11 @@ pub fn run_into<T: Send>(
     out: &mut [T],
     row_len: usize,
     store: &(dyn Fn(&Member, &MemberResult, &mut [T]) + Sync),
-) -> Result<(), NonFiniteMember> {
+) -> Result<(), EnsembleError> {
     assert_eq!(out.len(), count * row_len, "one row per member");
+    if let Some(member) = (0..count).find(|&i| member(i).pendulum.is_forced()) {
+        return Err(EnsembleError::Forced { member });
+    }
     let failures: Vec<NonFiniteMember> = out
         .par_chunks_mut(CHUNK * row_len)
         .enumerate()
@@ -122,7 +145,7 @@ pub fn run_into<T: Send>(
         })
         .collect();
     match failures.into_iter().min_by_key(|e| e.member) {
-        Some(e) => Err(e),
+        Some(e) => Err(e.into()),
         None => Ok(()),
     }
 }
@@ -524,13 +547,26 @@ fn tao_kernel<const FMA: bool>(
 /// t = 10 s on the chaotic default orbit).
 ///
 /// # Errors
-/// An invalid `spec`; [`crate::Error::NonFinite`] at the first non-finite state.
+/// A damped or driven pendulum ([`crate::Error::UnmetRequirement`]: the kernel implements
+/// the free equations); an invalid `spec`; [`crate::Error::NonFinite`] at the first
+/// non-finite state.
 pub fn rk4_trajectory(
     pendulum: &DoublePendulum,
     y0: &[f64],
     spec: &crate::RunSpec,
     observer: &mut dyn crate::observe::Observer,
 ) -> Result<crate::Report, crate::Error> {
+    if pendulum.is_forced() {
+        return Err(crate::Error::UnmetRequirement {
+            method: "ensemble::rk4_trajectory",
+            needs: "an undamped, undriven double pendulum",
+            reason: format!(
+                "this one has damping = {} and drive_amplitude = {}",
+                pendulum.damping, pendulum.drive_amplitude
+            ),
+            suggestion: "pendula::solve with RK4",
+        });
+    }
     let schedule = spec.schedule()?;
     let mut y: [f64; 4] = y0.try_into().expect("four state variables");
     if y.iter().any(|v| !v.is_finite()) {

@@ -25,6 +25,29 @@ pub struct DoublePendulum {
     pub l2: f64,
     /// Gravitational acceleration g, m/s².
     pub g: f64,
+    /// Viscous friction coefficient b at both joints, N m s/rad: torques −b θ̇₁ at the pivot
+    /// and −b (θ̇₂ − θ̇₁) at the elbow (on the second rod; its reaction on the first).
+    pub damping: f64,
+    /// Amplitude A of the driving torque A cos(Ω t) on the first rod, N m.
+    pub drive_amplitude: f64,
+    /// Angular frequency Ω of the drive, rad/s.
+    pub drive_frequency: f64,
+}
+
+impl Default for DoublePendulum {
+    /// The catalogue's defaults: unit masses and lengths, g = 9.81 m/s², no damping or drive.
+    fn default() -> Self {
+        DoublePendulum {
+            m1: 1.0,
+            m2: 1.0,
+            l1: 1.0,
+            l2: 1.0,
+            g: 9.81,
+            damping: 0.0,
+            drive_amplitude: 0.0,
+            drive_frequency: 0.0,
+        }
+    }
 }
 
 /// Catalogue entry of [`DoublePendulum`].
@@ -66,6 +89,27 @@ pub static INFO: SystemInfo = SystemInfo {
             default: 9.81,
             domain: Domain::Positive,
             description: "gravitational acceleration",
+        },
+        Quantity {
+            name: "damping",
+            unit: "N m s",
+            default: 0.0,
+            domain: Domain::NonNegative,
+            description: "viscous friction b at both joints: torques -b w1 (pivot), -b (w2 - w1) (elbow)",
+        },
+        Quantity {
+            name: "drive_amplitude",
+            unit: "N m",
+            default: 0.0,
+            domain: Domain::Real,
+            description: "amplitude A of the driving torque A cos(W t) on the first rod",
+        },
+        Quantity {
+            name: "drive_frequency",
+            unit: "rad/s",
+            default: 0.0,
+            domain: Domain::NonNegative,
+            description: "angular frequency W of the drive",
         },
     ],
     state: &[
@@ -116,13 +160,36 @@ pub struct MatrixForm {
 impl DoublePendulum {
     /// M, C and G at state y (paper (73)–(75)).
     pub fn matrix_form(&self, y: &[f64]) -> MatrixForm {
-        let Self { m1, m2, l1, l2, g } = *self;
+        let Self { m1, m2, l1, l2, g, .. } = *self;
         let (s, c) = (y[0] - y[1]).sin_cos();
         let b = m2 * l1 * l2;
         MatrixForm {
             mass: [[l1 * l1 * (m1 + m2), b * c], [b * c, m2 * l2 * l2]],
             coriolis: [b * y[3] * y[3] * s, -b * y[2] * y[2] * s],
             gravity: [g * l1 * (m1 + m2) * y[0].sin(), m2 * g * l2 * y[1].sin()],
+        }
+    }
+
+    /// Whether damping or a drive acts (then the energy is not conserved, and the ensemble
+    /// engine's kernels, which implement the free equations, do not apply).
+    pub fn is_forced(&self) -> bool {
+        self.damping != 0.0 || self.drive_amplitude != 0.0
+    }
+
+    /// The generalized forces (Q₁, Q₂) of the joint friction and the drive at time t, N m:
+    /// Q₁ = −b ω₁ + b (ω₂ − ω₁) + A cos(Ω t), Q₂ = −b (ω₂ − ω₁). They enter the right-hand
+    /// side of the Euler–Lagrange equations, M θ'' + C + G = Q.
+    pub fn generalized_forces(&self, t: f64, w1: f64, w2: f64) -> [f64; 2] {
+        let b = self.damping;
+        [b * (w2 - 2.0 * w1) + self.drive(t), -b * (w2 - w1)]
+    }
+
+    /// The driving torque A cos(Ω t) on the first rod, N m.
+    pub fn drive(&self, t: f64) -> f64 {
+        if self.drive_amplitude == 0.0 {
+            0.0
+        } else {
+            self.drive_amplitude * (self.drive_frequency * t).cos()
         }
     }
 
@@ -144,7 +211,7 @@ impl DoublePendulum {
 
     /// Potential energy V (46), J; zero when both rods are horizontal at the pivot's height.
     pub fn potential(&self, theta1: f64, theta2: f64) -> f64 {
-        let Self { m1, m2, l1, l2, g } = *self;
+        let Self { m1, m2, l1, l2, g, .. } = *self;
         -(m1 + m2) * g * l1 * cos(theta1) - m2 * g * l2 * cos(theta2)
     }
 
@@ -160,14 +227,17 @@ impl DoublePendulum {
 
     /// The Lagrangian right-hand side (the expressions of [`System::rhs`]) over any number
     /// type, for its Jacobian by forward-mode automatic differentiation (num-dual).
-    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, y: [T; 4]) -> [T; 4] {
-        let Self { m1, m2, l1, l2, g } = *self;
+    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, t: f64, y: [T; 4]) -> [T; 4] {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
         let [th1, th2, w1, w2] = y;
         let (sd, cd) = (th1 - th2).sin_cos();
         let (m11, m22) = (T::from((m1 + m2) * l1), T::from(l2));
         let (m12, m21) = (cd * (m2 * l2), cd * l1);
-        let r1 = w2 * w2 * sd * (-m2 * l2) - th1.sin() * ((m1 + m2) * g);
-        let r2 = w1 * w1 * sd * l1 - th2.sin() * g;
+        // The forces enter before M⁻¹, which depends on θ: both stay in the Jacobian.
+        let b = self.damping;
+        let r1 = w2 * w2 * sd * (-m2 * l2) - th1.sin() * ((m1 + m2) * g)
+            + (w2 * b - w1 * (2.0 * b) + self.drive(t)) / l1;
+        let r2 = w1 * w1 * sd * l1 - th2.sin() * g - (w2 - w1) * b / (m2 * l2);
         let det = m11 * m22 - m12 * m21;
         [w1, w2, (r1 * m22 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det]
     }
@@ -196,10 +266,22 @@ impl Model for DoublePendulum {
     const INFO: &'static SystemInfo = &INFO;
 
     fn from_values(v: &Values) -> Self {
-        DoublePendulum { m1: v.get("m1"), m2: v.get("m2"), l1: v.get("l1"), l2: v.get("l2"), g: v.get("g") }
+        DoublePendulum {
+            m1: v.get("m1"),
+            m2: v.get("m2"),
+            l1: v.get("l1"),
+            l2: v.get("l2"),
+            g: v.get("g"),
+            damping: v.get("damping"),
+            drive_amplitude: v.get("drive_amplitude"),
+            drive_frequency: v.get("drive_frequency"),
+        }
     }
 
     fn hamiltonian_form(&self) -> Result<DoublePendulumForm, String> {
+        if self.damping != 0.0 {
+            return Err(format!("the double pendulum with damping = {} is not Hamiltonian", self.damping));
+        }
         Ok(self.form())
     }
 
@@ -226,8 +308,8 @@ impl System for DoublePendulum {
     /// equation divided by l₁ and the second by m₂ l₂. The expression order is the one
     /// `shared/bench/SPEC.md` fixes, so that without FMA the result is bit-identical to the
     /// benchmark peers.
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        let Self { m1, m2, l1, l2, g } = *self;
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
         let (th1, th2, w1, w2) = (y[0], y[1], y[2], y[3]);
         let d = th1 - th2;
         let (sd, cd) = (d.sin(), d.cos());
@@ -236,8 +318,14 @@ impl System for DoublePendulum {
         let m12 = m2 * l2 * cd;
         let m21 = l1 * cd;
         let m22 = l2;
-        let r1 = -m2 * l2 * w2 * w2 * sd - (m1 + m2) * g * s1;
-        let r2 = l1 * w1 * w1 * sd - g * s2;
+        let mut r1 = -m2 * l2 * w2 * w2 * sd - (m1 + m2) * g * s1;
+        let mut r2 = l1 * w1 * w1 * sd - g * s2;
+        // Tested, not assumed zero: the unforced expressions stay bit-identical to the spec's.
+        if self.is_forced() {
+            let [q1, q2] = self.generalized_forces(t, w1, w2);
+            r1 += q1 / l1;
+            r2 += q2 / (m2 * l2);
+        }
         let det = m11 * m22 - m12 * m21;
         dydt[0] = w1;
         dydt[1] = w2;
@@ -245,8 +333,8 @@ impl System for DoublePendulum {
         dydt[3] = (m11 * r2 - m21 * r1) / det;
     }
 
-    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
-        dual_jacobian(|y| self.rhs_generic(y), y, jac);
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        dual_jacobian(|y| self.rhs_generic(t, y), y, jac);
         true
     }
 }
@@ -283,7 +371,7 @@ impl DoublePendulumForm {
     /// Hamilton's equations (∂H/∂p, −∂H/∂q) with the expressions of [`Hamiltonian::dh_dq`]
     /// and [`Hamiltonian::dh_dp`], over any number type (for the Jacobian).
     fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, y: [T; 4]) -> [T; 4] {
-        let DoublePendulum { m1, m2, l1, l2, g } = self.pendulum;
+        let DoublePendulum { m1, m2, l1, l2, g, .. } = self.pendulum;
         let [q1, q2, p1, p2] = y;
         let (s, c) = (q1 - q2).sin_cos();
         let d = s * s * m2 + m1;
@@ -303,15 +391,16 @@ impl DoublePendulumForm {
 
 impl Hamiltonian for DoublePendulumForm {
     /// ∂H/∂θ = −ṗ from (108) and (109).
-    fn dh_dq(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
-        let DoublePendulum { m1, m2, l1, l2, g } = self.pendulum;
+    fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        let DoublePendulum { m1, m2, l1, l2, g, .. } = self.pendulum;
         let (s, c) = (q[0] - q[1]).sin_cos();
         let d = m1 + m2 * s * s;
         let (p1, p2) = (p[0], p[1]);
         let bracket = m2 * c / (l1 * l1) * p1 * p1 - (m2 * c * c + (m1 + m2)) / (l1 * l2) * p1 * p2
             + (m1 + m2) * c / (l2 * l2) * p2 * p2;
         let coupling = s / (d * d) * bracket;
-        out[0] = -coupling + (m1 + m2) * g * l1 * q[0].sin();
+        // A drive adds −θ₁ A cos(Ω t) to H (the form exists only without damping).
+        out[0] = -coupling + (m1 + m2) * g * l1 * q[0].sin() - self.pendulum.drive(t);
         out[1] = coupling + m2 * g * l2 * q[1].sin();
     }
 
