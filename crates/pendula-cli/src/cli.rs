@@ -42,7 +42,8 @@ pub enum Command {
     Merge(Box<crate::commands::merge::MergeArgs>),
     /// The paper's whole numerical study as one self-contained HTML page.
     Report(Box<crate::commands::report::ReportArgs>),
-    /// List the systems or the methods, with parameters, units, defaults and requirements.
+    /// List the systems, the methods or the presets, with parameters, units, defaults,
+    /// requirements and sources.
     List {
         /// What to list.
         what: ListWhat,
@@ -53,6 +54,7 @@ pub enum Command {
 pub enum ListWhat {
     Systems,
     Methods,
+    Presets,
 }
 
 #[derive(Debug, Args)]
@@ -91,6 +93,10 @@ pub struct SimulateArgs {
     /// Angles take a `deg` suffix (bare numbers are radians) or a `pi` suffix.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// Start from a named preset (see `pendula list presets`); it picks the system, and
+    /// --set applies over it.
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
     /// TOML scenario with the same names (keys system, method, dt, t_end or steps, every,
     /// out, summary, and a `[set]` table); flags override it.
     #[arg(long, value_name = "FILE.toml")]

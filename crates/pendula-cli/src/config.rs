@@ -143,6 +143,19 @@ pub fn parse_settings(info: &SystemInfo, items: &[String]) -> Result<Vec<(String
         .collect()
 }
 
+/// The settings of `preset`, which must be for the system `info`.
+pub fn preset_settings(info: &SystemInfo, preset: &system::driven::Preset) -> Result<Vec<(String, f64)>> {
+    if preset.system != info.name {
+        bail!(
+            "invalid --preset `{}`: it is for the system {}, not {}",
+            preset.name,
+            preset.system,
+            info.name
+        );
+    }
+    Ok(preset.settings.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect())
+}
+
 /// An optional floating-point flag: parsed when given, `default` otherwise.
 pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
     text.map_or(Ok(default), |t| parse_number(flag, t, expected))
@@ -159,7 +172,13 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         Some(path) => read_scenario(path)?,
         None => Scenario::default(),
     };
-    let system_name = args.system.clone().or(scenario.system).unwrap_or_else(|| "double".into());
+    let preset = args.preset.as_deref().map(system::driven::find_preset).transpose()?;
+    let system_name = args
+        .system
+        .clone()
+        .or(scenario.system)
+        .or_else(|| preset.map(|p| p.system.to_owned()))
+        .unwrap_or_else(|| "double".into());
     let info: &'static SystemInfo = system::find(&system_name)?;
     let mut method =
         *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
@@ -168,7 +187,10 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         method = method.with_binding(omega)?;
     }
 
-    let mut settings = Vec::new();
+    let mut settings = match preset {
+        Some(p) => preset_settings(info, p)?,
+        None => Vec::new(),
+    };
     for (name, value) in &scenario.set {
         let q = info.quantity(name)?;
         settings.push((name.clone(), toml_value(name, value, q)?));

@@ -1,4 +1,4 @@
-//! `pendula list systems|methods`: everything read from the library's registries.
+//! `pendula list systems|methods|presets`: everything read from the library's registries.
 
 use std::io::Write;
 
@@ -38,6 +38,14 @@ pub fn run(what: ListWhat) -> Result<()> {
                         )?;
                     }
                 }
+            }
+        }
+        ListWhat::Presets => {
+            for p in pendula::system::driven::PRESETS {
+                let settings: Vec<String> = p.settings.iter().map(|(n, v)| format!("{n}={v}")).collect();
+                writeln!(out, "{:<26} {:<16} {}", p.name, p.system, settings.join(" "))?;
+                writeln!(out, "{:<26} {}", "", p.description)?;
+                writeln!(out, "{:<26} source: {}", "", p.source)?;
             }
         }
         ListWhat::Methods => {

@@ -23,6 +23,14 @@ pub enum Error {
         /// The valid names, comma-separated.
         valid: String,
     },
+    /// No preset of this name is in [`crate::system::driven::PRESETS`].
+    #[error("unknown preset `{name}`; valid presets: {valid}")]
+    UnknownPreset {
+        /// The name asked for.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+    },
     /// The system has no parameter or state variable of this name.
     #[error("unknown name `{name}` for system `{system}`; valid names: {valid}")]
     UnknownName {

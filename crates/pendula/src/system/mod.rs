@@ -7,6 +7,7 @@
 //! object-safe face for the command line.
 
 pub mod double;
+pub mod driven;
 pub mod oscillator;
 pub mod pendulum;
 
@@ -146,7 +147,7 @@ impl std::fmt::Debug for SystemInfo {
 }
 
 /// Every system pendula knows, in the order `pendula list systems` shows them.
-pub static CATALOGUE: &[&SystemInfo] = &[&oscillator::INFO, &pendulum::INFO, &double::INFO];
+pub static CATALOGUE: &[&SystemInfo] = &[&oscillator::INFO, &pendulum::INFO, &double::INFO, &driven::INFO];
 
 /// Looks a system up by name.
 pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {

@@ -1,0 +1,189 @@
+//! The damped, driven pendulum in the dimensionless form of Baker and Gollub, and its
+//! classic regimes as named [`PRESETS`].
+//!
+//! Reference: G. L. Baker and J. P. Gollub, *Chaotic Dynamics: An Introduction*, 2nd ed.,
+//! Cambridge University Press (1996), ch. 3 and 4:
+//! dω/dt = −ω/q − sin θ + g cos(ω_D t), with time in units of 1/ω₀ = √(l/g_grav) and
+//! q = 2, ω_D = 2/3 throughout their study, the drive amplitude g choosing the regime.
+
+use super::pendulum::PendulumForm;
+use super::{Domain, Energy, Model, Quantity, System, SystemInfo, Values};
+
+/// The damped, driven pendulum θ'' = −θ'/q − sin θ + g cos(ω_D t), dimensionless: time in
+/// units of 1/ω₀, energy in units of m g l.
+///
+/// State y = (θ, ω). Damped, so it has no Hamiltonian form; its Lyapunov spectrum sums to
+/// the trace of the Jacobian, −1/q.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrivenPendulum {
+    /// Quality factor q (the damping rate is 1/q).
+    pub q: f64,
+    /// Drive amplitude g.
+    pub drive_amplitude: f64,
+    /// Drive angular frequency ω_D, in units of ω₀.
+    pub drive_frequency: f64,
+}
+
+/// Catalogue entry of [`DrivenPendulum`]; the defaults are Baker and Gollub's chaotic
+/// regime (q = 2, g = 1.5, ω_D = 2/3).
+pub static INFO: SystemInfo = SystemInfo {
+    name: "driven-pendulum",
+    description: "damped driven pendulum w' = -w/q - sin th + g cos(wD t), dimensionless (Baker & Gollub 1996)",
+    parameters: &[
+        Quantity {
+            name: "q",
+            unit: "1",
+            default: 2.0,
+            domain: Domain::Positive,
+            description: "quality factor (damping rate 1/q)",
+        },
+        Quantity {
+            name: "drive_amplitude",
+            unit: "1",
+            default: 1.5,
+            domain: Domain::Real,
+            description: "drive amplitude g (in units of m g l)",
+        },
+        Quantity {
+            name: "drive_frequency",
+            unit: "1",
+            default: 2.0 / 3.0,
+            domain: Domain::Positive,
+            description: "drive angular frequency wD (in units of the small-angle frequency)",
+        },
+    ],
+    state: &[
+        Quantity {
+            name: "theta",
+            unit: "rad",
+            default: 0.2,
+            domain: Domain::Real,
+            description: "angle from the downward vertical",
+        },
+        Quantity {
+            name: "omega",
+            unit: "1",
+            default: 0.0,
+            domain: Domain::Real,
+            description: "angular velocity (in units of the small-angle frequency)",
+        },
+    ],
+    build: |v| Box::new(DrivenPendulum::from_values(v)),
+};
+
+/// A named set of values for a catalogued system, with where it comes from.
+#[derive(Debug, Clone, Copy)]
+pub struct Preset {
+    /// Name used on the command line (`--preset`).
+    pub name: &'static str,
+    /// The system it applies to.
+    pub system: &'static str,
+    /// (name, value) settings applied over the system's defaults.
+    pub settings: &'static [(&'static str, f64)],
+    /// What to expect, in words.
+    pub description: &'static str,
+    /// The source of the values.
+    pub source: &'static str,
+}
+
+const BAKER_GOLLUB: &str =
+    "Baker & Gollub, Chaotic Dynamics: An Introduction, 2nd ed. (1996), ch. 3-4: q = 2, wD = 2/3";
+
+/// Every preset, in the order `pendula list presets` shows them: the regimes of Baker and
+/// Gollub's driven pendulum as the drive amplitude g rises (each checked by the sign of its
+/// largest Lyapunov exponent in the tests).
+pub static PRESETS: &[Preset] = &[
+    Preset {
+        name: "baker-gollub-periodic",
+        system: "driven-pendulum",
+        settings: &[("q", 2.0), ("drive_amplitude", 0.9), ("drive_frequency", 2.0 / 3.0)],
+        description: "g = 0.9: periodic, one cycle per drive period",
+        source: BAKER_GOLLUB,
+    },
+    Preset {
+        name: "baker-gollub-period-2",
+        system: "driven-pendulum",
+        settings: &[("q", 2.0), ("drive_amplitude", 1.07), ("drive_frequency", 2.0 / 3.0)],
+        description: "g = 1.07: period doubled, two drive periods per cycle",
+        source: BAKER_GOLLUB,
+    },
+    Preset {
+        name: "baker-gollub-chaotic",
+        system: "driven-pendulum",
+        settings: &[("q", 2.0), ("drive_amplitude", 1.15), ("drive_frequency", 2.0 / 3.0)],
+        description: "g = 1.15: chaotic",
+        source: BAKER_GOLLUB,
+    },
+    Preset {
+        name: "baker-gollub-chaotic-1.5",
+        system: "driven-pendulum",
+        settings: &[("q", 2.0), ("drive_amplitude", 1.5), ("drive_frequency", 2.0 / 3.0)],
+        description: "g = 1.5: chaotic, the book's strange attractor (the system's defaults)",
+        source: BAKER_GOLLUB,
+    },
+];
+
+/// Looks a preset up by name.
+pub fn find_preset(name: &str) -> Result<&'static Preset, crate::Error> {
+    PRESETS.iter().find(|p| p.name == name).ok_or_else(|| crate::Error::UnknownPreset {
+        name: name.to_owned(),
+        valid: PRESETS.iter().map(|p| p.name).collect::<Vec<_>>().join(", "),
+    })
+}
+
+impl DrivenPendulum {
+    /// The drive g cos(ω_D t).
+    fn drive(&self, t: f64) -> f64 {
+        self.drive_amplitude * (self.drive_frequency * t).cos()
+    }
+}
+
+impl Model for DrivenPendulum {
+    /// Never built: the damped pendulum has no Hamiltonian form.
+    type Form = PendulumForm;
+    const INFO: &'static SystemInfo = &INFO;
+
+    fn from_values(v: &Values) -> Self {
+        DrivenPendulum {
+            q: v.get("q"),
+            drive_amplitude: v.get("drive_amplitude"),
+            drive_frequency: v.get("drive_frequency"),
+        }
+    }
+
+    fn hamiltonian_form(&self) -> Result<PendulumForm, String> {
+        Err(format!("the driven pendulum is damped (q = {}) and so not Hamiltonian", self.q))
+    }
+
+    /// p = ω in these units.
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]) {
+        z[..2].copy_from_slice(&y[..2]);
+    }
+
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
+        y[..2].copy_from_slice(&z[..2]);
+    }
+}
+
+impl System for DrivenPendulum {
+    fn dim(&self) -> usize {
+        2
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[1];
+        dydt[1] = -y[1] / self.q - y[0].sin() + self.drive(t);
+    }
+
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        jac.copy_from_slice(&[0.0, 1.0, -y[0].cos(), -1.0 / self.q]);
+        true
+    }
+}
+
+impl Energy for DrivenPendulum {
+    /// ½ ω² − cos θ, in units of m g l (−1 at rest at the bottom).
+    fn energy(&self, _t: f64, y: &[f64]) -> f64 {
+        0.5 * y[1] * y[1] - y[0].cos()
+    }
+}
