@@ -35,6 +35,9 @@ pub enum Command {
     Animate(Box<crate::commands::animate::AnimateArgs>),
     /// Distance between two trajectories started close together, and its growth rate.
     Divergence(Box<crate::commands::divergence::DivergenceArgs>),
+    /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
+    /// plot of the running estimate and an uncertainty.
+    Lyapunov(Box<crate::commands::lyapunov::LyapunovArgs>),
     /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
     /// pendulum with rk4) into one .npy array, or one shard of it.
     Sweep(Box<crate::commands::sweep::SweepArgs>),

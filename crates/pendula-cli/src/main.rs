@@ -29,6 +29,7 @@ fn main() -> ExitCode {
         Command::Report(args) => commands::report::run(args),
         Command::Sweep(args) => commands::sweep::run(args),
         Command::Divergence(args) => commands::divergence::run(args),
+        Command::Lyapunov(args) => commands::lyapunov::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
     };

@@ -76,6 +76,26 @@ pub fn values(system: &str, set: &[String]) -> Result<Values> {
     Ok(info.values(&parse_settings(info, set)?)?)
 }
 
+/// Validated values from an optional system name, an optional `--preset` (which picks the
+/// system when none is named) and `--set` items over it; `default` names the system when
+/// neither does.
+pub fn preset_values(
+    system: Option<&str>,
+    preset: Option<&str>,
+    set: &[String],
+    default: &str,
+) -> Result<Values> {
+    let preset = preset.map(system::driven::find_preset).transpose()?;
+    let name = system.or(preset.map(|p| p.system)).unwrap_or(default);
+    let info = system::find(name)?;
+    let mut settings = match preset {
+        Some(p) => crate::config::preset_settings(info, p)?,
+        None => Vec::new(),
+    };
+    settings.extend(parse_settings(info, set)?);
+    Ok(info.values(&settings)?)
+}
+
 /// Methods from a comma-separated list, or every method that applies to `model` at steps up
 /// to `max_h` when `None` (Tao's maps apply only where ω h ≤ 1; `None` for `max_h` keeps
 /// them).

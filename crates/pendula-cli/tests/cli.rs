@@ -339,7 +339,7 @@ fn unknown_system_method_and_parameter_list_the_valid_names() {
     );
     rejects(
         &["simulate", "double", "--set", "theta3=1"],
-        &["unknown name `theta3`", "m1, m2, l1, l2, g, theta1"],
+        &["unknown name `theta3`", "m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency, theta1"],
     );
 }
 

@@ -1,9 +1,10 @@
 //! Analyses of runs: convergence order, energy error and drift, largest stable step,
-//! periods from zero crossings, and the divergence of nearby trajectories. Each works on any catalogued model and method.
+//! periods from zero crossings, the divergence of nearby trajectories, and Lyapunov exponents. Each works on any catalogued model and method.
 
 pub mod convergence;
 pub mod divergence;
 pub mod energy;
+pub mod lyapunov;
 pub mod period;
 pub mod stability;
 
@@ -13,5 +14,6 @@ pub use convergence::{
 };
 pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
 pub use energy::{EnergySeries, drift_rate, envelope, relative_error};
+pub use lyapunov::{Lyapunov, LyapunovSpec, Tangent, lyapunov};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

@@ -143,6 +143,7 @@ pub static INFO: SystemInfo = SystemInfo {
         },
     ],
     build: |v| Box::new(DoublePendulum::from_values(v)),
+    variant: None,
 };
 
 /// The terms of the matrix formalism M(θ) θ'' + C + G = 0 (paper (73)–(75), with C the

@@ -69,6 +69,7 @@ pub static INFO: SystemInfo = SystemInfo {
         },
     ],
     build: |v| Box::new(DrivenPendulum::from_values(v)),
+    variant: None,
 };
 
 /// A named set of values for a catalogued system, with where it comes from.

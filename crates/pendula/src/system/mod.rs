@@ -6,6 +6,7 @@
 //! system to its parameters and to its Hamiltonian form, and [`DynModel`] is its
 //! object-safe face for the command line.
 
+pub mod chain;
 pub mod double;
 pub mod driven;
 pub mod oscillator;
@@ -79,6 +80,8 @@ pub enum Domain {
     Real,
     /// 0 or 1.
     Flag,
+    /// A whole number of links, 1 to [`chain::MAX_LINKS`].
+    Links,
 }
 
 impl Domain {
@@ -89,6 +92,7 @@ impl Domain {
             Domain::NonNegative => "must be finite and >= 0",
             Domain::Real => "must be finite",
             Domain::Flag => "must be 0 or 1",
+            Domain::Links => "must be a whole number from 1 to 8",
         }
     }
 
@@ -100,6 +104,7 @@ impl Domain {
                 Domain::NonNegative => v >= 0.0,
                 Domain::Real => true,
                 Domain::Flag => v == 0.0 || v == 1.0,
+                Domain::Links => v.fract() == 0.0 && (1.0..=chain::MAX_LINKS as f64).contains(&v),
             }
     }
 }
@@ -126,6 +131,9 @@ impl Quantity {
     }
 }
 
+/// Picks a family's member from (name, value) settings (see [`SystemInfo::variant`]).
+pub type Variant = fn(&[(String, f64)]) -> Result<&'static SystemInfo, Error>;
+
 /// A catalogue entry: a system's name, its quantities, and how to build it.
 pub struct SystemInfo {
     /// Name used on the command line.
@@ -138,6 +146,10 @@ pub struct SystemInfo {
     pub state: &'static [Quantity],
     /// Builds the system from validated values.
     pub build: fn(&Values) -> Box<dyn DynModel>,
+    /// For a family of systems whose quantities depend on a setting (the chain's `links`):
+    /// the member the settings choose, whose entry [`SystemInfo::values`] then uses. This
+    /// entry lists the quantities of the largest member, so that names can be checked early.
+    pub variant: Option<Variant>,
 }
 
 impl std::fmt::Debug for SystemInfo {
@@ -147,7 +159,8 @@ impl std::fmt::Debug for SystemInfo {
 }
 
 /// Every system pendula knows, in the order `pendula list systems` shows them.
-pub static CATALOGUE: &[&SystemInfo] = &[&oscillator::INFO, &pendulum::INFO, &double::INFO, &driven::INFO];
+pub static CATALOGUE: &[&SystemInfo] =
+    &[&oscillator::INFO, &pendulum::INFO, &double::INFO, &chain::INFO, &driven::INFO];
 
 /// Looks a system up by name.
 pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
@@ -175,6 +188,12 @@ impl SystemInfo {
 
     /// The catalogue's defaults with `settings` (name, value) applied in order, validated.
     pub fn values(&'static self, settings: &[(String, f64)]) -> Result<Values, Error> {
+        if let Some(variant) = self.variant {
+            let member = variant(settings)?;
+            if !std::ptr::eq(member, self) {
+                return member.values(settings);
+            }
+        }
         let mut values: Vec<f64> = self.quantities().map(|q| q.default).collect();
         for (name, value) in settings {
             let index = self.quantities().position(|q| q.name == name);
@@ -252,6 +271,11 @@ pub trait Model: System + Energy + Sized + 'static {
     fn exact(&self, _t: f64, _y0: &[f64], _y: &mut [f64]) -> bool {
         false
     }
+    /// The catalogue entry of this instance: [`Model::INFO`], except in a family, whose
+    /// members each have their own (see [`SystemInfo::variant`]).
+    fn info(&self) -> &'static SystemInfo {
+        Self::INFO
+    }
 }
 
 /// The object-safe face of a [`Model`], used where the system is chosen at run time.
@@ -262,6 +286,9 @@ pub trait DynModel {
     fn energy(&self, t: f64, y: &[f64]) -> f64;
     /// The right-hand side f(t, y) of the (position, velocity) form.
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+    /// The Jacobian ∂f/∂y of the (position, velocity) form, row-major; false when the
+    /// system has none (see [`System::jacobian`]).
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool;
     /// The exact state at t from `y0` at t = 0, if a closed form exists (see [`Model::exact`]).
     fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>>;
     /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
@@ -288,13 +315,16 @@ pub trait DynModel {
 
 impl<M: Model> DynModel for M {
     fn info(&self) -> &'static SystemInfo {
-        M::INFO
+        Model::info(self)
     }
     fn energy(&self, t: f64, y: &[f64]) -> f64 {
         Energy::energy(self, t, y)
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         System::rhs(self, t, y, dydt);
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        System::jacobian(self, t, y, jac)
     }
     fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>> {
         let mut y = vec![0.0; y0.len()];
@@ -319,5 +349,21 @@ impl<M: Model> DynModel for M {
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
         crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
+    }
+}
+
+/// A [`DynModel`]'s (position, velocity) ODE as a [`System`], for analyses written over
+/// plain systems (Lyapunov exponents).
+pub struct AsSystem<'a>(pub &'a dyn DynModel);
+
+impl System for AsSystem<'_> {
+    fn dim(&self) -> usize {
+        self.0.info().state.len()
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.0.rhs(t, y, dydt);
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        self.0.jacobian(t, y, jac)
     }
 }

@@ -60,6 +60,7 @@ pub static INFO: SystemInfo = SystemInfo {
         Quantity { name: "v", unit: "m/s", default: 0.0, domain: Domain::Real, description: "velocity" },
     ],
     build: |v| Box::new(Oscillator::from_values(v)),
+    variant: None,
 };
 
 /// The damping regime, from the damping ratio ζ = c / (2 √(k m)).

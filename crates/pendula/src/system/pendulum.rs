@@ -89,6 +89,7 @@ pub static INFO: SystemInfo = SystemInfo {
         },
     ],
     build: |v| Box::new(Pendulum::from_values(v)),
+    variant: None,
 };
 
 impl Pendulum {

@@ -1,0 +1,122 @@
+//! `pendula lyapunov`: the largest Lyapunov exponent, or the whole spectrum, from the
+//! variational equations with periodic re-orthonormalisation (Benettin), its running
+//! estimate as a convergence plot, and an uncertainty from batch means.
+
+use anyhow::{Result, bail};
+use clap::Args;
+use pendula::analysis::{LyapunovSpec, lyapunov};
+use pendula::integrator;
+use pendula::system::AsSystem;
+use pendula_viz::{Figure, Kind, Legend, Scale, palette};
+use serde_json::json;
+
+use crate::config::f64_arg;
+use crate::study::{self, Common, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct LyapunovArgs {
+    /// System [default: double, or the preset's].
+    pub system: Option<String>,
+    /// Start from a named preset (`pendula list presets`); --set applies over it.
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+    /// Method for the state and its tangent vectors: an explicit Runge–Kutta method, an
+    /// embedded pair at fixed steps, or Gauss–Legendre [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s [default: 0.001].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// Time over which the exponents are averaged, s [default: 200].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    /// Time run first and discarded, s [default: 10].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub transient: Option<String>,
+    /// Interval between re-orthonormalisations, s [default: 0.5].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub renormalise: Option<String>,
+    /// All exponents (QR re-orthonormalisation of as many tangent vectors as the state has).
+    #[arg(long)]
+    pub spectrum: bool,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub fn run(args: &LyapunovArgs) -> Result<()> {
+    let values =
+        study::preset_values(args.system.as_deref(), args.preset.as_deref(), &args.common.set, "double")?;
+    let info = values.info();
+    let system = info.name;
+    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 200.0, "a time in seconds")?;
+    let transient = f64_arg("--transient", args.transient.as_deref(), 10.0, "a time in seconds")?;
+    let renormalise = f64_arg("--renormalise", args.renormalise.as_deref(), 0.5, "a time in seconds")?;
+    let dim = info.state.len();
+    let count = if args.spectrum { dim } else { 1 };
+    let spec = LyapunovSpec { h, transient, t_end, renormalise, count, blocks: 10 };
+    if (t_end / renormalise) < 20.0 {
+        bail!(
+            "invalid --t-end {t_end}: at least 20 re-orthonormalisations (every --renormalise {renormalise} s) are needed for the uncertainty"
+        );
+    }
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
+    let model = values.build();
+    let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
+
+    let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
+    let mut header = vec!["t"];
+    header.extend(names.iter().map(String::as_str));
+    let rows: Vec<Vec<String>> =
+        result.running.chunks_exact(count + 1).map(|r| r.iter().map(|v| num(*v)).collect()).collect();
+    out.csv("lyapunov.csv", &header, &rows)?;
+
+    let (lambda, err) = (result.exponents[0], result.uncertainty[0]);
+    println!("{system} ({}, dt = {h} s, {t_end} s after a {transient} s transient):", method.name);
+    for (j, (l, e)) in result.exponents.iter().zip(&result.uncertainty).enumerate() {
+        println!("  lambda{} = {l:.5} ± {e:.5} 1/s", j + 1);
+    }
+    if args.spectrum {
+        println!("  sum = {:.3e} 1/s", result.exponents.iter().sum::<f64>());
+    }
+
+    let mut fig = Figure::new(
+        format!("{system}: running Lyapunov estimate ({}, dt = {h} s)", method.name),
+        "t after the transient (s)",
+        "exponent (1/s)",
+    )
+    .scales(Scale::Linear, Scale::Linear)
+    .legend(Legend::UpperRight);
+    for j in 0..count {
+        let series: Vec<(f64, f64)> =
+            result.running.chunks_exact(count + 1).map(|r| (r[0], r[1 + j])).collect();
+        fig = fig.with(
+            format!("lambda{} = {:.4} ± {:.4}", j + 1, result.exponents[j], result.uncertainty[j]),
+            palette(j),
+            Kind::Line,
+            series,
+        );
+    }
+    let band = |v: f64| vec![(0.0, v), (t_end, v)];
+    fig = fig.with("lambda1 ± uncertainty", palette(0), Kind::Dashed, band(lambda + err)).with(
+        "",
+        palette(0),
+        Kind::Dashed,
+        band(lambda - err),
+    );
+    out.figure("lyapunov", &fig)?;
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({
+            "system": system, "method": method.name, "dt": h, "t_end": t_end,
+            "transient": transient, "renormalise": renormalise,
+            "parameters": values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect::<serde_json::Map<_, _>>(),
+            "lambda_max": lambda, "uncertainty": err,
+            "spectrum": args.spectrum.then(|| result.exponents.clone()),
+            "spectrum_uncertainty": args.spectrum.then(|| result.uncertainty.clone()),
+        }),
+    )?;
+    out.report();
+    Ok(())
+}

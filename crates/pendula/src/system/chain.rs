@@ -1,0 +1,459 @@
+//! The planar N-link pendulum (a chain of point masses on massless rods) in the
+//! mass-matrix formalism M(θ) θ'' = f(θ, θ'), the paper's §6 matrix form generalised to N
+//! links, with its Hamiltonian form on (θ, p = M ω).
+//!
+//! With μₖ = Σ_{i ≥ k} mᵢ (the mass hanging from joint k) and μᵢⱼ = μ_max(i,j):
+//! Mᵢⱼ = μᵢⱼ lᵢ lⱼ cos(θᵢ − θⱼ),
+//! fᵢ = −Σⱼ μᵢⱼ lᵢ lⱼ sin(θᵢ − θⱼ) ωⱼ² − μᵢ g lᵢ sin θᵢ,
+//! V = −Σₖ μₖ g lₖ cos θₖ, T = ½ ωᵀ M ω, and
+//! ∂H/∂θₖ = Σⱼ μₖⱼ lₖ lⱼ ωₖ ωⱼ sin(θₖ − θⱼ) + μₖ g lₖ sin θₖ with ω = M⁻¹ p.
+//! N = 1 is [`super::pendulum`] and N = 2 is [`super::double`] (checked by tests to
+//! round-off).
+
+use std::f64::consts::PI;
+
+use num_dual::{Dual64, DualNum};
+
+use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use crate::Error;
+
+/// The most links a chain may have: its matrices live on the stack, sized for it.
+pub const MAX_LINKS: usize = 8;
+
+/// A planar chain of `n` point masses on massless rigid rods, hung from a fixed pivot.
+///
+/// State y = (θ₁…θₙ, ω₁…ωₙ): angles from the downward vertical (rad) and angular
+/// velocities (rad/s). Its Hamiltonian is not separable (for n ≥ 2): symplectic methods
+/// run on [`ChainForm`] (implicit Gauss–Legendre).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Chain {
+    /// Number of links n, 1 to [`MAX_LINKS`].
+    pub n: usize,
+    /// Masses m₁…mₙ, kg (entries past n unused).
+    pub m: [f64; MAX_LINKS],
+    /// Rod lengths l₁…lₙ, m (entries past n unused).
+    pub l: [f64; MAX_LINKS],
+    /// Gravitational acceleration g, m/s².
+    pub g: f64,
+}
+
+macro_rules! link {
+    ($m:literal, $l:literal) => {
+        [
+            Quantity {
+                name: $m,
+                unit: "kg",
+                default: 1.0,
+                domain: Domain::Positive,
+                description: "mass of this link's bob",
+            },
+            Quantity {
+                name: $l,
+                unit: "m",
+                default: 1.0,
+                domain: Domain::Positive,
+                description: "length of this link's rod",
+            },
+        ]
+    };
+}
+
+const fn flatten<const N: usize, const M: usize>(
+    head: [Quantity; 2],
+    links: [[Quantity; 2]; N],
+) -> [Quantity; M] {
+    let mut out = [head[0]; M];
+    out[1] = head[1];
+    let mut i = 0;
+    while i < N {
+        out[2 + 2 * i] = links[i][0];
+        out[3 + 2 * i] = links[i][1];
+        i += 1;
+    }
+    out
+}
+
+/// links, g, then (mₖ, lₖ) per link: the first 2 + 2n are the parameters of an n-link chain.
+static PARAMETERS: [Quantity; 2 + 2 * MAX_LINKS] = flatten(
+    [
+        Quantity {
+            name: "links",
+            unit: "1",
+            default: 3.0,
+            domain: Domain::Links,
+            description: "number of links N (1 to 8)",
+        },
+        Quantity {
+            name: "g",
+            unit: "m/s^2",
+            default: 9.81,
+            domain: Domain::Positive,
+            description: "gravitational acceleration",
+        },
+    ],
+    [
+        link!("m1", "l1"),
+        link!("m2", "l2"),
+        link!("m3", "l3"),
+        link!("m4", "l4"),
+        link!("m5", "l5"),
+        link!("m6", "l6"),
+        link!("m7", "l7"),
+        link!("m8", "l8"),
+    ],
+);
+
+const THETA: [&str; MAX_LINKS] =
+    ["theta1", "theta2", "theta3", "theta4", "theta5", "theta6", "theta7", "theta8"];
+const OMEGA: [&str; MAX_LINKS] =
+    ["omega1", "omega2", "omega3", "omega4", "omega5", "omega6", "omega7", "omega8"];
+
+/// The state quantities of an n-link chain, (θ₁…θₙ, ω₁…ωₙ), in the first 2n entries (the
+/// rest repeat the last and are never shown): θ₁ = 120°, θ₂ = −10° (the double pendulum's
+/// defaults), the other angles 0, at rest.
+const fn states(n: usize) -> [Quantity; 2 * MAX_LINKS] {
+    let mut out =
+        [Quantity { name: "", unit: "", default: 0.0, domain: Domain::Real, description: "" }; 2 * MAX_LINKS];
+    let mut k = 0;
+    while k < MAX_LINKS {
+        let default = match k {
+            0 => 120.0 * PI / 180.0,
+            1 => -10.0 * PI / 180.0,
+            _ => 0.0,
+        };
+        let angle = Quantity {
+            name: THETA[k],
+            unit: "rad",
+            default,
+            domain: Domain::Real,
+            description: "angle of this rod from the downward vertical",
+        };
+        let rate = Quantity {
+            name: OMEGA[k],
+            unit: "rad/s",
+            default: 0.0,
+            domain: Domain::Real,
+            description: "angular velocity of this rod",
+        };
+        if k < n {
+            out[k] = angle;
+            out[n + k] = rate;
+        }
+        k += 1;
+    }
+    out
+}
+
+static STATES: [[Quantity; 2 * MAX_LINKS]; MAX_LINKS] =
+    [states(1), states(2), states(3), states(4), states(5), states(6), states(7), states(8)];
+
+const fn member_info(n: usize, parameters: &'static [Quantity], states: &'static [Quantity]) -> SystemInfo {
+    SystemInfo {
+        name: "chain",
+        description: "planar N-link pendulum (links = 1..8), mass-matrix form M(th) th'' = f and Hamiltonian form",
+        parameters: parameters.split_at(2 + 2 * n).0,
+        state: states.split_at(2 * n).0,
+        build: |v| Box::new(Chain::from_values(v)),
+        variant: None,
+    }
+}
+
+/// The entries of the chains with 1 to [`MAX_LINKS`] links.
+static MEMBERS: [SystemInfo; MAX_LINKS] = [
+    member_info(1, &PARAMETERS, &STATES[0]),
+    member_info(2, &PARAMETERS, &STATES[1]),
+    member_info(3, &PARAMETERS, &STATES[2]),
+    member_info(4, &PARAMETERS, &STATES[3]),
+    member_info(5, &PARAMETERS, &STATES[4]),
+    member_info(6, &PARAMETERS, &STATES[5]),
+    member_info(7, &PARAMETERS, &STATES[6]),
+    member_info(8, &PARAMETERS, &STATES[7]),
+];
+
+/// Catalogue entry of the chain family: it lists the quantities of the largest chain (so
+/// names can be checked before `links` is known); the `links` setting (default 3) picks the
+/// member whose entry the values use ([`SystemInfo::variant`]).
+pub static INFO: SystemInfo =
+    SystemInfo { variant: Some(member), ..member_info(MAX_LINKS, &PARAMETERS, &STATES[MAX_LINKS - 1]) };
+
+/// The member of the family that `settings` choose by `links` (the last setting wins).
+fn member(settings: &[(String, f64)]) -> Result<&'static SystemInfo, Error> {
+    let links = settings.iter().rev().find(|(name, _)| name == "links").map_or(3.0, |(_, v)| *v);
+    if !Domain::Links.contains(links) {
+        return Err(Error::InvalidValue {
+            name: "links".into(),
+            value: links,
+            allowed: Domain::Links.describe(),
+        });
+    }
+    Ok(&MEMBERS[links as usize - 1])
+}
+
+impl Chain {
+    /// μₖ = Σ_{i ≥ k} mᵢ: the mass below joint k, kg.
+    fn hanging(&self) -> [f64; MAX_LINKS] {
+        let mut mu = [0.0; MAX_LINKS];
+        let mut sum = 0.0;
+        for k in (0..self.n).rev() {
+            sum += self.m[k];
+            mu[k] = sum;
+        }
+        mu
+    }
+
+    /// Mass matrix M(θ) (upper-left n × n block), kg m².
+    fn mass_matrix<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T]) -> [[T; MAX_LINKS]; MAX_LINKS] {
+        let mu = self.hanging();
+        let mut mass = [[T::zero(); MAX_LINKS]; MAX_LINKS];
+        for i in 0..self.n {
+            for j in 0..self.n {
+                mass[i][j] = (theta[i] - theta[j]).cos() * (mu[i.max(j)] * self.l[i] * self.l[j]);
+            }
+        }
+        mass
+    }
+
+    /// θ'' = M⁻¹ f over any number type: f64 for [`System::rhs`], dual numbers for the
+    /// Jacobian (one code path, so the two cannot disagree).
+    fn accelerations<T: DualNum<Primitive = f64> + Copy>(&self, y: &[T], out: &mut [T]) {
+        let n = self.n;
+        let (theta, omega) = y.split_at(n);
+        let mu = self.hanging();
+        let mass = self.mass_matrix(theta);
+        let mut f = [T::zero(); MAX_LINKS];
+        for i in 0..n {
+            let mut fi = theta[i].sin() * (-mu[i] * self.g * self.l[i]);
+            for j in 0..n {
+                if j != i {
+                    fi -= (theta[i] - theta[j]).sin()
+                        * omega[j]
+                        * omega[j]
+                        * (mu[i.max(j)] * self.l[i] * self.l[j]);
+                }
+            }
+            f[i] = fi;
+        }
+        solve_spd(n, mass, &mut f);
+        out[..n].copy_from_slice(&f[..n]);
+    }
+
+    /// Potential energy V = −Σ μₖ g lₖ cos θₖ, J (zero with every rod horizontal).
+    pub fn potential(&self, theta: &[f64]) -> f64 {
+        let mu = self.hanging();
+        (0..self.n).map(|k| -mu[k] * self.g * self.l[k] * theta[k].cos()).sum()
+    }
+
+    /// Kinetic energy T = ½ ωᵀ M(θ) ω, J.
+    pub fn kinetic(&self, y: &[f64]) -> f64 {
+        let (theta, omega) = y.split_at(self.n);
+        let mass = self.mass_matrix(theta);
+        let mut t = 0.0;
+        for i in 0..self.n {
+            for j in 0..self.n {
+                t += 0.5 * omega[i] * mass[i][j] * omega[j];
+            }
+        }
+        t
+    }
+
+    /// ω = M⁻¹ p over any number type.
+    fn velocities<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        let mut w = [T::zero(); MAX_LINKS];
+        w[..self.n].copy_from_slice(&p[..self.n]);
+        solve_spd(self.n, self.mass_matrix(theta), &mut w);
+        out[..self.n].copy_from_slice(&w[..self.n]);
+    }
+
+    /// ∂H/∂θ over any number type (see the module's formula).
+    fn dh_dtheta<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        let n = self.n;
+        let mu = self.hanging();
+        let mut w = [T::zero(); MAX_LINKS];
+        self.velocities(theta, p, &mut w);
+        for k in 0..n {
+            let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
+            for j in 0..n {
+                if j != k {
+                    d += (theta[k] - theta[j]).sin() * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
+                }
+            }
+            out[k] = d;
+        }
+    }
+}
+
+/// Solves M x = b in place for a symmetric positive definite n × n M by Cholesky
+/// factorisation (M is a mass matrix), on the stack.
+fn solve_spd<T: DualNum<Primitive = f64> + Copy>(
+    n: usize,
+    mut a: [[T; MAX_LINKS]; MAX_LINKS],
+    b: &mut [T; MAX_LINKS],
+) {
+    for j in 0..n {
+        let mut d = a[j][j];
+        for &v in &a[j][..j] {
+            d -= v * v;
+        }
+        let d = d.sqrt();
+        a[j][j] = d;
+        for i in j + 1..n {
+            let mut s = a[i][j];
+            for (x, y) in a[i][..j].iter().zip(&a[j][..j]) {
+                s -= *x * *y;
+            }
+            a[i][j] = s / d;
+        }
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= a[i][k] * b[k];
+        }
+        b[i] = s / a[i][i];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= a[k][i] * b[k];
+        }
+        b[i] = s / a[i][i];
+    }
+}
+
+/// The Jacobian of `f` (a map of R^dim into itself, dim ≤ 2 [`MAX_LINKS`]) by forward-mode
+/// automatic differentiation, one dual evaluation per column.
+fn dual_jacobian(dim: usize, f: impl Fn(&[Dual64], &mut [Dual64]), y: &[f64], jac: &mut [f64]) {
+    let mut seeded = [Dual64::from(0.0); 2 * MAX_LINKS];
+    let mut out = [Dual64::from(0.0); 2 * MAX_LINKS];
+    for column in 0..dim {
+        for j in 0..dim {
+            seeded[j] = Dual64::new(y[j], if j == column { 1.0 } else { 0.0 });
+        }
+        f(&seeded[..dim], &mut out[..dim]);
+        for row in 0..dim {
+            jac[row * dim + column] = out[row].eps;
+        }
+    }
+}
+
+impl Model for Chain {
+    type Form = ChainForm;
+    const INFO: &'static SystemInfo = &INFO;
+
+    fn from_values(v: &Values) -> Self {
+        let n = v.get("links") as usize;
+        let mut chain = Chain { n, m: [0.0; MAX_LINKS], l: [0.0; MAX_LINKS], g: v.get("g") };
+        for k in 0..n {
+            chain.m[k] = v.get(&format!("m{}", k + 1));
+            chain.l[k] = v.get(&format!("l{}", k + 1));
+        }
+        chain
+    }
+
+    fn info(&self) -> &'static SystemInfo {
+        &MEMBERS[self.n - 1]
+    }
+
+    fn hamiltonian_form(&self) -> Result<ChainForm, String> {
+        Ok(ChainForm { chain: *self })
+    }
+
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]) {
+        let n = self.n;
+        let mass = self.mass_matrix(&y[..n]);
+        z[..n].copy_from_slice(&y[..n]);
+        for i in 0..n {
+            z[n + i] = (0..n).map(|j| mass[i][j] * y[n + j]).sum();
+        }
+    }
+
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
+        let n = self.n;
+        y[..n].copy_from_slice(&z[..n]);
+        self.velocities(&z[..n], &z[n..], &mut y[n..]);
+    }
+}
+
+impl System for Chain {
+    fn dim(&self) -> usize {
+        2 * self.n
+    }
+
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        let n = self.n;
+        dydt[..n].copy_from_slice(&y[n..2 * n]);
+        self.accelerations(y, &mut dydt[n..]);
+    }
+
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let n = self.n;
+        dual_jacobian(
+            2 * n,
+            |y, out| {
+                out[..n].copy_from_slice(&y[n..]);
+                self.accelerations(y, &mut out[n..]);
+            },
+            y,
+            jac,
+        );
+        true
+    }
+}
+
+impl Energy for Chain {
+    fn energy(&self, _t: f64, y: &[f64]) -> f64 {
+        self.kinetic(y) + self.potential(&y[..self.n])
+    }
+}
+
+/// The chain on (θ, p = M(θ) ω); H = ½ pᵀ M⁻¹ p + V is not separable for n ≥ 2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainForm {
+    /// The chain.
+    pub chain: Chain,
+}
+
+impl System for ChainForm {
+    fn dim(&self) -> usize {
+        2 * self.chain.n
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        super::hamilton_rhs(self, t, y, dydt);
+    }
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let n = self.chain.n;
+        dual_jacobian(
+            2 * n,
+            |y, out| {
+                let (q, p) = y.split_at(n);
+                let (dq, dp) = out.split_at_mut(n);
+                self.chain.velocities(q, p, dq);
+                self.chain.dh_dtheta(q, p, dp);
+                for v in dp.iter_mut() {
+                    *v = -*v;
+                }
+            },
+            y,
+            jac,
+        );
+        true
+    }
+}
+
+impl Hamiltonian for ChainForm {
+    fn dh_dq(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        self.chain.dh_dtheta(q, p, out);
+    }
+    fn dh_dp(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        self.chain.velocities(q, p, out);
+    }
+}
+
+impl Energy for ChainForm {
+    fn energy(&self, _t: f64, y: &[f64]) -> f64 {
+        let n = self.chain.n;
+        let mut w = [0.0; MAX_LINKS];
+        self.chain.velocities(&y[..n], &y[n..], &mut w);
+        0.5 * (0..n).map(|k| y[n + k] * w[k]).sum::<f64>() + self.chain.potential(&y[..n])
+    }
+}
