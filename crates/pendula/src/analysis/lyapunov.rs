@@ -228,8 +228,7 @@ fn batch_error(per_interval: &[f64], k: usize, j: usize, interval: f64, blocks: 
 /// Modified Gram–Schmidt on the vectors (consecutive runs of `n` values): orthonormalises
 /// them in place and writes ln ‖·‖ of each before its normalisation (R's diagonal) to `logs`.
 fn orthonormalise(n: usize, vectors: &mut [f64], logs: &mut [f64]) {
-    let k = logs.len();
-    for j in 0..k {
+    for (j, log) in logs.iter_mut().enumerate() {
         let (done, rest) = vectors.split_at_mut(j * n);
         let v = &mut rest[..n];
         for q in done.chunks_exact(n) {
@@ -239,7 +238,7 @@ fn orthonormalise(n: usize, vectors: &mut [f64], logs: &mut [f64]) {
             }
         }
         let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        logs[j] = norm.ln();
+        *log = norm.ln();
         for vi in v.iter_mut() {
             *vi /= norm;
         }
