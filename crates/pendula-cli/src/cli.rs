@@ -38,6 +38,9 @@ pub enum Command {
     /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
     /// plot of the running estimate and an uncertainty.
     Lyapunov(Box<crate::commands::lyapunov::LyapunovArgs>),
+    /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
+    /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
+    Fractal(Box<crate::commands::fractal::FractalArgs>),
     /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
     /// pendulum with rk4) into one .npy array, or one shard of it.
     Sweep(Box<crate::commands::sweep::SweepArgs>),

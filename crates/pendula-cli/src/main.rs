@@ -30,6 +30,7 @@ fn main() -> ExitCode {
         Command::Sweep(args) => commands::sweep::run(args),
         Command::Divergence(args) => commands::divergence::run(args),
         Command::Lyapunov(args) => commands::lyapunov::run(args),
+        Command::Fractal(args) => commands::fractal::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
     };

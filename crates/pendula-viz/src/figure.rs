@@ -261,7 +261,7 @@ impl Figure {
     }
 }
 
-fn draw_error<E: std::fmt::Display>(e: E) -> Error {
+pub(crate) fn draw_error<E: std::fmt::Display>(e: E) -> Error {
     Error::Draw(e.to_string())
 }
 
@@ -282,7 +282,7 @@ fn pad((lo, hi): (f64, f64), scale: Scale) -> Range<f64> {
 
 /// Tick labels: plain numbers in a moderate range, scientific notation outside it; values
 /// within `zero` of 0 are 0.
-fn tick(v: f64, zero: f64) -> String {
+pub(crate) fn tick(v: f64, zero: f64) -> String {
     let a = v.abs();
     if a <= zero {
         "0".into()

@@ -4,16 +4,19 @@
 //! with units, linear or logarithmic axes, and [`Series`] — rendered to PNG or SVG bytes
 //! with an embedded font (DejaVu Sans), so that output is the same on every machine.
 //! [`method_color`] gives each integration method one colour, used in every figure.
+//! [`Heatmap`] draws values on a grid with the viridis colour map and a colour bar.
 //! [`animate`] draws anti-aliased pendulum frames and encodes them as GIF.
 //!
 //! Nothing here writes files: callers decide where bytes go.
 
 pub mod animate;
 mod figure;
+mod heatmap;
 
 pub use animate::{Animation, Snapshot};
 
 pub use figure::{Figure, Kind, Legend, Scale, Series};
+pub use heatmap::Heatmap;
 
 use plotters::style::RGBColor;
 
@@ -34,6 +37,9 @@ pub enum Error {
 
 /// An RGB colour.
 pub type Rgb = RGBColor;
+
+/// Black, for cells without a value (a flip fractal's "no flip").
+pub const BLACK: Rgb = RGBColor(0, 0, 0);
 
 /// Colour-blind-safe palette (Okabe & Ito, 2008), then Paul Tol's muted colours, in the
 /// order methods are registered.

@@ -18,6 +18,7 @@ mod events;
 mod exact;
 mod forced;
 mod formulations;
+mod fractal;
 mod implicit;
 mod lyapunov;
 mod schedule;

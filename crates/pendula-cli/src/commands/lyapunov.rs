@@ -61,9 +61,9 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             "invalid --t-end {t_end}: at least 20 re-orthonormalisations (every --renormalise {renormalise} s) are needed for the uncertainty"
         );
     }
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
     let model = values.build();
     let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
 
     let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
     let mut header = vec!["t"];

@@ -4,6 +4,7 @@ pub mod animate;
 pub mod compare;
 pub mod convergence;
 pub mod divergence;
+pub mod fractal;
 pub mod lyapunov;
 pub mod merge;
 pub mod period;

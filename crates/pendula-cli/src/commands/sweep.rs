@@ -72,11 +72,11 @@ pub struct SweepArgs {
 
 /// One axis of the grid.
 #[derive(Debug, Clone, PartialEq)]
-struct Axis {
-    name: String,
-    lo: f64,
-    hi: f64,
-    n: usize,
+pub(crate) struct Axis {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+    pub n: usize,
 }
 
 impl Axis {
@@ -159,7 +159,7 @@ impl Sweep {
     }
 }
 
-fn parse_axis(info: &'static SystemInfo, text: &str) -> Result<Axis> {
+pub(crate) fn parse_axis(info: &'static SystemInfo, text: &str) -> Result<Axis> {
     let bad = || anyhow!("invalid --grid `{text}`: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256");
     let (name, range) = text.split_once('=').ok_or_else(bad)?;
     let name = name.trim();
@@ -519,7 +519,7 @@ fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress
     })
 }
 
-fn write_npy(file: &AtomicFile, shape: &[usize], data: Vec<f64>) -> Result<()> {
+pub(crate) fn write_npy(file: &AtomicFile, shape: &[usize], data: Vec<f64>) -> Result<()> {
     use ndarray_npy::WriteNpyExt;
     use std::io::Write;
     let array =
@@ -530,7 +530,7 @@ fn write_npy(file: &AtomicFile, shape: &[usize], data: Vec<f64>) -> Result<()> {
     Ok(())
 }
 
-fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {
+pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {
     use std::io::Write;
     let mut w = std::io::BufWriter::new(file.handle()?);
     serde_json::to_writer_pretty(&mut w, doc)?;

@@ -1,9 +1,10 @@
 //! Analyses of runs: convergence order, energy error and drift, largest stable step,
-//! periods from zero crossings, the divergence of nearby trajectories, and Lyapunov exponents. Each works on any catalogued model and method.
+//! periods from zero crossings, the divergence of nearby trajectories, Lyapunov exponents, and the flip fractal. Each works on any catalogued model and method.
 
 pub mod convergence;
 pub mod divergence;
 pub mod energy;
+pub mod fractal;
 pub mod lyapunov;
 pub mod period;
 pub mod stability;

@@ -1,0 +1,250 @@
+//! `pendula fractal`: the double pendulum's flip fractal — the time to the first flip from
+//! rest over a (θ₁, θ₂) grid, on the ensemble engine — with a per-pixel convergence flag
+//! from a second run at half the step.
+//!
+//! Writes FILE.npy (float64, shape (N₂, N₁), θ₁ fastest as in `pendula sweep`, NaN where no
+//! flip happens before --t-max), FILE.png (viridis, log time, colour bar; black: no flip),
+//! FILE-converged.npy (uint8, 1 where the flip time moved by at most --tolerance between the
+//! two steps) and FILE-converged.png; all files appear whole or not at all.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use pendula::analysis::fractal::{FractalSpec, GridAxis, flip_fractal};
+use pendula::ensemble::BatchMethod;
+use pendula::integrator::{self, Scheme};
+use pendula::system::{self, Model, double::DoublePendulum};
+use pendula_viz::{Heatmap, Rgb};
+use serde_json::json;
+
+use crate::commands::sweep::{parse_axis, write_json, write_npy};
+use crate::config::{f64_arg, parse_number, parse_settings};
+use crate::output::AtomicFile;
+
+#[derive(Debug, Clone, Args)]
+pub struct FractalArgs {
+    /// An axis, theta1=LO:HI:N or theta2=LO:HI:N (cell centres, `pi` and `deg` accepted)
+    /// [default: theta1=-pi:pi:512 and theta2=-pi:pi:512].
+    #[arg(long = "grid", value_name = "NAME=LO:HI:N")]
+    pub grids: Vec<String>,
+    /// Longest time followed, s; no flip by then is NaN [default: 100].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_max: Option<String>,
+    /// Step size, s; the convergence check runs at half of it [default: 0.01].
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// Method: rk4, tao-2 or tao-4 (the ensemble engine's) [default: rk4].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// A pixel is converged when its flip times at dt and dt/2 differ by at most this, s
+    /// (and both or neither flip) [default: 0.01].
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub tolerance: Option<String>,
+    /// Set a parameter (m1, m2, l1, l2, g); the pendulum starts at rest.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Worker threads [default: all cores]; the result does not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<String>,
+    /// Output .npy file; the PNG and the convergence flags go beside it [default: fractal.npy].
+    #[arg(long, value_name = "FILE.npy")]
+    pub out: Option<PathBuf>,
+    /// Write a JSON summary here.
+    #[arg(long, value_name = "FILE.json")]
+    pub summary: Option<PathBuf>,
+}
+
+/// `dir/stem.npy` → `dir/stem{suffix}`.
+fn beside(path: &Path, suffix: &str) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fractal");
+    path.with_file_name(format!("{stem}{suffix}"))
+}
+
+pub fn run(args: &FractalArgs) -> Result<()> {
+    // Parse and validate everything before any work.
+    let info = system::find("double")?;
+    let settings = parse_settings(info, &args.set)?;
+    for (name, _) in &settings {
+        if info.state.iter().any(|q| q.name == *name) {
+            bail!(
+                "invalid --set {name}: the fractal starts from rest at the grid's angles; set parameters only"
+            );
+        }
+    }
+    let values = info.values(&settings)?;
+    let pendulum = DoublePendulum::from_values(&values);
+    if pendulum.is_forced() {
+        bail!(
+            "invalid --set: the fractal's ensemble kernels integrate the free double pendulum (damping and drive_amplitude must be 0)"
+        );
+    }
+    let mut theta1 = GridAxis { lo: -std::f64::consts::PI, hi: std::f64::consts::PI, n: 512 };
+    let mut theta2 = theta1;
+    let mut seen = Vec::new();
+    for text in &args.grids {
+        let axis = parse_axis(info, text)?;
+        let target = match axis.name.as_str() {
+            "theta1" => &mut theta1,
+            "theta2" => &mut theta2,
+            other => bail!("invalid --grid `{text}`: the fractal's axes are theta1 and theta2, not {other}"),
+        };
+        if seen.contains(&axis.name) {
+            bail!("invalid --grid: `{}` is given twice", axis.name);
+        }
+        *target = GridAxis { lo: axis.lo, hi: axis.hi, n: axis.n };
+        seen.push(axis.name);
+    }
+    let t_max = f64_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
+    if !(t_max.is_finite() && t_max > 0.0) {
+        bail!("invalid --t-max {t_max}: must be finite and > 0");
+    }
+    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    if !(h.is_finite() && h > 0.0 && h <= t_max) {
+        bail!("invalid --dt {h}: must be finite, > 0 and at most --t-max {t_max}");
+    }
+    let tolerance = f64_arg("--tolerance", args.tolerance.as_deref(), 0.01, "a time in seconds")?;
+    if !(tolerance.is_finite() && tolerance >= 0.0) {
+        bail!("invalid --tolerance {tolerance}: must be finite and >= 0");
+    }
+    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let batch = match method.scheme {
+        _ if method.name == "rk4" => BatchMethod::Rk4,
+        Scheme::Tao(scheme) => {
+            integrator::tao::check_binding_step(&scheme, h)?;
+            BatchMethod::Tao(scheme)
+        }
+        _ => bail!(
+            "invalid --method {}: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
+            method.name
+        ),
+    };
+    let threads = match &args.threads {
+        Some(text) => {
+            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
+            if n == 0 {
+                bail!("invalid --threads 0: need at least 1");
+            }
+            n
+        }
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("fractal.npy"));
+    if out.extension().and_then(|e| e.to_str()) != Some("npy") {
+        bail!("invalid --out {}: the fractal is written as .npy", out.display());
+    }
+    let paths =
+        [out.clone(), beside(&out, ".png"), beside(&out, "-converged.npy"), beside(&out, "-converged.png")];
+    let files: Vec<AtomicFile> =
+        paths.iter().map(|p| AtomicFile::create(p, "--out")).collect::<Result<_>>()?;
+    let summary_file = args.summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+
+    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
+    let begin = Instant::now();
+    let fractal = pool.install(|| flip_fractal(&spec))?;
+    let wall = begin.elapsed().as_secs_f64();
+
+    let (n1, n2) = (theta1.n, theta2.n);
+    let pixels = n1 * n2;
+    let unconverged = fractal.converged.iter().filter(|c| !**c).count();
+    let flipped = fractal.flip_time.iter().filter(|t| t.is_finite()).count();
+    let share = unconverged as f64 / pixels as f64;
+
+    let [npy, png, flags_npy, flags_png] = <[AtomicFile; 4]>::try_from(files).expect("four files");
+    write_npy(&npy, &[n2, n1], fractal.flip_time.clone())?;
+    let flags =
+        ndarray::Array2::from_shape_vec((n2, n1), fractal.converged.iter().map(|c| u8::from(*c)).collect())
+            .expect("the shape fits");
+    {
+        use ndarray_npy::WriteNpyExt;
+        let mut w = std::io::BufWriter::new(flags_npy.handle()?);
+        flags.write_npy(&mut w)?;
+        w.flush()?;
+    }
+    let map = |title: String, bar: &str, values: Vec<f64>, log: bool, nan: Rgb| Heatmap {
+        title,
+        x_label: "theta1 (rad)".into(),
+        y_label: "theta2 (rad)".into(),
+        bar_label: bar.into(),
+        x: (theta1.lo, theta1.hi),
+        y: (theta2.lo, theta2.hi),
+        nx: n1,
+        ny: n2,
+        values,
+        log,
+        nan_color: nan,
+    };
+    let picture = map(
+        format!(
+            "double pendulum: time to first flip from rest ({}, dt = {h} s; black: none by {t_max} s)",
+            method.name
+        ),
+        "time to first flip (s)",
+        fractal.flip_time.clone(),
+        true,
+        pendula_viz::BLACK,
+    );
+    let write_png = |file: &AtomicFile, map: &Heatmap| -> Result<()> {
+        let bytes = match map.png() {
+            Ok(b) => b,
+            // Nothing flips at all: draw the flags' colours instead of failing.
+            Err(pendula_viz::Error::Empty(_)) => {
+                Heatmap { values: vec![0.0; map.values.len()], log: false, ..map.clone() }.png()?
+            }
+            Err(e) => return Err(e.into()),
+        };
+        file.handle()?.write_all(&bytes)?;
+        Ok(())
+    };
+    write_png(&png, &picture)?;
+    let flag_values: Vec<f64> = fractal.converged.iter().map(|c| if *c { 1.0 } else { 0.0 }).collect();
+    write_png(
+        &flags_png,
+        &map(
+            format!(
+                "converged pixels: flip time within {tolerance} s at dt = {h} s and {} s (yellow)",
+                h / 2.0
+            ),
+            "converged (1) or not (0)",
+            flag_values,
+            false,
+            pendula_viz::BLACK,
+        ),
+    )?;
+    let doc = json!({
+        "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
+        "tolerance": tolerance,
+        "parameters": values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "axes": [
+            {"name": "theta1", "lo": theta1.lo, "hi": theta1.hi, "n": n1},
+            {"name": "theta2", "lo": theta2.lo, "hi": theta2.hi, "n": n2},
+        ],
+        "shape": [n2, n1],
+        "pixels": pixels, "flipped": flipped, "forbidden_by_energy": fractal.forbidden,
+        "unconverged": unconverged, "unconverged_share": share,
+        "threads": threads, "wall_s": wall,
+        "files": paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+    });
+    if let Some(f) = &summary_file {
+        write_json(f, &doc)?;
+    }
+    for f in [npy, png, flags_npy, flags_png] {
+        f.commit()?;
+    }
+    if let Some(f) = summary_file {
+        f.commit()?;
+    }
+    println!(
+        "fractal {n1}x{n2}, t-max {t_max} s, {} at dt = {h} s and {} s: {flipped} pixels flip, {} cannot (energy), {unconverged} unconverged ({:.2}%) [{wall:.1} s, {threads} threads]",
+        method.name,
+        h / 2.0,
+        fractal.forbidden,
+        100.0 * share
+    );
+    println!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    Ok(())
+}

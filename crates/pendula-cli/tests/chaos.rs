@@ -1,0 +1,140 @@
+//! The chaos commands end to end: `fractal` (array layout, flags, determinism across thread
+//! counts, bad input), `lyapunov` (summary keys, spectrum, presets) and bad input, which
+//! must exit with 2 and leave no file.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use ndarray::{ArrayD, IxDyn};
+use ndarray_npy::ReadNpyExt;
+use tempfile::TempDir;
+
+fn pendula(dir: &Path, args: &[&str]) -> assert_cmd::assert::Assert {
+    Command::cargo_bin("pendula").unwrap().current_dir(dir).args(args).assert()
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn fractal_writes_times_flags_and_pictures_the_same_on_any_thread_count() {
+    let dir = TempDir::new().unwrap();
+    let args = |out: &'static str, threads: &'static str| {
+        vec![
+            "fractal",
+            "--grid",
+            "theta1=-pi:pi:48",
+            "--grid",
+            "theta2=-pi:pi:32",
+            "--t-max",
+            "10",
+            "--threads",
+            threads,
+            "--out",
+            out,
+        ]
+    };
+    pendula(dir.path(), &[args("one.npy", "1"), vec!["--summary", "one.json"]].concat()).success();
+    pendula(dir.path(), &args("two.npy", "2")).success();
+    for name in ["one.npy", "one.png", "one-converged.npy", "one-converged.png", "one.json"] {
+        assert!(dir.path().join(name).is_file(), "{name} missing");
+    }
+    let one = std::fs::read(dir.path().join("one.npy")).unwrap();
+    assert_eq!(one, std::fs::read(dir.path().join("two.npy")).unwrap(), "thread count changed the result");
+    let times = ArrayD::<f64>::read_npy(&one[..]).unwrap();
+    assert_eq!(times.shape(), &[32, 48]);
+    let flags =
+        ArrayD::<u8>::read_npy(std::fs::File::open(dir.path().join("one-converged.npy")).unwrap()).unwrap();
+    assert_eq!(flags.shape(), &[32, 48]);
+    let summary = json(&dir.path().join("one.json"));
+    let unconverged = flags.iter().filter(|f| **f == 0).count();
+    assert_eq!(summary["unconverged"], unconverged);
+    assert_eq!(summary["pixels"], 48 * 32);
+    // The centre pixel (θ₁ ≈ θ₂ ≈ 0) cannot flip; flip times lie in (0, t-max], some early.
+    assert!(times[IxDyn(&[16, 24])].is_nan());
+    assert!(times.iter().filter(|t| t.is_finite()).all(|t| *t > 0.0 && *t <= 10.0));
+    assert!(times.iter().any(|t| *t < 1.0));
+}
+
+#[test]
+fn fractal_bad_input_exits_2_and_writes_nothing() {
+    let cases: &[&[&str]] = &[
+        &["fractal", "--grid", "omega1=0:1:4"],
+        &["fractal", "--grid", "theta1=1:0:4"],
+        &["fractal", "--t-max", "0"],
+        &["fractal", "--dt", "-0.1"],
+        &["fractal", "--method", "gauss-legendre-4"],
+        &["fractal", "--set", "damping=0.1"],
+        &["fractal", "--set", "theta1=1"],
+        &["fractal", "--out", "f.csv"],
+        &["fractal", "--tolerance", "nan"],
+        &["fractal", "--method", "tao-4", "--dt", "0.1"],
+    ];
+    for args in cases {
+        let dir = TempDir::new().unwrap();
+        let out = pendula(dir.path(), args).code(2);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        assert!(
+            stderr.contains("invalid") || stderr.contains("unknown") || stderr.contains("binding"),
+            "{args:?}: {stderr}"
+        );
+        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+    }
+}
+
+#[test]
+fn lyapunov_summary_and_spectrum() {
+    let dir = TempDir::new().unwrap();
+    pendula(
+        dir.path(),
+        &[
+            "lyapunov",
+            "--preset",
+            "baker-gollub-chaotic-1.5",
+            "--dt",
+            "0.01",
+            "--t-end",
+            "500",
+            "--transient",
+            "100",
+            "--spectrum",
+            "--out-dir",
+            "out",
+            "--summary",
+            "s.json",
+        ],
+    )
+    .success();
+    let s = json(&dir.path().join("s.json"));
+    assert_eq!(s["system"], "driven-pendulum");
+    let spectrum: Vec<f64> = serde_json::from_value(s["spectrum"].clone()).unwrap();
+    assert_eq!(spectrum.len(), 2);
+    assert!((spectrum[0] + spectrum[1] + 0.5).abs() < 1e-6, "sum {spectrum:?} must be -1/q");
+    assert!(s["lambda_max"].as_f64().unwrap() > 0.0 && s["uncertainty"].as_f64().unwrap() > 0.0);
+    assert!(dir.path().join("out/lyapunov.csv").is_file() && dir.path().join("out/lyapunov.png").is_file());
+}
+
+#[test]
+fn lyapunov_bad_input_exits_2() {
+    for args in [
+        &["lyapunov", "--method", "tao-4"][..],
+        &["lyapunov", "--t-end", "1"],
+        &["lyapunov", "--dt", "0"],
+        &["lyapunov", "--preset", "nope"],
+        &["lyapunov", "pendulum", "--preset", "baker-gollub-chaotic"],
+    ] {
+        let dir = TempDir::new().unwrap();
+        pendula(dir.path(), args).code(2);
+        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+    }
+}

@@ -1,0 +1,143 @@
+//! Heat maps of values on a regular grid (the flip fractal), with a colour bar, rendered
+//! with plotters and the perceptually uniform viridis colour map.
+
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
+
+use crate::figure::{draw_error, encode_png, ensure_font, tick};
+use crate::{Error, Rgb};
+
+/// A grid of values as an image: `values` holds `ny` rows of `nx` cells, the first row at
+/// the bottom (low y), the first cell of a row at the left (low x).
+#[derive(Debug, Clone)]
+pub struct Heatmap {
+    /// Title.
+    pub title: String,
+    /// x-axis label, with units.
+    pub x_label: String,
+    /// y-axis label, with units.
+    pub y_label: String,
+    /// Colour-bar label, with units.
+    pub bar_label: String,
+    /// x range of the grid's outer edges.
+    pub x: (f64, f64),
+    /// y range of the grid's outer edges.
+    pub y: (f64, f64),
+    /// Cells per row.
+    pub nx: usize,
+    /// Rows.
+    pub ny: usize,
+    /// The values; NaN cells take `nan_color`.
+    pub values: Vec<f64>,
+    /// Colour by log₁₀ of the value (for positive values spanning decades).
+    pub log: bool,
+    /// Colour of NaN cells.
+    pub nan_color: Rgb,
+}
+
+impl Heatmap {
+    /// The finite (positive on a log scale) range of the values.
+    fn range(&self) -> Result<(f64, f64), Error> {
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for &v in self.values.iter().filter(|v| v.is_finite() && (!self.log || **v > 0.0)) {
+            r = (r.0.min(v), r.1.max(v));
+        }
+        if !r.0.is_finite() {
+            return Err(Error::Empty(self.title.clone()));
+        }
+        if r.0 == r.1 {
+            r.1 = r.0 + if r.0 == 0.0 { 1.0 } else { r.0.abs() * 1e-3 };
+        }
+        Ok(if self.log { (r.0.log10(), r.1.log10()) } else { r })
+    }
+
+    /// The image as PNG bytes (about 900 × 760 pixels).
+    pub fn png(&self) -> Result<Vec<u8>, Error> {
+        assert_eq!(self.values.len(), self.nx * self.ny, "nx * ny values");
+        let (w, h) = (900u32, 760u32);
+        let mut rgb = vec![255u8; (w * h * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+            self.draw(&root)?;
+            root.present().map_err(draw_error)?;
+        }
+        encode_png(&rgb, w, h)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<(), Error> {
+        ensure_font();
+        root.fill(&WHITE).map_err(draw_error)?;
+        let (lo, hi) = self.range()?;
+        let colour = |v: f64| -> RGBColor {
+            if !v.is_finite() || (self.log && v <= 0.0) {
+                return self.nan_color;
+            }
+            let s = if self.log { v.log10() } else { v };
+            ViridisRGB.get_color_normalized(s as f32, lo as f32, hi as f32)
+        };
+        let root = root.titled(&self.title, ("sans-serif", 24)).map_err(draw_error)?;
+        let (main, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
+        let mut chart = ChartBuilder::on(&main)
+            .margin(12)
+            .x_label_area_size(52)
+            .y_label_area_size(70)
+            .build_cartesian_2d(self.x.0..self.x.1, self.y.0..self.y.1)
+            .map_err(draw_error)?;
+        let span = |r: (f64, f64)| 1e-9 * (r.1 - r.0);
+        let (zx, zy) = (span(self.x), span(self.y));
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(8)
+            .y_labels(8)
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 17))
+            .x_label_formatter(&|v| tick(*v, zx))
+            .y_label_formatter(&|v| tick(*v, zy))
+            .draw()
+            .map_err(draw_error)?;
+        let (dx, dy) = ((self.x.1 - self.x.0) / self.nx as f64, (self.y.1 - self.y.0) / self.ny as f64);
+        chart
+            .draw_series(self.values.iter().enumerate().map(|(k, &v)| {
+                let (i, j) = ((k % self.nx) as f64, (k / self.nx) as f64);
+                let (x0, y0) = (self.x.0 + i * dx, self.y.0 + j * dy);
+                Rectangle::new([(x0, y0), (x0 + dx, y0 + dy)], colour(v).filled())
+            }))
+            .map_err(draw_error)?;
+
+        // The colour bar: a column of 256 bands over the value range, labelled in values.
+        let mut bar_chart = ChartBuilder::on(&bar)
+            .margin_top(12)
+            .margin_bottom(64)
+            .margin_right(12)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..1.0, lo..hi)
+            .map_err(draw_error)?;
+        let log = self.log;
+        bar_chart
+            .configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_labels(8)
+            .y_desc(&self.bar_label)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .y_label_formatter(&|v| if log { tick(10f64.powf(*v), 0.0) } else { tick(*v, 0.0) })
+            .draw()
+            .map_err(draw_error)?;
+        let bands = 256;
+        bar_chart
+            .draw_series((0..bands).map(|b| {
+                let (s0, s1) = (
+                    lo + (hi - lo) * b as f64 / bands as f64,
+                    lo + (hi - lo) * (b + 1) as f64 / bands as f64,
+                );
+                let c = ViridisRGB.get_color_normalized((0.5 * (s0 + s1)) as f32, lo as f32, hi as f32);
+                Rectangle::new([(0.0, s0), (1.0, s1)], c.filled())
+            }))
+            .map_err(draw_error)?;
+        Ok(())
+    }
+}

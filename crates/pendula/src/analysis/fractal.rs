@@ -1,0 +1,125 @@
+//! The flip fractal: the time a double pendulum released from rest at (θ₁, θ₂) takes to
+//! flip (either rod passes ±π), over a grid of starts, on the ensemble engine — computed at
+//! two step sizes, so that every pixel carries a convergence flag.
+
+use crate::ensemble::{self, BatchMethod, BatchSpec, EnsembleError, Member, MemberResult};
+use crate::system::double::DoublePendulum;
+
+/// One axis of the grid: `n` cell centres lo + (i + ½)(hi − lo)/n (the convention of
+/// `pendula sweep`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridAxis {
+    /// Lower edge, rad.
+    pub lo: f64,
+    /// Upper edge, rad.
+    pub hi: f64,
+    /// Number of cells.
+    pub n: usize,
+}
+
+impl GridAxis {
+    /// The centre of cell i.
+    pub fn centre(&self, i: usize) -> f64 {
+        self.lo + (i as f64 + 0.5) * (self.hi - self.lo) / self.n as f64
+    }
+}
+
+/// What to compute.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FractalSpec {
+    /// The pendulum (undamped and undriven: the ensemble kernels' equations).
+    pub pendulum: DoublePendulum,
+    /// θ₁ axis (varies fastest in the output).
+    pub theta1: GridAxis,
+    /// θ₂ axis.
+    pub theta2: GridAxis,
+    /// Longest time followed, s; no flip by then is NaN.
+    pub t_max: f64,
+    /// Step size of the main run, s; the check runs at h/2.
+    pub h: f64,
+    /// The method (RK4 or a Tao map).
+    pub method: BatchMethod,
+    /// A pixel is converged when its flip times at h and h/2 differ by at most this, s (and
+    /// both or neither flip).
+    pub tolerance: f64,
+}
+
+/// The result of [`flip_fractal`]: arrays of θ₂-rows of θ₁-pixels (θ₁ fastest).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlipFractal {
+    /// Time to the first flip at step h, s; NaN where none happens before `t_max`.
+    pub flip_time: Vec<f64>,
+    /// The same at step h/2.
+    pub flip_time_half_step: Vec<f64>,
+    /// Whether the two agree ([`converged`]).
+    pub converged: Vec<bool>,
+    /// Pixels whose energy forbids any flip ([`cannot_flip`]), not integrated.
+    pub forbidden: usize,
+}
+
+/// Whether a pendulum released from rest at (θ₁, θ₂) can never flip: its energy is below
+/// the least potential energy with a rod upright, min((m₁+m₂) g l₁ − m₂ g l₂,
+/// m₂ g l₂ − (m₁+m₂) g l₁) (θ₁ = π with θ₂ = 0, or θ₂ = π with θ₁ = 0). Conservation of
+/// energy then keeps both angles inside (−π, π) for ever.
+pub fn cannot_flip(p: &DoublePendulum, theta1: f64, theta2: f64) -> bool {
+    let (a, b) = ((p.m1 + p.m2) * p.g * p.l1, p.m2 * p.g * p.l2);
+    let energy = -a * theta1.cos() - b * theta2.cos();
+    energy < (a - b).min(b - a)
+}
+
+/// The convergence rule: both NaN, or both finite and within `tolerance` of each other.
+pub fn converged(coarse: f64, fine: f64, tolerance: f64) -> bool {
+    match (coarse.is_nan(), fine.is_nan()) {
+        (true, true) => true,
+        (false, false) => (coarse - fine).abs() <= tolerance,
+        _ => false,
+    }
+}
+
+/// Computes the flip fractal, on rayon's current pool: results do not depend on its size.
+///
+/// # Errors
+/// [`EnsembleError`] for a forced pendulum or a non-finite state (member = pixel index).
+///
+/// # Panics
+/// If `h` or `t_max` is not finite and positive (validated by the caller).
+pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
+    assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
+    let (n1, n2) = (spec.theta1.n, spec.theta2.n);
+    let start = |i: usize| (spec.theta1.centre(i % n1), spec.theta2.centre(i / n1));
+    // Only pixels that can flip are integrated; the others are NaN at both step sizes.
+    let allowed: Vec<usize> = (0..n1 * n2)
+        .filter(|&i| {
+            let (a, b) = start(i);
+            !cannot_flip(&spec.pendulum, a, b)
+        })
+        .collect();
+    let run = |h: f64| -> Result<Vec<f64>, EnsembleError> {
+        let steps = (spec.t_max / h).ceil() as u64;
+        let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
+        let member = |k: usize| {
+            let (a, b) = start(allowed[k]);
+            Member { pendulum: spec.pendulum, state: [a, b, 0.0, 0.0] }
+        };
+        let mut times = vec![f64::NAN; allowed.len()];
+        let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
+            row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
+        };
+        ensemble::run_into(allowed.len(), &member, &batch, &mut times, 1, &store).map_err(|e| match e {
+            EnsembleError::NonFinite(f) => {
+                EnsembleError::NonFinite(ensemble::NonFiniteMember { member: allowed[f.member], ..f })
+            }
+            EnsembleError::Forced { member } => EnsembleError::Forced { member: allowed[member] },
+        })?;
+        let mut image = vec![f64::NAN; n1 * n2];
+        for (k, t) in allowed.iter().zip(times) {
+            image[*k] = t;
+        }
+        Ok(image)
+    };
+    let flip_time = run(spec.h)?;
+    let flip_time_half_step = run(spec.h / 2.0)?;
+    let converged =
+        flip_time.iter().zip(&flip_time_half_step).map(|(a, b)| converged(*a, *b, spec.tolerance)).collect();
+    Ok(FlipFractal { flip_time, flip_time_half_step, converged, forbidden: n1 * n2 - allowed.len() })
+}
