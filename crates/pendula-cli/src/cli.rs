@@ -38,6 +38,9 @@ pub enum Command {
     /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
     /// plot of the running estimate and an uncertainty.
     Lyapunov(Box<crate::commands::lyapunov::LyapunovArgs>),
+    /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
+    /// surface and their crossings of a section, located by events.
+    Poincare(Box<crate::commands::poincare::PoincareArgs>),
     /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
     Fractal(Box<crate::commands::fractal::FractalArgs>),
@@ -118,7 +121,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
     /// Locate events and list them in the summary: `flip` (an angle passes ±π the first
-    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE`; a trailing `+`
+    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE` (for an angle,
+    /// VALUE + 2 pi k: the angle is on a circle); a trailing `+`
     /// or `-` keeps only upward or downward crossings (`section:theta1=0+`).
     #[arg(long = "event", value_name = "SPEC")]
     pub events: Vec<String>,

@@ -138,3 +138,66 @@ fn lyapunov_bad_input_exits_2() {
         assert!(files(dir.path()).is_empty(), "{args:?} left files");
     }
 }
+
+#[test]
+fn poincare_writes_the_section() {
+    let dir = TempDir::new().unwrap();
+    pendula(
+        dir.path(),
+        &[
+            "poincare",
+            "--energy",
+            "-12",
+            "--count",
+            "4",
+            "--t-end",
+            "40",
+            "--out-dir",
+            "out",
+            "--summary",
+            "s.json",
+        ],
+    )
+    .success();
+    let s = json(&dir.path().join("s.json"));
+    assert!(s["crossings"].as_u64().unwrap() > 4 * 5);
+    assert!(s["max_energy_error"].as_f64().unwrap() < 1e-6);
+    let csv = std::fs::read_to_string(dir.path().join("out/poincare.csv")).unwrap();
+    assert!(csv.starts_with("orbit,t,theta2,p2,theta1,p1"), "{}", &csv[..40]);
+    assert!(dir.path().join("out/poincare.png").is_file());
+    // The symplectic route: fixed steps of Gauss–Legendre.
+    pendula(
+        dir.path(),
+        &[
+            "poincare",
+            "--count",
+            "2",
+            "--t-end",
+            "10",
+            "--method",
+            "gauss-legendre-4",
+            "--dt",
+            "0.002",
+            "--out-dir",
+            "gl",
+        ],
+    )
+    .success();
+}
+
+#[test]
+fn poincare_bad_input_exits_2() {
+    for args in [
+        &["poincare", "--section", "omega1=0"][..],
+        &["poincare", "--count", "0"],
+        &["poincare", "pendulum"],
+        &["poincare", "--method", "rk4"],
+        &["poincare", "--energy", "-100"],
+        &["poincare", "--set", "damping=0.2"],
+        &["poincare", "--t-end", "-1"],
+    ] {
+        let dir = TempDir::new().unwrap();
+        pendula(dir.path(), args).code(2);
+        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+    }
+}

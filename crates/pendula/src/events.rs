@@ -37,12 +37,15 @@ pub enum EventKind {
         /// Index in the state vector.
         index: usize,
     },
-    /// State variable `index` crosses `value` (a Poincaré section).
+    /// State variable `index` crosses `value` (a Poincaré section); for an angle, any of
+    /// value + 2πk (the angle is a point on a circle).
     Section {
         /// Index in the state vector.
         index: usize,
         /// The section's value, in the variable's unit.
         value: f64,
+        /// Whether the variable is an angle, so that the section repeats every 2π.
+        periodic: bool,
     },
 }
 
@@ -118,7 +121,8 @@ impl EventSpec {
             if !value.is_finite() {
                 return Err(Error::InvalidValue { name: text.to_owned(), value, allowed: "must be finite" });
             }
-            EventKind::Section { index: index_of(name)?, value }
+            let index = index_of(name)?;
+            EventKind::Section { index, value, periodic: state[index].is_angle() }
         } else {
             return Err(Error::UnknownName {
                 system: model.info().name,
@@ -175,7 +179,10 @@ impl<'a> EventLocator<'a> {
                 }
             }
             EventKind::Zero { index } => out.push(y[*index]),
-            EventKind::Section { index, value } => out.push(y[*index] - value),
+            // sin(θ − v) vanishes at v + 2πk and also at v + π + 2πk; those are dropped
+            // where the event is located (cos(θ − v) < 0 there).
+            EventKind::Section { index, value, periodic: true } => out.push((y[*index] - value).sin()),
+            EventKind::Section { index, value, periodic: false } => out.push(y[*index] - value),
         }
     }
 }
@@ -247,6 +254,12 @@ impl Observer for EventLocator<'_> {
                         }
                     }
                     let s = 0.5 * (lo + hi);
+                    if let EventKind::Section { index, value, periodic: true } = self.specs[k].kind {
+                        self.interpolate(sample, s, &mut at);
+                        if (at[index] - value).cos() < 0.0 {
+                            continue;
+                        }
+                    }
                     first = Some(first.map_or(s, |f: f64| f.min(s)));
                 }
                 if let Some(s) = first {

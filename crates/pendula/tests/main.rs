@@ -21,6 +21,7 @@ mod formulations;
 mod fractal;
 mod implicit;
 mod lyapunov;
+mod poincare;
 mod schedule;
 mod special;
 mod support;

@@ -8,6 +8,7 @@ pub mod fractal;
 pub mod lyapunov;
 pub mod merge;
 pub mod period;
+pub mod poincare;
 pub mod regimes;
 pub mod report;
 pub mod stability;

@@ -1,5 +1,5 @@
 //! Analyses of runs: convergence order, energy error and drift, largest stable step,
-//! periods from zero crossings, the divergence of nearby trajectories, Lyapunov exponents, and the flip fractal. Each works on any catalogued model and method.
+//! periods from zero crossings, the divergence of nearby trajectories, Lyapunov exponents, Poincaré sections and the flip fractal. Each works on any catalogued model and method.
 
 pub mod convergence;
 pub mod divergence;
@@ -7,6 +7,7 @@ pub mod energy;
 pub mod fractal;
 pub mod lyapunov;
 pub mod period;
+pub mod poincare;
 pub mod stability;
 
 pub use convergence::{

@@ -266,6 +266,10 @@ impl Model for DoublePendulum {
     type Form = DoublePendulumForm;
     const INFO: &'static SystemInfo = &INFO;
 
+    fn autonomous(&self) -> bool {
+        self.drive_amplitude == 0.0
+    }
+
     fn from_values(v: &Values) -> Self {
         DoublePendulum {
             m1: v.get("m1"),

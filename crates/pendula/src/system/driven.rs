@@ -144,6 +144,10 @@ impl Model for DrivenPendulum {
     type Form = PendulumForm;
     const INFO: &'static SystemInfo = &INFO;
 
+    fn autonomous(&self) -> bool {
+        self.drive_amplitude == 0.0
+    }
+
     fn from_values(v: &Values) -> Self {
         DrivenPendulum {
             q: v.get("q"),

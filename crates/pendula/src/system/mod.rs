@@ -253,7 +253,7 @@ impl Values {
 ///
 /// The user-facing state is (positions, velocities); the Hamiltonian form's state is
 /// (positions, momenta), and the two conversions map between them.
-pub trait Model: System + Energy + Sized + 'static {
+pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     /// The canonical (q, p) form.
     type Form: Hamiltonian + Energy;
     /// Catalogue entry of this system.
@@ -271,6 +271,11 @@ pub trait Model: System + Energy + Sized + 'static {
     fn exact(&self, _t: f64, _y0: &[f64], _y: &mut [f64]) -> bool {
         false
     }
+    /// Whether the equations do not depend on time (no drive): with a Hamiltonian form,
+    /// the energy is then conserved.
+    fn autonomous(&self) -> bool {
+        true
+    }
     /// The catalogue entry of this instance: [`Model::INFO`], except in a family, whose
     /// members each have their own (see [`SystemInfo::variant`]).
     fn info(&self) -> &'static SystemInfo {
@@ -279,7 +284,7 @@ pub trait Model: System + Energy + Sized + 'static {
 }
 
 /// The object-safe face of a [`Model`], used where the system is chosen at run time.
-pub trait DynModel {
+pub trait DynModel: Send + Sync {
     /// Catalogue entry.
     fn info(&self) -> &'static SystemInfo;
     /// Mechanical energy at (t, y), J.
@@ -291,6 +296,13 @@ pub trait DynModel {
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool;
     /// The exact state at t from `y0` at t = 0, if a closed form exists (see [`Model::exact`]).
     fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>>;
+    /// (q, q') → (q, p) (see [`Model::to_momenta`]).
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]);
+    /// (q, p) → (q, q') (see [`Model::to_velocities`]).
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]);
+    /// Ok when the system is Hamiltonian and autonomous, so that its energy is conserved;
+    /// otherwise why not.
+    fn conserves_energy(&self) -> Result<(), String>;
     /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
     /// (see [`crate::simulate::solve`]).
     fn solve(
@@ -329,6 +341,19 @@ impl<M: Model> DynModel for M {
     fn exact(&self, t: f64, y0: &[f64]) -> Option<Vec<f64>> {
         let mut y = vec![0.0; y0.len()];
         Model::exact(self, t, y0, &mut y).then_some(y)
+    }
+    fn to_momenta(&self, y: &[f64], z: &mut [f64]) {
+        Model::to_momenta(self, y, z);
+    }
+    fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
+        Model::to_velocities(self, z, y);
+    }
+    fn conserves_energy(&self) -> Result<(), String> {
+        self.hamiltonian_form()?;
+        if !self.autonomous() {
+            return Err(format!("the `{}` system is driven (time-dependent)", Model::info(self).name));
+        }
+        Ok(())
     }
     fn solve(
         &self,

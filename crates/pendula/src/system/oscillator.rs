@@ -178,6 +178,10 @@ impl Model for Oscillator {
     type Form = OscillatorForm;
     const INFO: &'static SystemInfo = &INFO;
 
+    fn autonomous(&self) -> bool {
+        self.drive_amplitude == 0.0
+    }
+
     fn from_values(v: &Values) -> Self {
         Oscillator {
             m: v.get("m"),

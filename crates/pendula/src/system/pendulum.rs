@@ -177,6 +177,10 @@ impl Model for Pendulum {
     type Form = PendulumForm;
     const INFO: &'static SystemInfo = &INFO;
 
+    fn autonomous(&self) -> bool {
+        self.drive_amplitude == 0.0
+    }
+
     fn from_values(v: &Values) -> Self {
         Pendulum {
             m: v.get("m"),

@@ -1,0 +1,156 @@
+//! `pendula poincare`: a Poincaré section of a conservative two-degree-of-freedom system
+//! (the double pendulum by default): orbits started on a fixed-energy surface, their
+//! crossings of θₛ = v (mod 2π) with θ̇ₛ > 0 located by events, as a scatter of the other
+//! angle and its momentum coloured by orbit.
+
+use anyhow::{Result, bail};
+use clap::Args;
+use pendula::analysis::poincare::{PoincareSpec, Stepping, poincare};
+use pendula::control::Tolerances;
+use pendula::integrator::{self, Scheme};
+use pendula_viz::{Figure, Kind, Scale, palette};
+use serde_json::json;
+
+use crate::config::{f64_arg, parse_number, parse_value};
+use crate::study::{self, Common, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct PoincareArgs {
+    /// System: double, or chain with --set links=2 [default: double].
+    pub system: Option<String>,
+    /// Energy of every orbit, J [default: -15, regular and chaotic orbits side by side].
+    #[arg(long, value_name = "E", allow_hyphen_values = true)]
+    pub energy: Option<String>,
+    /// Number of orbits [default: 30].
+    #[arg(long, value_name = "N")]
+    pub count: Option<String>,
+    /// The section, an angle and its value (deg accepted); crossings count when that angle
+    /// increases through the value (mod 2 pi) [default: theta1=0].
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub section: Option<String>,
+    /// Length of each orbit, s [default: 300].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+    /// Method: dop853 or dopri5 (adaptive, dense output) or any fixed-step method with --dt
+    /// (gauss-legendre-4: symplectic) [default: dop853].
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Fixed step size, s (required by fixed-step methods).
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+    /// Relative and absolute tolerance of adaptive methods [default: 1e-10].
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub tol: Option<String>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+pub fn run(args: &PoincareArgs) -> Result<()> {
+    let system = args.system.as_deref().unwrap_or("double");
+    let values = study::values(system, &args.common.set)?;
+    let info = values.info();
+    let model = values.build();
+    let energy = f64_arg("--energy", args.energy.as_deref(), -15.0, "an energy in J")?;
+    if !energy.is_finite() {
+        bail!("invalid --energy {energy}: must be finite");
+    }
+    let count: usize = match &args.count {
+        Some(t) => parse_number("--count", t, "a whole number of orbits >= 1")?,
+        None => 30,
+    };
+    if count == 0 {
+        bail!("invalid --count 0: need at least 1 orbit");
+    }
+    let section_text = args.section.as_deref().unwrap_or("theta1=0");
+    let (name, value) = section_text.split_once('=').ok_or_else(|| {
+        anyhow::anyhow!("invalid --section `{section_text}`: expected NAME=VALUE, e.g. theta1=0")
+    })?;
+    let name = name.trim();
+    let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
+    let Some(section) = info.state.iter().position(|q| q.name == name && q.is_angle()) else {
+        bail!(
+            "invalid --section `{section_text}`: `{name}` is not an angle of {system}; valid: {}",
+            angles.join(", ")
+        );
+    };
+    let value = parse_value(name, value, Some(&info.state[section]))?;
+    if !value.is_finite() {
+        bail!("invalid --section `{section_text}`: the value must be finite");
+    }
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 300.0, "a time in seconds")?;
+    if !(t_end.is_finite() && t_end > 0.0) {
+        bail!("invalid --t-end {t_end}: must be finite and > 0");
+    }
+    let method = integrator::find(args.method.as_deref().unwrap_or("dop853"))?;
+    let stepping = match (&args.dt, method.scheme) {
+        (Some(text), _) => {
+            let h: f64 = parse_number("--dt", text, "a step size in seconds")?;
+            if !(h.is_finite() && h > 0.0 && h <= t_end) {
+                bail!("invalid --dt {h}: must be finite, > 0 and at most --t-end");
+            }
+            Stepping::Fixed(h)
+        }
+        (None, Scheme::Embedded(_)) => {
+            let tol = f64_arg("--tol", args.tol.as_deref(), 1e-10, "a tolerance")?;
+            let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
+            tol.validate()?;
+            Stepping::Adaptive(tol)
+        }
+        (None, _) => bail!("--method {} takes fixed steps: give --dt", method.name),
+    };
+    let spec = PoincareSpec { energy, count, section, value, t_end };
+    let orbits = poincare(&*model, method, stepping, &spec)?;
+
+    let other = 1 - section;
+    let (q_name, p_name) = (info.state[other].name, format!("p{}", &info.state[other].name[5..]));
+    let wrap =
+        |a: f64| (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+    let mut rows = Vec::new();
+    let mut worst_energy: f64 = 0.0;
+    let mut fig = Figure::new(
+        format!(
+            "{system}: Poincare section {name} = {value:.3} rad (rising), E = {energy} J, {count} orbits ({})",
+            method.name
+        ),
+        format!("{q_name} (rad)"),
+        format!("{p_name} (kg m^2/s)"),
+    )
+    .scales(Scale::Linear, Scale::Linear);
+    let mut total = 0;
+    for (k, orbit) in orbits.iter().enumerate() {
+        let mut points = Vec::with_capacity(orbit.crossings.len());
+        for (t, z) in orbit.t.iter().zip(&orbit.crossings) {
+            let mut y = [0.0; 4];
+            model.to_velocities(z, &mut y);
+            worst_energy = worst_energy.max((model.energy(*t, &y) - energy).abs());
+            let (q, p) = (wrap(z[other]), z[2 + other]);
+            rows.push(vec![k.to_string(), num(*t), num(q), num(p), num(z[section]), num(z[2 + section])]);
+            points.push((q, p));
+        }
+        total += points.len();
+        // Colour tells orbits apart; with tens of them a legend would hide the section.
+        fig = fig.with("", palette(k), Kind::Dots, points);
+    }
+    if total == 0 {
+        bail!("no orbit crossed the section in {t_end} s: raise --t-end or change --energy");
+    }
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
+    let p_section = format!("p{}", &name[5..]);
+    out.csv("poincare.csv", &["orbit", "t", q_name, &p_name, name, &p_section], &rows)?;
+    out.figure("poincare", &fig)?;
+    println!(
+        "{system}: {count} orbits at E = {energy} J, {total} crossings of {name} = {value} (rising) in {t_end} s; max |H - E| at crossings {worst_energy:.2e} J"
+    );
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({
+            "system": system, "method": method.name, "energy": energy, "count": count,
+            "section": {"name": name, "value": value, "direction": "rising"},
+            "t_end": t_end, "crossings": total,
+            "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
+            "max_energy_error": worst_energy,
+        }),
+    )?;
+    out.report();
+    Ok(())
+}
