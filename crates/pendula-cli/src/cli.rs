@@ -41,6 +41,9 @@ pub enum Command {
     /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
     /// surface and their crossings of a section, located by events.
     Poincare(Box<crate::commands::poincare::PoincareArgs>),
+    /// Stroboscopic orbit diagram of a driven system against a swept parameter (SIMD lanes for
+    /// the driven pendulum).
+    Bifurcation(Box<crate::commands::bifurcation::BifurcationArgs>),
     /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
     Fractal(Box<crate::commands::fractal::FractalArgs>),

@@ -31,6 +31,7 @@ fn main() -> ExitCode {
         Command::Divergence(args) => commands::divergence::run(args),
         Command::Lyapunov(args) => commands::lyapunov::run(args),
         Command::Fractal(args) => commands::fractal::run(args),
+        Command::Bifurcation(args) => commands::bifurcation::run(args),
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),

@@ -201,3 +201,74 @@ fn poincare_bad_input_exits_2() {
         assert!(files(dir.path()).is_empty(), "{args:?} left files");
     }
 }
+
+#[test]
+fn bifurcation_csv_is_the_same_on_any_thread_count() {
+    let dir = TempDir::new().unwrap();
+    for (threads, out) in [("1", "one"), ("2", "two")] {
+        pendula(
+            dir.path(),
+            &[
+                "bifurcation",
+                "--param",
+                "drive_amplitude=1.0:1.5:40",
+                "--samples",
+                "20",
+                "--transient",
+                "300",
+                "--threads",
+                threads,
+                "--out-dir",
+                out,
+            ],
+        )
+        .success();
+    }
+    let one = std::fs::read_to_string(dir.path().join("one/bifurcation.csv")).unwrap();
+    assert_eq!(one, std::fs::read_to_string(dir.path().join("two/bifurcation.csv")).unwrap());
+    assert!(one.starts_with("drive_amplitude,sample,theta,omega\n"));
+    assert_eq!(one.lines().count(), 1 + 40 * 20);
+    assert!(dir.path().join("one/bifurcation.png").is_file());
+    // The scalar path, for a driven double pendulum.
+    pendula(
+        dir.path(),
+        &[
+            "bifurcation",
+            "double",
+            "--set",
+            "drive_frequency=3",
+            "--set",
+            "damping=0.5",
+            "--param",
+            "drive_amplitude=0:10:6",
+            "--samples",
+            "5",
+            "--transient",
+            "20",
+            "--out-dir",
+            "double",
+        ],
+    )
+    .success();
+    let csv = std::fs::read_to_string(dir.path().join("double/bifurcation.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 6 * 5);
+}
+
+#[test]
+fn bifurcation_bad_input_exits_2() {
+    for args in [
+        &["bifurcation", "--param", "theta=0:1:4"][..],
+        &["bifurcation", "--param", "q=2:1:4"],
+        &["bifurcation", "double", "--param", "drive_amplitude=0:1:4"],
+        &["bifurcation", "double"],
+        &["bifurcation", "chain", "--param", "g=1:2:3"],
+        &["bifurcation", "--samples", "0"],
+        &["bifurcation", "--steps-per-period", "2"],
+        &["bifurcation", "--variable", "p"],
+        &["bifurcation", "--param", "drive_frequency=-1:1:4"],
+    ] {
+        let dir = TempDir::new().unwrap();
+        pendula(dir.path(), args).code(2);
+        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+    }
+}

@@ -10,6 +10,7 @@ mod adaptive;
 mod alloc;
 mod analysis;
 mod architecture;
+mod bifurcation;
 mod chain;
 mod conformance;
 mod energy;

@@ -1,6 +1,7 @@
 //! The study commands, one file each.
 
 pub mod animate;
+pub mod bifurcation;
 pub mod compare;
 pub mod convergence;
 pub mod divergence;

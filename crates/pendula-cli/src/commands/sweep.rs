@@ -80,7 +80,7 @@ pub(crate) struct Axis {
 }
 
 impl Axis {
-    fn centre(&self, i: usize) -> f64 {
+    pub(crate) fn centre(&self, i: usize) -> f64 {
         self.lo + (i as f64 + 0.5) * (self.hi - self.lo) / self.n as f64
     }
 }

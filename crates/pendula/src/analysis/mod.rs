@@ -9,6 +9,7 @@ pub mod lyapunov;
 pub mod period;
 pub mod poincare;
 pub mod stability;
+pub mod strobe;
 
 pub use convergence::{
     OrderFit, REFERENCE_TOLERANCE, Reference, WorkPoint, convergence_errors, fit_order, reference_state,

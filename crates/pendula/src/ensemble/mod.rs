@@ -13,6 +13,7 @@
 //! (branch-free) but its state stays at the step where the flip was seen. A non-finite state
 //! is an error naming the member and the time.
 
+pub mod driven;
 pub mod trig;
 
 use rayon::prelude::*;
@@ -240,7 +241,7 @@ fn axpy<const FMA: bool>(out: &mut V, y: &V, a: f64, k: &V) {
 
 /// Whether this CPU has fused multiply-add instructions (then the trigonometric polynomials
 /// use them: faster, and as accurate, but rounded differently from the plain kernel).
-fn has_fma() -> bool {
+pub(crate) fn has_fma() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("fma")

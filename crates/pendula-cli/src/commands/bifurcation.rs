@@ -1,0 +1,229 @@
+//! `pendula bifurcation`: a stroboscopic orbit diagram — the state once per drive period
+//! after a transient, against a swept parameter. The damped, driven pendulum runs on the
+//! ensemble engine's SIMD lanes (`pendula::ensemble::driven`); other driven systems run the
+//! scalar RK4 per parameter value, in parallel. Either way the result does not depend on
+//! the thread count.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use pendula::analysis::strobe::stroboscopic as scalar_strobe;
+use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
+use pendula::integrator::explicit_rk::RK4;
+use pendula::system::Model;
+use pendula::system::driven::DrivenPendulum;
+use pendula_viz::{Figure, Kind, Scale, palette};
+use rayon::prelude::*;
+use serde_json::json;
+
+use crate::commands::sweep::parse_axis;
+use crate::config::{f64_arg, parse_number, parse_settings};
+use crate::study::{self, OutDir, num};
+
+#[derive(Debug, Clone, Args)]
+pub struct BifurcationArgs {
+    /// A driven system [default: driven-pendulum, or the preset's].
+    pub system: Option<String>,
+    /// The swept parameter: NAME=LO:HI:N, N cell centres as in `pendula sweep`
+    /// [default: drive_amplitude=1.0:1.5:800 for driven-pendulum].
+    #[arg(long, value_name = "NAME=LO:HI:N")]
+    pub param: Option<String>,
+    /// Start from a named preset (`pendula list presets`); --set applies over it.
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+    /// Time discarded before sampling, s, rounded up to whole drive periods [default: 1000].
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub transient: Option<String>,
+    /// Samples (drive periods) per parameter value [default: 150].
+    #[arg(long, value_name = "N")]
+    pub samples: Option<String>,
+    /// RK4 steps per drive period [default: 100].
+    #[arg(long, value_name = "M")]
+    pub steps_per_period: Option<String>,
+    /// The state variable plotted against the parameter [default: the first velocity].
+    #[arg(long, value_name = "NAME")]
+    pub variable: Option<String>,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<String>,
+    #[command(flatten)]
+    pub common: study::Common,
+}
+
+pub fn run(args: &BifurcationArgs) -> Result<()> {
+    // Validate everything first.
+    let preset = args.preset.as_deref().map(pendula::system::driven::find_preset).transpose()?;
+    let system = args.system.as_deref().or(preset.map(|p| p.system)).unwrap_or("driven-pendulum");
+    let info = pendula::system::find(system)?;
+    if info.quantity("drive_frequency").is_err() {
+        bail!("invalid system `{system}`: bifurcation needs a driven system (a drive_frequency parameter)");
+    }
+    let mut base = match preset {
+        Some(p) => crate::config::preset_settings(info, p)?,
+        None => Vec::new(),
+    };
+    base.extend(parse_settings(info, &args.common.set)?);
+    let default_param = (system == "driven-pendulum").then_some("drive_amplitude=1.0:1.5:800");
+    let Some(param_text) = args.param.as_deref().or(default_param) else {
+        bail!("--param NAME=LO:HI:N is required for {system}");
+    };
+    let axis = parse_axis(info, param_text)?;
+    if !info.parameters.iter().any(|q| q.name == axis.name) {
+        bail!("invalid --param `{param_text}`: `{}` is not a parameter of {system}", axis.name);
+    }
+    let transient = f64_arg("--transient", args.transient.as_deref(), 1000.0, "a time in seconds")?;
+    if !(transient.is_finite() && transient >= 0.0) {
+        bail!("invalid --transient {transient}: must be finite and >= 0");
+    }
+    let samples: usize = match &args.samples {
+        Some(t) => parse_number("--samples", t, "a whole number >= 1")?,
+        None => 150,
+    };
+    let m: u32 = match &args.steps_per_period {
+        Some(t) => parse_number("--steps-per-period", t, "a whole number >= 4")?,
+        None => 100,
+    };
+    if samples == 0 || m < 4 {
+        bail!(
+            "invalid --samples {samples} / --steps-per-period {m}: need >= 1 sample and >= 4 steps per period"
+        );
+    }
+    let threads = match &args.threads {
+        Some(text) => {
+            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
+            if n == 0 {
+                bail!("invalid --threads 0: need at least 1");
+            }
+            n
+        }
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    // Every value's parameters, validated (a drive frequency > 0 included).
+    let all: Vec<pendula::system::Values> = (0..axis.n)
+        .map(|i| {
+            let mut s = base.clone();
+            s.push((axis.name.clone(), axis.centre(i)));
+            info.values(&s)
+        })
+        .collect::<Result<_, _>>()?;
+    let dim = all[0].info().state.len();
+    let state = all[0].info().state;
+    let variable = match &args.variable {
+        Some(name) => state.iter().position(|q| q.name == name).with_context(|| {
+            format!(
+                "invalid --variable `{name}`; valid: {}",
+                state.iter().map(|q| q.name).collect::<Vec<_>>().join(", ")
+            )
+        })?,
+        None => dim / 2,
+    };
+    let periods: Vec<(f64, u64)> = all
+        .iter()
+        .map(|v| {
+            let w = v.get("drive_frequency");
+            let period = 2.0 * std::f64::consts::PI / w;
+            (period, (transient / period).ceil() as u64)
+        })
+        .collect();
+    if let Some(v) = all.iter().find(|v| !(v.get("drive_frequency") > 0.0)) {
+        bail!(
+            "invalid drive_frequency {}: a stroboscopic diagram needs a drive (set drive_frequency > 0)",
+            v.get("drive_frequency")
+        );
+    }
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation")?;
+
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
+    let begin = Instant::now();
+    let simd = system == "driven-pendulum";
+    let data: Vec<f64> = pool.install(|| -> Result<Vec<f64>> {
+        if simd {
+            let members: Vec<DrivenMember> = all
+                .iter()
+                .zip(&periods)
+                .map(|(v, (_, transient))| DrivenMember {
+                    pendulum: DrivenPendulum::from_values(v),
+                    state: [v.initial_state()[0], v.initial_state()[1]],
+                    transient_periods: *transient,
+                })
+                .collect();
+            let mut data = vec![0.0; members.len() * samples * 2];
+            stroboscopic(&members, &StroboSpec { steps_per_period: m, samples }, &mut data).map_err(|e| {
+                anyhow::Error::new(pendula::Error::NonFinite { t: e.t }).context(format!(
+                    "{} = {}",
+                    axis.name,
+                    axis.centre(e.member)
+                ))
+            })?;
+            Ok(data)
+        } else {
+            let rows: Vec<Vec<f64>> = all
+                .par_iter()
+                .zip(&periods)
+                .map(|(v, (period, transient))| {
+                    let model = v.build();
+                    let mut rows =
+                        scalar_strobe(&*model, &RK4, v.initial_state(), *period, m, *transient, samples)?;
+                    for row in rows.chunks_exact_mut(dim) {
+                        for (x, q) in row.iter_mut().zip(state) {
+                            if q.is_angle() {
+                                *x -= 2.0
+                                    * std::f64::consts::PI
+                                    * (*x / (2.0 * std::f64::consts::PI) + 0.5).floor();
+                            }
+                        }
+                    }
+                    Ok(rows)
+                })
+                .collect::<Result<_, pendula::Error>>()?;
+            Ok(rows.concat())
+        }
+    })?;
+    let wall = begin.elapsed().as_secs_f64();
+
+    let mut header = vec![axis.name.as_str(), "sample"];
+    header.extend(state.iter().map(|q| q.name));
+    let mut rows = Vec::with_capacity(axis.n * samples);
+    let mut points = Vec::with_capacity(axis.n * samples);
+    for (i, chunk) in data.chunks_exact(samples * dim).enumerate() {
+        let p = axis.centre(i);
+        for (s, y) in chunk.chunks_exact(dim).enumerate() {
+            let mut row = vec![num(p), s.to_string()];
+            row.extend(y.iter().map(|v| num(*v)));
+            rows.push(row);
+            points.push((p, y[variable]));
+        }
+    }
+    out.csv("bifurcation.csv", &header, &rows)?;
+    let fig = Figure::new(
+        format!(
+            "{system}: stroboscopic samples after {transient} s ({samples} per value, RK4, {m} steps/period)"
+        ),
+        format!("{} ({})", axis.name, info.quantity(&axis.name)?.unit),
+        format!("{} at drive phase 0 ({})", state[variable].name, state[variable].unit),
+    )
+    .scales(Scale::Linear, Scale::Linear)
+    .with("", palette(1), Kind::Dots, points);
+    out.figure("bifurcation", &fig)?;
+    println!(
+        "{system}: {} values of {} in [{}, {}], {samples} samples each after {transient} s; {} [{wall:.2} s, {threads} threads]",
+        axis.n,
+        axis.name,
+        axis.lo,
+        axis.hi,
+        if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
+    );
+    study::summary(
+        args.common.summary.as_deref(),
+        &json!({
+            "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
+            "transient": transient, "samples": samples, "steps_per_period": m,
+            "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
+            "threads": threads, "wall_s": wall,
+        }),
+    )?;
+    out.report();
+    Ok(())
+}

@@ -1,0 +1,170 @@
+//! Stroboscopic sampling of many damped, driven pendulums ([`DrivenPendulum`]) on the
+//! ensemble engine: lanes of [`LANES`] pendulums advanced by RK4 in structure-of-arrays
+//! form with the engine's branch-free sine, `multiversion` dispatch and rayon over chunks.
+//!
+//! Each member takes `steps_per_period` steps per drive period T = 2π/ω_D (its own step
+//! h = T/M), so the drive phase after k steps is 2πk/M for every member: the drive values
+//! cos(2π j/(2M)) at the steps and half-steps are one table shared by all lanes. Once per
+//! period the angle is wrapped into [−π, π) and, after the member's transient, (θ, ω) is
+//! recorded — the Poincaré section of the extended phase space at phase 0.
+//!
+//! Determinism: as for the double pendulums (see [`super`]), a member's samples do not
+//! depend on its lane, chunk or thread.
+
+use rayon::prelude::*;
+
+use super::{LANES, NonFiniteMember, has_fma, trig};
+use crate::system::driven::DrivenPendulum;
+
+/// One member: a driven pendulum, its start (θ, ω), and how many whole periods to discard.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrivenMember {
+    /// The pendulum.
+    pub pendulum: DrivenPendulum,
+    /// Initial (θ, ω).
+    pub state: [f64; 2],
+    /// Drive periods run before the first sample.
+    pub transient_periods: u64,
+}
+
+/// How to sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StroboSpec {
+    /// RK4 steps per drive period (M ≥ 4).
+    pub steps_per_period: u32,
+    /// Samples per member, one per period after its transient.
+    pub samples: usize,
+}
+
+/// Members per parallel work item.
+const CHUNK: usize = 64;
+
+/// Samples every member: `out[(member · samples + s) · 2 ..]` receives (θ, ω) of sample s.
+///
+/// # Errors
+/// The first member (in index order) whose state became non-finite, with the time.
+///
+/// # Panics
+/// If `out` does not hold members × samples × 2 values or `steps_per_period < 4`.
+pub fn stroboscopic(
+    members: &[DrivenMember],
+    spec: &StroboSpec,
+    out: &mut [f64],
+) -> Result<(), NonFiniteMember> {
+    let per_member = spec.samples * 2;
+    assert_eq!(out.len(), members.len() * per_member, "members × samples × 2 values");
+    assert!(spec.steps_per_period >= 4, "at least 4 steps per period");
+    let m = spec.steps_per_period as usize;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    // cos(2π j/(2M)) for j = 0 … 2M: the drive at every step and half-step of a period.
+    let drive: Vec<f64> = (0..=2 * m).map(|j| (two_pi * j as f64 / (2 * m) as f64).cos()).collect();
+    let failures: Vec<NonFiniteMember> = out
+        .par_chunks_mut(CHUNK * per_member)
+        .enumerate()
+        .filter_map(|(c, rows)| {
+            let start = c * CHUNK;
+            let chunk = &members[start..start + rows.len() / per_member.max(1)];
+            let mut first: Option<NonFiniteMember> = None;
+            for (g, (group, rows)) in chunk.chunks(LANES).zip(rows.chunks_mut(LANES * per_member)).enumerate()
+            {
+                if let Err(e) = run_group(group, spec, &drive, rows) {
+                    first.get_or_insert(NonFiniteMember { member: start + g * LANES + e.member, t: e.t });
+                }
+            }
+            first
+        })
+        .collect();
+    match failures.into_iter().min_by_key(|e| e.member) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// Structure-of-arrays state of a lane group.
+struct Lanes {
+    theta: [f64; LANES],
+    omega: [f64; LANES],
+    h: [f64; LANES],
+    damping: [f64; LANES],
+    amplitude: [f64; LANES],
+}
+
+fn run_group(
+    group: &[DrivenMember],
+    spec: &StroboSpec,
+    drive: &[f64],
+    rows: &mut [f64],
+) -> Result<(), NonFiniteMember> {
+    let pick = |i: usize| group[i.min(group.len() - 1)];
+    let m = spec.steps_per_period as f64;
+    let mut lanes = Lanes {
+        theta: std::array::from_fn(|i| pick(i).state[0]),
+        omega: std::array::from_fn(|i| pick(i).state[1]),
+        h: std::array::from_fn(|i| 2.0 * std::f64::consts::PI / pick(i).pendulum.drive_frequency / m),
+        damping: std::array::from_fn(|i| 1.0 / pick(i).pendulum.q),
+        amplitude: std::array::from_fn(|i| pick(i).pendulum.drive_amplitude),
+    };
+    let per_member = spec.samples * 2;
+    let last_period = group.iter().map(|g| g.transient_periods).max().unwrap_or(0) + spec.samples as u64;
+    for period in 0..last_period {
+        if has_fma() {
+            period_kernel::<true>(&mut lanes, drive);
+        } else {
+            period_kernel::<false>(&mut lanes, drive);
+        }
+        for (i, member) in group.iter().enumerate() {
+            let (theta, omega) = (lanes.theta[i], lanes.omega[i]);
+            if !(theta.is_finite() && omega.is_finite()) {
+                return Err(NonFiniteMember { member: i, t: (period + 1) as f64 * lanes.h[i] * m });
+            }
+            // Wrap into [−π, π): the equations are 2π-periodic in θ, and the sine's argument
+            // stays small however long the run.
+            let wrapped =
+                theta - 2.0 * std::f64::consts::PI * (theta / (2.0 * std::f64::consts::PI) + 0.5).floor();
+            lanes.theta[i] = wrapped;
+            if period >= member.transient_periods {
+                let s = (period - member.transient_periods) as usize;
+                if s < spec.samples {
+                    let at = i * per_member + 2 * s;
+                    rows[at] = wrapped;
+                    rows[at + 1] = omega;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One drive period of RK4 steps for every lane.
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx2+fma",
+    "x86_64+avx2+fma",
+    "x86_64+avx+fma",
+    "x86_64+avx",
+    "x86_64+sse4.1",
+    "aarch64+neon"
+))]
+fn period_kernel<const FMA: bool>(lanes: &mut Lanes, drive: &[f64]) {
+    let steps = (drive.len() - 1) / 2;
+    let Lanes { theta, omega, h, damping, amplitude } = lanes;
+    let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
+        -w * damping - trig::sin_with::<FMA>(th) + amplitude * c
+    };
+    for k in 0..steps {
+        let (c0, c_half, c1) = (drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]);
+        for i in 0..LANES {
+            let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
+            let hh = 0.5 * h;
+            let k1 = accel(th, w, b, a, c0);
+            let (th2, w2) = (th + hh * w, w + hh * k1);
+            let k2 = accel(th2, w2, b, a, c_half);
+            let (th3, w3) = (th + hh * w2, w + hh * k2);
+            let k3 = accel(th3, w3, b, a, c_half);
+            let (th4, w4) = (th + h * w3, w + h * k3);
+            let k4 = accel(th4, w4, b, a, c1);
+            let h6 = h / 6.0;
+            theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
+            omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+    }
+}

@@ -1,0 +1,82 @@
+//! Stroboscopic sampling of the damped, driven pendulum: the ensemble kernel against the
+//! scalar RK4 path, Baker and Gollub's period-1 and period-2 attractors, and determinism.
+
+use pendula::analysis::strobe::stroboscopic as scalar;
+use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
+use pendula::integrator::explicit_rk::RK4;
+use pendula::system::driven::DrivenPendulum;
+use pendula::system::{DynModel, Model};
+
+use crate::support::values;
+
+fn member(g: f64, frequency: f64, transient: u64) -> DrivenMember {
+    DrivenMember {
+        pendulum: DrivenPendulum { q: 2.0, drive_amplitude: g, drive_frequency: frequency },
+        state: [0.2, 0.0],
+        transient_periods: transient,
+    }
+}
+
+fn wrap(a: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    a - two_pi * (a / two_pi + 0.5).floor()
+}
+
+#[test]
+fn lanes_match_the_scalar_rk4() {
+    // Periodic regimes over 50 periods; chaotic ones over 3 (where round-off still is
+    // below the tolerance after amplification by exp(λ t)).
+    let cases =
+        [(0.9, 2.0 / 3.0, 50), (1.07, 2.0 / 3.0, 50), (1.5, 2.0 / 3.0, 3), (1.2, 0.8, 3), (0.5, 1.3, 50)];
+    let members: Vec<DrivenMember> = cases.iter().map(|&(g, f, _)| member(g, f, 0)).collect();
+    let samples = 50;
+    let spec = StroboSpec { steps_per_period: 120, samples };
+    let mut out = vec![0.0; members.len() * samples * 2];
+    stroboscopic(&members, &spec, &mut out).unwrap();
+    for (k, (&(g, f, check), m)) in cases.iter().zip(&members).enumerate() {
+        let v = values("driven-pendulum", &[("drive_amplitude", g), ("drive_frequency", f)]);
+        let model = DrivenPendulum::from_values(&v);
+        let rows =
+            scalar(&model as &dyn DynModel, &RK4, &m.state, 2.0 * std::f64::consts::PI / f, 120, 0, samples)
+                .unwrap();
+        for s in 0..check {
+            let (lane, row) = (&out[(k * samples + s) * 2..][..2], &rows[s * 2..][..2]);
+            let d = (lane[0] - wrap(row[0])).abs().max((lane[1] - row[1]).abs());
+            assert!(d < 1e-10, "g = {g}, sample {s}: lanes {lane:?} vs scalar {row:?}");
+        }
+    }
+}
+
+#[test]
+fn baker_gollub_period_one_and_period_two() {
+    let members = [member(0.9, 2.0 / 3.0, 300), member(1.07, 2.0 / 3.0, 300)];
+    let samples = 8;
+    let mut out = vec![0.0; 2 * samples * 2];
+    stroboscopic(&members, &StroboSpec { steps_per_period: 200, samples }, &mut out).unwrap();
+    let omega = |k: usize, s: usize| out[(k * samples + s) * 2 + 1];
+    for s in 0..samples - 1 {
+        assert!((omega(0, s + 1) - omega(0, s)).abs() < 1e-6, "g = 0.9 is period 1");
+    }
+    for s in 0..samples - 2 {
+        assert!((omega(1, s + 2) - omega(1, s)).abs() < 1e-6, "g = 1.07 repeats every 2 periods");
+        assert!((omega(1, s + 1) - omega(1, s)).abs() > 1e-2, "g = 1.07 is not period 1");
+    }
+}
+
+#[test]
+fn same_samples_on_one_and_two_threads() {
+    let members: Vec<DrivenMember> =
+        (0..100).map(|i| member(1.0 + 0.005 * i as f64, 2.0 / 3.0, 20)).collect();
+    let spec = StroboSpec { steps_per_period: 100, samples: 10 };
+    let run = |threads| {
+        let mut out = vec![0.0; 100 * 10 * 2];
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| stroboscopic(&members, &spec, &mut out).unwrap());
+        out
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+}
