@@ -126,7 +126,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
             (period, (transient / period).ceil() as u64)
         })
         .collect();
-    if let Some(v) = all.iter().find(|v| !(v.get("drive_frequency") > 0.0)) {
+    if let Some(v) = all.iter().find(|v| v.get("drive_frequency") <= 0.0) {
         bail!(
             "invalid drive_frequency {}: a stroboscopic diagram needs a drive (set drive_frequency > 0)",
             v.get("drive_frequency")
