@@ -272,3 +272,31 @@ fn bifurcation_bad_input_exits_2() {
         assert!(files(dir.path()).is_empty(), "{args:?} left files");
     }
 }
+
+#[test]
+fn chain_members_shape_sweeps_and_trajectories() {
+    let dir = TempDir::new().unwrap();
+    pendula(
+        dir.path(),
+        &["sweep", "chain", "--set", "links=3", "--grid", "theta3=-1:1:4", "--t-end", "1", "--out", "c.npy"],
+    )
+    .success();
+    let a = ArrayD::<f64>::read_npy(std::fs::File::open(dir.path().join("c.npy")).unwrap()).unwrap();
+    assert_eq!(a.shape(), &[4, 6]);
+    pendula(dir.path(), &["simulate", "chain", "--set", "links=4", "--t-end", "1", "--out", "t.csv"])
+        .success();
+    let csv = std::fs::read_to_string(dir.path().join("t.csv")).unwrap();
+    assert!(
+        csv.starts_with("t,theta1,theta2,theta3,theta4,omega1,omega2,omega3,omega4,energy\n"),
+        "{}",
+        &csv[..80]
+    );
+    for args in [
+        &["sweep", "chain", "--grid", "links=1:3:3", "--out", "x.npy"][..],
+        &["simulate", "chain", "--set", "links=9"],
+    ] {
+        let d = TempDir::new().unwrap();
+        pendula(d.path(), args).code(2);
+        assert!(files(d.path()).is_empty());
+    }
+}

@@ -178,9 +178,24 @@ pub(crate) fn parse_axis(info: &'static SystemInfo, text: &str) -> Result<Axis> 
 }
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
-    let info = system::find(args.system.as_deref().unwrap_or("double"))?;
-    let base = parse_settings(info, &args.set)?;
+    let family = system::find(args.system.as_deref().unwrap_or("double"))?;
+    let base = parse_settings(family, &args.set)?;
+    // A family (the chain) resolves to the member the settings choose; an axis may not
+    // change the member, since the state's size would change from cell to cell.
+    let info = family.values(&base)?.info();
     let axes = args.grids.iter().map(|g| parse_axis(info, g)).collect::<Result<Vec<_>>>()?;
+    for a in &axes {
+        for v in [a.centre(0), a.centre(a.n - 1)] {
+            let mut settings = base.clone();
+            settings.push((a.name.clone(), v));
+            if !std::ptr::eq(family.values(&settings)?.info(), info) {
+                bail!(
+                    "invalid --grid `{}`: it changes the size of the state; run one sweep per value",
+                    a.name
+                );
+            }
+        }
+    }
     for (i, a) in axes.iter().enumerate() {
         if axes[..i].iter().any(|b| b.name == a.name) {
             bail!("invalid --grid: `{}` is given twice", a.name);

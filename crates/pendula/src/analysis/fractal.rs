@@ -84,6 +84,21 @@ pub fn converged(coarse: f64, fine: f64, tolerance: f64) -> bool {
 /// # Panics
 /// If `h` or `t_max` is not finite and positive (validated by the caller).
 pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
+    flip_fractal_with_progress(spec, &|| ())
+}
+
+/// [`flip_fractal`], calling `tick` once per integrated pixel and step size (2 × the pixels
+/// that can flip in all), from any thread: for a progress bar.
+///
+/// # Errors
+/// As [`flip_fractal`].
+///
+/// # Panics
+/// As [`flip_fractal`].
+pub fn flip_fractal_with_progress(
+    spec: &FractalSpec,
+    tick: &(dyn Fn() + Sync),
+) -> Result<FlipFractal, EnsembleError> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
     let (n1, n2) = (spec.theta1.n, spec.theta2.n);
     let start = |i: usize| (spec.theta1.centre(i % n1), spec.theta2.centre(i / n1));
@@ -104,6 +119,7 @@ pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
         let mut times = vec![f64::NAN; allowed.len()];
         let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
             row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
+            tick();
         };
         ensemble::run_into(allowed.len(), &member, &batch, &mut times, 1, &store).map_err(|e| match e {
             EnsembleError::NonFinite(f) => {
