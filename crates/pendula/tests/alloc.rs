@@ -112,6 +112,27 @@ fn steps_allocate_nothing() {
     check::<Oscillator>(&values("oscillator", &[("drive_amplitude", 0.5), ("drive_frequency", 2.0)]));
     check::<Pendulum>(&values("pendulum", &[]));
     check::<DoublePendulum>(&values("double", &[]));
+    check::<pendula::system::chain::Chain>(&values("chain", &[("links", 4.0)]));
+}
+
+/// The variational system of `lyapunov` (state and 4 tangent vectors, Jacobians by
+/// num-dual) steps without allocating.
+#[test]
+fn tangent_steps_allocate_nothing() {
+    let v = values("double", &[]);
+    let model = v.build();
+    let system = pendula::system::AsSystem(&*model);
+    let tangent = pendula::analysis::Tangent { model: &system, n: 4, k: 4 };
+    let Scheme::ExplicitRk(t) = pendula::integrator::explicit_rk::RK4.scheme else { unreachable!() };
+    let mut stepper = ExplicitRk::new(t, 20);
+    let mut y = vec![0.1; 20];
+    y[..4].copy_from_slice(v.initial_state());
+    stepper.step(&tangent, 0.0, 1e-3, &mut y).unwrap();
+    let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Steps(100) };
+    let count = allocations_during(|| {
+        Simulation { system: &tangent, spec }.run(&mut stepper, &mut y, &mut Ignore).unwrap();
+    });
+    assert_eq!(count, 0, "the tangent system allocated {count} times");
 }
 
 /// The counter works: a step that allocates is seen.
