@@ -156,6 +156,20 @@ pub fn preset_settings(info: &SystemInfo, preset: &system::driven::Preset) -> Re
     Ok(preset.settings.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect())
 }
 
+/// `--threads`: a whole number >= 1 when given, else every core.
+pub fn parse_threads(text: Option<&str>) -> Result<usize> {
+    match text {
+        Some(text) => {
+            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
+            if n == 0 {
+                bail!("invalid --threads 0: need at least 1");
+            }
+            Ok(n)
+        }
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
 /// An optional floating-point flag: parsed when given, `default` otherwise.
 pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
     text.map_or(Ok(default), |t| parse_number(flag, t, expected))

@@ -85,6 +85,18 @@ pub fn preset_values(
     set: &[String],
     default: &str,
 ) -> Result<Values> {
+    let (info, settings) = preset_settings(system, preset, set, default)?;
+    Ok(info.values(&settings)?)
+}
+
+/// The system and the (name, value) settings of [`preset_values`], not yet validated as a
+/// whole (for commands that add their own settings per run).
+pub fn preset_settings(
+    system: Option<&str>,
+    preset: Option<&str>,
+    set: &[String],
+    default: &str,
+) -> Result<(&'static system::SystemInfo, Vec<(String, f64)>)> {
     let preset = preset.map(system::driven::find_preset).transpose()?;
     let name = system.or(preset.map(|p| p.system)).unwrap_or(default);
     let info = system::find(name)?;
@@ -93,7 +105,7 @@ pub fn preset_values(
         None => Vec::new(),
     };
     settings.extend(parse_settings(info, set)?);
-    Ok(info.values(&settings)?)
+    Ok((info, settings))
 }
 
 /// Methods from a comma-separated list, or every method that applies to `model` at steps up

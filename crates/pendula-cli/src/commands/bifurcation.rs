@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde_json::json;
 
 use crate::commands::sweep::parse_axis;
-use crate::config::{f64_arg, parse_number, parse_settings};
+use crate::config::{f64_arg, parse_number};
 use crate::study::{self, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -53,17 +53,16 @@ pub struct BifurcationArgs {
 
 pub fn run(args: &BifurcationArgs) -> Result<()> {
     // Validate everything first.
-    let preset = args.preset.as_deref().map(pendula::system::driven::find_preset).transpose()?;
-    let system = args.system.as_deref().or(preset.map(|p| p.system)).unwrap_or("driven-pendulum");
-    let info = pendula::system::find(system)?;
+    let (info, base) = study::preset_settings(
+        args.system.as_deref(),
+        args.preset.as_deref(),
+        &args.common.set,
+        "driven-pendulum",
+    )?;
+    let system = info.name;
     if info.quantity("drive_frequency").is_err() {
         bail!("invalid system `{system}`: bifurcation needs a driven system (a drive_frequency parameter)");
     }
-    let mut base = match preset {
-        Some(p) => crate::config::preset_settings(info, p)?,
-        None => Vec::new(),
-    };
-    base.extend(parse_settings(info, &args.common.set)?);
     let default_param = (system == "driven-pendulum").then_some("drive_amplitude=1.0:1.5:800");
     let Some(param_text) = args.param.as_deref().or(default_param) else {
         bail!("--param NAME=LO:HI:N is required for {system}");
@@ -89,16 +88,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
             "invalid --samples {samples} / --steps-per-period {m}: need >= 1 sample and >= 4 steps per period"
         );
     }
-    let threads = match &args.threads {
-        Some(text) => {
-            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
-            if n == 0 {
-                bail!("invalid --threads 0: need at least 1");
-            }
-            n
-        }
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let threads = crate::config::parse_threads(args.threads.as_deref())?;
     // Every value's parameters, validated (a drive frequency > 0 included).
     let all: Vec<pendula::system::Values> = (0..axis.n)
         .map(|i| {

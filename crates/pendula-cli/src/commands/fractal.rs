@@ -15,13 +15,13 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, cannot_flip, flip_fractal_with_progress};
 use pendula::ensemble::BatchMethod;
-use pendula::integrator::{self, Scheme};
+use pendula::integrator;
 use pendula::system::{self, Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
-use crate::commands::sweep::{parse_axis, write_json, write_npy};
-use crate::config::{f64_arg, parse_number, parse_settings};
+use crate::commands::sweep::{batch_method, parse_axis, write_json, write_npy};
+use crate::config::{f64_arg, parse_settings};
 use crate::output::AtomicFile;
 
 #[derive(Debug, Clone, Args)]
@@ -110,27 +110,16 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         bail!("invalid --tolerance {tolerance}: must be finite and >= 0");
     }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let batch = match method.scheme {
-        _ if method.name == "rk4" => BatchMethod::Rk4,
-        Scheme::Tao(scheme) => {
-            integrator::tao::check_binding_step(&scheme, h)?;
-            BatchMethod::Tao(scheme)
-        }
-        _ => bail!(
+    let Some(batch) = batch_method(method) else {
+        bail!(
             "invalid --method {}: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
             method.name
-        ),
+        );
     };
-    let threads = match &args.threads {
-        Some(text) => {
-            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
-            if n == 0 {
-                bail!("invalid --threads 0: need at least 1");
-            }
-            n
-        }
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    if let BatchMethod::Tao(scheme) = batch {
+        integrator::tao::check_binding_step(&scheme, h)?;
+    }
+    let threads = crate::config::parse_threads(args.threads.as_deref())?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("fractal.npy"));
     if out.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: the fractal is written as .npy", out.display());
@@ -167,16 +156,9 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     let share = unconverged as f64 / pixels as f64;
 
     let [npy, png, flags_npy, flags_png] = <[AtomicFile; 4]>::try_from(files).expect("four files");
-    write_npy(&npy, &[n2, n1], fractal.flip_time.clone())?;
-    let flags =
-        ndarray::Array2::from_shape_vec((n2, n1), fractal.converged.iter().map(|c| u8::from(*c)).collect())
-            .expect("the shape fits");
-    {
-        use ndarray_npy::WriteNpyExt;
-        let mut w = std::io::BufWriter::new(flags_npy.handle()?);
-        flags.write_npy(&mut w)?;
-        w.flush()?;
-    }
+    write_npy(&npy, &[n2, n1], &fractal.flip_time)?;
+    let flags: Vec<u8> = fractal.converged.iter().map(|c| u8::from(*c)).collect();
+    write_npy(&flags_npy, &[n2, n1], &flags)?;
     let map = |title: String, bar: &str, values: Vec<f64>, log: bool, nan: Rgb| Heatmap {
         title,
         x_label: "theta1 (rad)".into(),

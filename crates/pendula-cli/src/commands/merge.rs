@@ -78,14 +78,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         data[offset * columns..(offset + count) * columns]
             .copy_from_slice(values.as_slice().expect("standard layout"));
     }
-    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(&shape), data).expect("the shape fits");
-    {
-        use ndarray_npy::WriteNpyExt;
-        use std::io::Write;
-        let mut w = std::io::BufWriter::new(out.handle()?);
-        array.write_npy(&mut w)?;
-        w.flush()?;
-    }
+    crate::commands::sweep::write_npy(&out, &shape, &data)?;
     out.commit()?;
     eprintln!("merged {} shards into {} {:?}", parts.len(), args.out.display(), shape);
     Ok(())

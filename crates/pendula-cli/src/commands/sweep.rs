@@ -312,16 +312,7 @@ impl Observer for FlipWatch {
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     let sweep = parse(args)?;
-    let threads = match &args.threads {
-        Some(text) => {
-            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
-            if n == 0 {
-                bail!("invalid --threads 0: need at least 1");
-            }
-            n
-        }
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let threads = crate::config::parse_threads(args.threads.as_deref())?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
@@ -361,7 +352,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     if sharded {
         shape = vec![end - start, cols];
     }
-    write_npy(&out_file, &shape, data)?;
+    write_npy(&out_file, &shape, &data)?;
     out_file.commit()?;
     let description = json!({
         "pendula_sweep": 1,
@@ -431,7 +422,7 @@ fn store(sweep: &Sweep, state: &[f64], flip_time: f64, energy_error: impl FnOnce
 }
 
 /// The ensemble engine's form of `method`, if it has one (rk4, tao-2, tao-4).
-fn batch_method(method: &Method) -> Option<BatchMethod> {
+pub(crate) fn batch_method(method: &Method) -> Option<BatchMethod> {
     match method.scheme {
         _ if method.name == "rk4" => Some(BatchMethod::Rk4),
         integrator::Scheme::Tao(scheme) => Some(BatchMethod::Tao(scheme)),
@@ -534,11 +525,15 @@ fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress
     })
 }
 
-pub(crate) fn write_npy(file: &AtomicFile, shape: &[usize], data: Vec<f64>) -> Result<()> {
+pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
+    file: &AtomicFile,
+    shape: &[usize],
+    data: &[T],
+) -> Result<()> {
     use ndarray_npy::WriteNpyExt;
     use std::io::Write;
     let array =
-        ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), data).expect("the shape fits the data");
+        ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
     let mut w = std::io::BufWriter::new(file.handle()?);
     array.write_npy(&mut w)?;
     w.flush()?;
