@@ -5,7 +5,7 @@ use pendula::analysis::strobe::stroboscopic as scalar;
 use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
 use pendula::integrator::explicit_rk::RK4;
 use pendula::system::driven::DrivenPendulum;
-use pendula::system::{DynModel, Model};
+use pendula::system::{DynModel, Model, wrap_angle};
 
 use crate::support::values;
 
@@ -15,11 +15,6 @@ fn member(g: f64, frequency: f64, transient: u64) -> DrivenMember {
         state: [0.2, 0.0],
         transient_periods: transient,
     }
-}
-
-fn wrap(a: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
-    a - two_pi * (a / two_pi + 0.5).floor()
 }
 
 #[test]
@@ -41,7 +36,7 @@ fn lanes_match_the_scalar_rk4() {
                 .unwrap();
         for s in 0..check {
             let (lane, row) = (&out[(k * samples + s) * 2..][..2], &rows[s * 2..][..2]);
-            let d = (lane[0] - wrap(row[0])).abs().max((lane[1] - row[1]).abs());
+            let d = (lane[0] - wrap_angle(row[0])).abs().max((lane[1] - row[1]).abs());
             assert!(d < 1e-10, "g = {g}, sample {s}: lanes {lane:?} vs scalar {row:?}");
         }
     }

@@ -159,9 +159,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
                     for row in rows.chunks_exact_mut(dim) {
                         for (x, q) in row.iter_mut().zip(state) {
                             if q.is_angle() {
-                                *x -= 2.0
-                                    * std::f64::consts::PI
-                                    * (*x / (2.0 * std::f64::consts::PI) + 0.5).floor();
+                                *x = pendula::system::wrap_angle(*x);
                             }
                         }
                     }

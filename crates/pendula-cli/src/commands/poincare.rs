@@ -103,8 +103,6 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
 
     let other = 1 - section;
     let (q_name, p_name) = (info.state[other].name, format!("p{}", &info.state[other].name[5..]));
-    let wrap =
-        |a: f64| (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
     let mut rows = Vec::new();
     let mut worst_energy: f64 = 0.0;
     let mut fig = Figure::new(
@@ -123,7 +121,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
             let mut y = [0.0; 4];
             model.to_velocities(z, &mut y);
             worst_energy = worst_energy.max((model.energy(*t, &y) - energy).abs());
-            let (q, p) = (wrap(z[other]), z[2 + other]);
+            let (q, p) = (pendula::system::wrap_angle(z[other]), z[2 + other]);
             rows.push(vec![k.to_string(), num(*t), num(q), num(p), num(z[section]), num(z[2 + section])]);
             points.push((q, p));
         }

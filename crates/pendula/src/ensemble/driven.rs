@@ -119,8 +119,7 @@ fn run_group(
             }
             // Wrap into [−π, π): the equations are 2π-periodic in θ, and the sine's argument
             // stays small however long the run.
-            let wrapped =
-                theta - 2.0 * std::f64::consts::PI * (theta / (2.0 * std::f64::consts::PI) + 0.5).floor();
+            let wrapped = crate::system::wrap_angle(theta);
             lanes.theta[i] = wrapped;
             if period >= member.transient_periods {
                 let s = (period - member.transient_periods) as usize;

@@ -12,9 +12,9 @@
 
 use std::f64::consts::PI;
 
-use num_dual::{Dual64, DualNum};
+use num_dual::DualNum;
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian};
 use crate::Error;
 
 /// The most links a chain may have: its matrices live on the stack, sized for it.
@@ -317,22 +317,6 @@ fn solve_spd<T: DualNum<Primitive = f64> + Copy>(
             s -= a[k][i] * b[k];
         }
         b[i] = s / a[i][i];
-    }
-}
-
-/// The Jacobian of `f` (a map of R^dim into itself, dim ≤ 2 [`MAX_LINKS`]) by forward-mode
-/// automatic differentiation, one dual evaluation per column.
-fn dual_jacobian(dim: usize, f: impl Fn(&[Dual64], &mut [Dual64]), y: &[f64], jac: &mut [f64]) {
-    let mut seeded = [Dual64::from(0.0); 2 * MAX_LINKS];
-    let mut out = [Dual64::from(0.0); 2 * MAX_LINKS];
-    for column in 0..dim {
-        for j in 0..dim {
-            seeded[j] = Dual64::new(y[j], if j == column { 1.0 } else { 0.0 });
-        }
-        f(&seeded[..dim], &mut out[..dim]);
-        for row in 0..dim {
-            jac[row * dim + column] = out[row].eps;
-        }
     }
 }
 

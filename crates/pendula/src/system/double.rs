@@ -3,9 +3,9 @@
 
 use std::f64::consts::PI;
 
-use num_dual::{Dual64, DualNum};
+use num_dual::DualNum;
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian};
 
 /// Two point masses on massless rigid rods, the second hung from the first.
 ///
@@ -260,17 +260,6 @@ fn cos(x: f64) -> f64 {
     crate::ensemble::trig::sin_cos(x).1
 }
 
-/// The Jacobian of a map of R⁴ into itself by forward-mode automatic differentiation: one
-/// dual-number evaluation per column.
-fn dual_jacobian(f: impl Fn([Dual64; 4]) -> [Dual64; 4], y: &[f64], jac: &mut [f64]) {
-    for column in 0..4 {
-        let seeded = std::array::from_fn(|j| Dual64::new(y[j], if j == column { 1.0 } else { 0.0 }));
-        for (row, value) in f(seeded).iter().enumerate() {
-            jac[row * 4 + column] = value.eps;
-        }
-    }
-}
-
 impl Model for DoublePendulum {
     type Form = DoublePendulumForm;
     const INFO: &'static SystemInfo = &INFO;
@@ -347,7 +336,12 @@ impl System for DoublePendulum {
     }
 
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
-        dual_jacobian(|y| self.rhs_generic(t, y), y, jac);
+        dual_jacobian(
+            4,
+            |y, out| out.copy_from_slice(&self.rhs_generic(t, [y[0], y[1], y[2], y[3]])),
+            y,
+            jac,
+        );
         true
     }
 }
@@ -375,7 +369,7 @@ impl System for DoublePendulumForm {
     }
 
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
-        dual_jacobian(|y| self.rhs_generic(y), y, jac);
+        dual_jacobian(4, |y, out| out.copy_from_slice(&self.rhs_generic([y[0], y[1], y[2], y[3]])), y, jac);
         true
     }
 }

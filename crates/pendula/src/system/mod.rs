@@ -392,3 +392,36 @@ impl System for AsSystem<'_> {
         self.0.jacobian(t, y, jac)
     }
 }
+
+/// The largest state [`dual_jacobian`] differentiates (the 8-link chain's 16).
+const MAX_DUAL_DIM: usize = 16;
+
+/// The Jacobian of `f`, a map of R^dim into itself (dim ≤ 16), at `y` by forward-mode
+/// automatic differentiation (num-dual): one dual-number evaluation per column, written
+/// row-major into `jac`; nothing is allocated.
+pub(crate) fn dual_jacobian(
+    dim: usize,
+    f: impl Fn(&[num_dual::Dual64], &mut [num_dual::Dual64]),
+    y: &[f64],
+    jac: &mut [f64],
+) {
+    use num_dual::Dual64;
+    let mut seeded = [Dual64::from(0.0); MAX_DUAL_DIM];
+    let mut out = [Dual64::from(0.0); MAX_DUAL_DIM];
+    for column in 0..dim {
+        for j in 0..dim {
+            seeded[j] = Dual64::new(y[j], if j == column { 1.0 } else { 0.0 });
+        }
+        f(&seeded[..dim], &mut out[..dim]);
+        for row in 0..dim {
+            jac[row * dim + column] = out[row].eps;
+        }
+    }
+}
+
+/// An angle wrapped into [−π, π), rad: θ − 2π ⌊θ/2π + ½⌋.
+#[inline]
+pub fn wrap_angle(theta: f64) -> f64 {
+    use std::f64::consts::TAU;
+    theta - TAU * (theta / TAU + 0.5).floor()
+}
