@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use pendula::analysis::fractal::{FractalSpec, GridAxis, cannot_flip, flip_fractal_with_progress};
+use pendula::analysis::fractal::{FractalSpec, GridAxis, flip_fractal_with_progress};
 use pendula::ensemble::BatchMethod;
 use pendula::integrator;
 use pendula::system::{self, Model, double::DoublePendulum};
@@ -134,15 +134,13 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let integrated = (0..theta1.n * theta2.n)
-        .filter(|&i| !cannot_flip(&pendulum, theta1.centre(i % theta1.n), theta2.centre(i / theta1.n)))
-        .count();
-    let bar = crate::study::progress(2 * integrated as u64, "fractal");
+    let bar = crate::study::progress(2 * (theta1.n * theta2.n) as u64, "fractal");
     let done = std::sync::atomic::AtomicU64::new(0);
-    let tick = || {
-        let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        if n.is_multiple_of(4096) {
-            bar.set_position(n);
+    let tick = |n: u64| {
+        let before = done.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        // Redraw every 4096 pixel-runs.
+        if (before + n) / 4096 != before / 4096 {
+            bar.set_position(before + n);
         }
     };
     let fractal = pool.install(|| flip_fractal_with_progress(&spec, &tick))?;

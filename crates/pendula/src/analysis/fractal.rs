@@ -84,11 +84,11 @@ pub fn converged(coarse: f64, fine: f64, tolerance: f64) -> bool {
 /// # Panics
 /// If `h` or `t_max` is not finite and positive (validated by the caller).
 pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
-    flip_fractal_with_progress(spec, &|| ())
+    flip_fractal_with_progress(spec, &|_| ())
 }
 
-/// [`flip_fractal`], calling `tick` once per integrated pixel and step size (2 × the pixels
-/// that can flip in all), from any thread: for a progress bar.
+/// [`flip_fractal`], reporting progress to `tick(n)` (n pixel-runs done, from any thread):
+/// 2 × the pixels in all, the forbidden ones at once.
 ///
 /// # Errors
 /// As [`flip_fractal`].
@@ -97,7 +97,7 @@ pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
 /// As [`flip_fractal`].
 pub fn flip_fractal_with_progress(
     spec: &FractalSpec,
-    tick: &(dyn Fn() + Sync),
+    tick: &(dyn Fn(u64) + Sync),
 ) -> Result<FlipFractal, EnsembleError> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
     let (n1, n2) = (spec.theta1.n, spec.theta2.n);
@@ -109,6 +109,7 @@ pub fn flip_fractal_with_progress(
             !cannot_flip(&spec.pendulum, a, b)
         })
         .collect();
+    tick(2 * (n1 * n2 - allowed.len()) as u64);
     let run = |h: f64| -> Result<Vec<f64>, EnsembleError> {
         let steps = (spec.t_max / h).ceil() as u64;
         let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
@@ -119,7 +120,7 @@ pub fn flip_fractal_with_progress(
         let mut times = vec![f64::NAN; allowed.len()];
         let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
             row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
-            tick();
+            tick(1);
         };
         ensemble::run_into(allowed.len(), &member, &batch, &mut times, 1, &store).map_err(|e| match e {
             EnsembleError::NonFinite(f) => {
