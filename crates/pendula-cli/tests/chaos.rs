@@ -22,6 +22,14 @@ fn files(dir: &Path) -> Vec<String> {
     names
 }
 
+/// Runs `args` in an empty directory: exit code 2 and nothing written; returns stderr.
+fn refused(args: &[&str]) -> String {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path(), args).code(2);
+    assert!(files(dir.path()).is_empty(), "{args:?} left files");
+    String::from_utf8_lossy(&out.get_output().stderr).into_owned()
+}
+
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -81,14 +89,11 @@ fn fractal_bad_input_exits_2_and_writes_nothing() {
         &["fractal", "--method", "tao-4", "--dt", "0.1"],
     ];
     for args in cases {
-        let dir = TempDir::new().unwrap();
-        let out = pendula(dir.path(), args).code(2);
-        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        let stderr = refused(args);
         assert!(
             stderr.contains("invalid") || stderr.contains("unknown") || stderr.contains("binding"),
             "{args:?}: {stderr}"
         );
-        assert!(files(dir.path()).is_empty(), "{args:?} left files");
     }
 }
 
@@ -133,9 +138,7 @@ fn lyapunov_bad_input_exits_2() {
         &["lyapunov", "--preset", "nope"],
         &["lyapunov", "pendulum", "--preset", "baker-gollub-chaotic"],
     ] {
-        let dir = TempDir::new().unwrap();
-        pendula(dir.path(), args).code(2);
-        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+        refused(args);
     }
 }
 
@@ -196,9 +199,7 @@ fn poincare_bad_input_exits_2() {
         &["poincare", "--set", "damping=0.2"],
         &["poincare", "--t-end", "-1"],
     ] {
-        let dir = TempDir::new().unwrap();
-        pendula(dir.path(), args).code(2);
-        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+        refused(args);
     }
 }
 
@@ -267,9 +268,7 @@ fn bifurcation_bad_input_exits_2() {
         &["bifurcation", "--variable", "p"],
         &["bifurcation", "--param", "drive_frequency=-1:1:4"],
     ] {
-        let dir = TempDir::new().unwrap();
-        pendula(dir.path(), args).code(2);
-        assert!(files(dir.path()).is_empty(), "{args:?} left files");
+        refused(args);
     }
 }
 
@@ -295,8 +294,6 @@ fn chain_members_shape_sweeps_and_trajectories() {
         &["sweep", "chain", "--grid", "links=1:3:3", "--out", "x.npy"][..],
         &["simulate", "chain", "--set", "links=9"],
     ] {
-        let d = TempDir::new().unwrap();
-        pendula(d.path(), args).code(2);
-        assert!(files(d.path()).is_empty());
+        refused(args);
     }
 }

@@ -5,10 +5,11 @@
 
 use pendula::integrator::explicit_rk::RK4;
 use pendula::integrator::gauss_legendre::GAUSS_LEGENDRE_4;
-use pendula::observe::{Ignore, Observer, Sample};
+use pendula::observe::Ignore;
 use pendula::system::{DynModel, Model, System};
 use pendula::{End, RunSpec};
 
+use crate::energy::Tenths;
 use crate::support::values;
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
@@ -87,28 +88,6 @@ fn ref_equal_triple_pendulum_small_oscillation_spectrum() {
         + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
     for (got, want) in [(trace, 9.0), (minors, 18.0), (det, 6.0)] {
         assert!((got - want).abs() < 1e-12, "{got} vs {want}");
-    }
-}
-
-/// max |E − E₀| over the first and the last tenth of the run.
-struct Tenths<'a> {
-    model: &'a dyn DynModel,
-    steps: u64,
-    e0: Option<f64>,
-    first: f64,
-    last: f64,
-}
-
-impl Observer for Tenths<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> std::ops::ControlFlow<()> {
-        let e = self.model.energy(s.t, s.y);
-        let err = (e - *self.e0.get_or_insert(e)).abs();
-        if s.step <= self.steps / 10 {
-            self.first = self.first.max(err);
-        } else if s.step >= self.steps - self.steps / 10 {
-            self.last = self.last.max(err);
-        }
-        std::ops::ControlFlow::Continue(())
     }
 }
 

@@ -16,12 +16,12 @@ use crate::support::values;
 const STEPS: u64 = 1_000_000;
 
 /// max |E − E₀| over the first and the last tenth of a run of `steps` steps.
-struct Tenths<'a> {
-    model: &'a dyn DynModel,
-    steps: u64,
-    e0: Option<f64>,
-    first: f64,
-    last: f64,
+pub(crate) struct Tenths<'a> {
+    pub model: &'a dyn DynModel,
+    pub steps: u64,
+    pub e0: Option<f64>,
+    pub first: f64,
+    pub last: f64,
 }
 
 impl Observer for Tenths<'_> {
