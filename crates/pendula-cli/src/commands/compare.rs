@@ -188,11 +188,10 @@ pub fn figures(values: &pendula::system::Values, runs: &[Run], h: f64, t_end: f6
             Kind::Line,
             rows.clone().take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
         );
-        let wrap =
-            |x: f64| if angle { x - std::f64::consts::TAU * (x / std::f64::consts::TAU).round() } else { x };
+        let wrap = |x: f64| if angle { pendula::system::wrap_angle(x) } else { x };
         let phase = Figure::new(
             format!("{system}: phase portrait with {}, h = {h} s, t <= {t_end} s", r.method),
-            format!("{} ({}{})", q.name, q.unit, if angle { ", wrapped to [-pi, pi]" } else { "" }),
+            format!("{} ({}{})", q.name, q.unit, if angle { ", wrapped to [-pi, pi)" } else { "" }),
             format!("{} ({})", v.name, v.unit),
         )
         .with(r.method, color, Kind::Dots, rows.map(|row| (wrap(row[1]), row[1 + n])).collect());
