@@ -5,34 +5,32 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
+use pendula::analysis::EnergyBalance;
 use pendula::events::{EventLocator, EventSpec};
-use pendula::observe::{EnergyTracker, Observer, Sample};
+use pendula::observe::{Observer, Sample};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, Sink};
 
-/// Tracks energy at every step and writes the kept steps.
-struct Writer<F> {
-    energy: EnergyTracker<F>,
+/// Tracks the energy error (or balance) at every step and writes the kept steps.
+struct Writer<'a> {
+    energy: EnergyBalance<'a>,
     every: u64,
     sink: Sink,
     rows: u64,
     failure: Option<anyhow::Error>,
 }
 
-impl<F: FnMut(f64, &[f64]) -> f64> Observer for Writer<F> {
+impl Observer for Writer<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = match s.energy {
-            Some(e) => {
-                self.energy.record(e);
-                e
-            }
-            None => self.energy.track(s.t, s.y),
-        };
+        self.energy.track(s.t, s.y, s.energy);
+        let (e, work) = (self.energy.last, self.energy.work);
         if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
-            let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
+            // Forced runs add the work W(t) of damping and drive, so E − E(0) − W is the balance.
+            let forced = self.energy.forced.then_some(work);
+            let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain([e]).chain(forced);
             if let Err(err) = self.sink.row(row) {
                 self.failure = Some(err);
                 return ControlFlow::Break(());
@@ -61,8 +59,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     columns.extend(info.state.iter().map(|q| q.name));
     columns.push("energy");
     let model = values.build();
+    let balance = EnergyBalance::new(&*model, values.initial_state());
+    if balance.forced {
+        columns.push("work");
+    }
     let mut writer = Writer {
-        energy: EnergyTracker::new(|t, y: &[f64]| model.energy(t, y)),
+        energy: balance,
         every: every.unwrap_or(0),
         sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
         rows: 0,
@@ -96,7 +98,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         return Err(err);
     }
     let report = report?;
-    let energy = writer.energy.stats();
+    let energy = &writer.energy;
+    let energy_unit = info.energy_unit();
     let rows = writer.rows;
     writer.sink.finish(out_file.as_ref())?;
     if let Some(f) = out_file {
@@ -137,8 +140,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             "energy": {
                 "initial": energy.initial,
                 "final": energy.last,
-                "max_abs_error": energy.max_abs_error,
-                "max_rel_error": energy.max_rel_error(),
+                "tracked": energy.quantity(),
+                "work": energy.forced.then_some(energy.work),
+                "scale": energy.scale,
+                "scale_definition": info.energy_scale,
+                "max_abs_error": energy.max_abs,
+                "max_rel_error": energy.max_rel(),
             },
             "wall_s": wall_s,
             "events": events.found.iter().map(|e| {
@@ -182,11 +189,14 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     )?;
     writeln!(
         err,
-        "energy: {:.12e} J -> {:.12e} J, max |dE| = {:.3e} J (relative {:.3e})",
+        "energy: {:.12e}{u} -> {:.12e}{u}; {}: max {:.3e}{u}, {:.3e} of the energy scale {:.4}{u}",
         energy.initial,
         energy.last,
-        energy.max_abs_error,
-        energy.max_rel_error()
+        energy.quantity(),
+        energy.max_abs,
+        energy.max_rel(),
+        energy.scale,
+        u = if energy_unit.is_empty() { String::new() } else { format!(" {energy_unit}") },
     )?;
     match out {
         Some(Output::Csv(p) | Output::Npy(p)) => writeln!(err, "wrote {} ({rows} rows)", p.display())?,

@@ -173,9 +173,10 @@ pub struct EnergyStats {
 }
 
 impl EnergyStats {
-    /// `max_abs_error / |initial|` (infinite or NaN when the initial energy is 0).
-    pub fn max_rel_error(&self) -> f64 {
-        self.max_abs_error / self.initial.abs()
+    /// `max_abs_error / scale`: relative to an energy scale, such as the system's
+    /// ([`crate::system::Model::energy_scale`]), never to |E(0)|, which may vanish.
+    pub fn max_rel_error(&self, scale: f64) -> f64 {
+        self.max_abs_error / scale
     }
 }
 

@@ -8,7 +8,7 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use pendula::analysis::relative_error;
+use pendula::analysis::EnergySeries;
 use pendula::integrator;
 use pendula::observe::{Every, Recorder};
 use pendula::{End, RunSpec};
@@ -133,13 +133,15 @@ pub fn snapshots(
     }
     let model = values.build();
     let n = values.info().state.len() / 2;
-    let mut tracks = Vec::new();
+    let (mut tracks, mut errors) = (Vec::new(), Vec::new());
     for y0 in &starts {
         let mut rec = Every { n: every, inner: Recorder::default() };
-        model.solve(method, y0, spec, &mut rec)?;
+        // Relative to the system's energy scale; sampled at the same steps as the frames.
+        let mut energy = EnergySeries::new(&*model, y0, every);
+        model.solve(method, y0, spec, &mut (&mut rec, &mut energy))?;
         tracks.push(rec.inner.rows);
+        errors.push(energy.error);
     }
-    let e0: Vec<f64> = starts.iter().map(|y| model.energy(0.0, y)).collect();
     let row = 2 * n + 1;
     Ok((0..tracks[0].len() / row)
         .map(|k| {
@@ -147,11 +149,7 @@ pub fn snapshots(
             Snapshot {
                 t: rows[0][0],
                 angles: rows.iter().map(|r| r[1..=n].to_vec()).collect(),
-                energy_error: rows
-                    .iter()
-                    .zip(&e0)
-                    .map(|(r, e)| relative_error(model.energy(r[0], &r[1..]), *e).abs())
-                    .collect(),
+                energy_error: errors.iter().map(|e| e[k].abs()).collect(),
             }
         })
         .collect())

@@ -130,7 +130,7 @@ pub fn compare_one(
     let model = values.build();
     let steps = spec.schedule()?.steps;
     let every = (steps / SAMPLES).max(1);
-    let mut energy = EnergySeries::new(|t, y: &[f64]| model.energy(t, y), every);
+    let mut energy = EnergySeries::new(&*model, values.initial_state(), every);
     let mut traj = Every { n: every, inner: Recorder::default() };
     let start = Instant::now();
     let result = model.solve(method, values.initial_state(), spec, &mut (&mut energy, &mut traj));

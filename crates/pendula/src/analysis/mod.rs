@@ -16,7 +16,7 @@ pub use convergence::{
     work_precision, work_precision_adaptive,
 };
 pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
-pub use energy::{EnergySeries, drift_rate, envelope, relative_error};
+pub use energy::{EnergyBalance, EnergySeries, drift_rate, envelope};
 pub use lyapunov::{Lyapunov, LyapunovSpec, Tangent, lyapunov};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

@@ -2,7 +2,7 @@
 
 use std::ops::ControlFlow;
 
-use super::energy::relative_error;
+use super::energy::EnergyBalance;
 use crate::integrator::Method;
 use crate::observe::{Observer, Sample};
 use crate::system::DynModel;
@@ -13,23 +13,22 @@ use crate::{End, Error, RunSpec};
 pub struct StabilityCriterion {
     /// Length of the test run, s.
     pub t_end: f64,
-    /// Largest allowed |E − E₀| / |E₀| (absolute, J, when E₀ = 0) at any step.
+    /// Largest allowed relative energy error at any step, against the system's energy scale
+    /// (the energy balance error for damped or driven systems; see [`EnergyBalance`]).
     pub max_rel_energy_error: f64,
 }
 
 /// Stops a run as soon as the energy error exceeds the bound.
 struct Guard<'a> {
-    model: &'a dyn DynModel,
+    balance: EnergyBalance<'a>,
     bound: f64,
-    e0: Option<f64>,
     exceeded: bool,
 }
 
 impl Observer for Guard<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = self.model.energy(s.t, s.y);
-        let e0 = *self.e0.get_or_insert(e);
-        if relative_error(e, e0).abs() > self.bound {
+        let error = self.balance.track(s.t, s.y, s.energy);
+        if error.abs() > self.bound * self.balance.scale {
             self.exceeded = true;
             return ControlFlow::Break(());
         }
@@ -51,7 +50,8 @@ pub fn is_stable(
     {
         return Ok(false);
     }
-    let mut guard = Guard { model, bound: criterion.max_rel_energy_error, e0: None, exceeded: false };
+    let balance = EnergyBalance::new(model, y0);
+    let mut guard = Guard { balance, bound: criterion.max_rel_energy_error, exceeded: false };
     let spec = RunSpec { t0: 0.0, h, end: End::Time(criterion.t_end) };
     match model.solve(method, y0, &spec, &mut guard) {
         Ok(_) => Ok(!guard.exceeded),

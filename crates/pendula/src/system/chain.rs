@@ -155,6 +155,8 @@ const fn member_info(n: usize, parameters: &'static [Quantity], states: &'static
         state: states.split_at(2 * n).0,
         build: |v| Box::new(Chain::from_values(v)),
         variant: None,
+        dimensionless: false,
+        energy_scale: "the potential energy gained from hanging at rest to every rod horizontal, sum over k of (m_k + ... + m_N) g l_k, or E(0) - V_min if larger",
     }
 }
 
@@ -356,6 +358,11 @@ impl Model for Chain {
         y[..n].copy_from_slice(&z[..n]);
         self.velocities(&z[..n], &z[n..], &mut y[n..]);
     }
+
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        let above_min = Energy::energy(self, 0.0, y0) - self.potential(&[0.0; MAX_LINKS][..self.n]);
+        self.well_depth().max(above_min)
+    }
 }
 
 impl System for Chain {
@@ -381,6 +388,14 @@ impl System for Chain {
             jac,
         );
         true
+    }
+}
+
+impl Chain {
+    /// V(every rod horizontal) − V_min = Σₖ μₖ g lₖ, J.
+    fn well_depth(&self) -> f64 {
+        let mu = self.hanging();
+        (0..self.n).map(|k| mu[k] * self.g * self.l[k]).sum()
     }
 }
 

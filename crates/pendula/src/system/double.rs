@@ -144,6 +144,8 @@ pub static INFO: SystemInfo = SystemInfo {
     ],
     build: |v| Box::new(DoublePendulum::from_values(v)),
     variant: None,
+    dimensionless: false,
+    energy_scale: "(m1 + m2) g l1 + m2 g l2, the potential energy gained from hanging at rest to both rods horizontal, or E(0) - V_min if larger",
 };
 
 /// The terms of the matrix formalism M(θ) θ'' + C + G = 0 (paper (73)–(75), with C the
@@ -299,6 +301,18 @@ impl Model for DoublePendulum {
         self.form().dh_dp(0.0, &z[..2], &z[2..4], &mut w);
         y[..2].copy_from_slice(&z[..2]);
         y[2..4].copy_from_slice(&w);
+    }
+
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
+        let above_min = Energy::energy(self, 0.0, y0) - self.potential(0.0, 0.0);
+        ((m1 + m2) * g * l1 + m2 * g * l2).max(above_min)
+    }
+
+    /// Q · ω, the power of the joint friction and the drive.
+    fn power(&self, t: f64, y: &[f64]) -> f64 {
+        let [q1, q2] = self.generalized_forces(t, y[2], y[3]);
+        q1 * y[2] + q2 * y[3]
     }
 }
 

@@ -70,6 +70,8 @@ pub static INFO: SystemInfo = SystemInfo {
     ],
     build: |v| Box::new(DrivenPendulum::from_values(v)),
     variant: None,
+    dimensionless: true,
+    energy_scale: "1 (m g l, from hanging at rest to horizontal), or E(0) - V_min if larger",
 };
 
 /// A named set of values for a catalogued system, with where it comes from.
@@ -167,6 +169,16 @@ impl Model for DrivenPendulum {
 
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[..2].copy_from_slice(&z[..2]);
+    }
+
+    /// In units of m g l: 1, or the energy above the bottom (−1) when larger.
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        (Energy::energy(self, 0.0, y0) + 1.0).max(1.0)
+    }
+
+    /// ω (g cos(ω_D t) − ω/q), in units of m g l ω₀.
+    fn power(&self, t: f64, y: &[f64]) -> f64 {
+        y[1] * (self.drive(t) - y[1] / self.q)
     }
 }
 

@@ -150,6 +150,12 @@ pub struct SystemInfo {
     /// the member the settings choose, whose entry [`SystemInfo::values`] then uses. This
     /// entry lists the quantities of the largest member, so that names can be checked early.
     pub variant: Option<Variant>,
+    /// Whether the system is written in dimensionless units (time in units of 1/ω₀, energy
+    /// in units of m g l): its outputs then carry no s, 1/s or J.
+    pub dimensionless: bool,
+    /// The energy scale that relative energy errors are taken against, in words (see
+    /// [`Model::energy_scale`]).
+    pub energy_scale: &'static str,
 }
 
 impl std::fmt::Debug for SystemInfo {
@@ -171,6 +177,21 @@ pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
 }
 
 impl SystemInfo {
+    /// The unit of time: `s`, or `""` for a dimensionless system.
+    pub fn time_unit(&self) -> &'static str {
+        if self.dimensionless { "" } else { "s" }
+    }
+
+    /// The unit of rates (Lyapunov exponents, growth rates): `1/s`, or `""`.
+    pub fn rate_unit(&self) -> &'static str {
+        if self.dimensionless { "" } else { "1/s" }
+    }
+
+    /// The unit of energy: `J`, or `""` for a dimensionless system.
+    pub fn energy_unit(&self) -> &'static str {
+        if self.dimensionless { "" } else { "J" }
+    }
+
     /// Every quantity: parameters then state variables.
     pub fn quantities(&self) -> impl Iterator<Item = &'static Quantity> + use<> {
         let (p, s): (&'static [Quantity], &'static [Quantity]) = (self.parameters, self.state);
@@ -281,6 +302,20 @@ pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     fn info(&self) -> &'static SystemInfo {
         Self::INFO
     }
+    /// The energy scale that relative energy errors of a run from `y0` are taken against, J
+    /// (in the system's units when dimensionless): a size of the motion's energy that is
+    /// never near zero for ordinary states — for the pendulums, the potential energy gained
+    /// from hanging at rest to every rod horizontal, or the initial energy above the
+    /// potential's minimum when that is larger ([`SystemInfo::energy_scale`] says it in
+    /// words). Dividing by |E(0)| instead misleads: E(0) depends on where V = 0 is put and
+    /// may vanish for ordinary states.
+    fn energy_scale(&self, y0: &[f64]) -> f64;
+    /// The power of the non-conservative forces (damping, drive) at (t, y), J/s: dE/dt =
+    /// power along every solution, so that E(t) − E(0) − ∫₀ᵗ power dt is conserved. Zero (the
+    /// default) for a free system.
+    fn power(&self, _t: f64, _y: &[f64]) -> f64 {
+        0.0
+    }
 }
 
 /// The object-safe face of a [`Model`], used where the system is chosen at run time.
@@ -289,6 +324,10 @@ pub trait DynModel: Send + Sync {
     fn info(&self) -> &'static SystemInfo;
     /// Mechanical energy at (t, y), J.
     fn energy(&self, t: f64, y: &[f64]) -> f64;
+    /// The scale of relative energy errors of a run from `y0` (see [`Model::energy_scale`]).
+    fn energy_scale(&self, y0: &[f64]) -> f64;
+    /// The power of the non-conservative forces at (t, y), J/s (see [`Model::power`]).
+    fn power(&self, t: f64, y: &[f64]) -> f64;
     /// The right-hand side f(t, y) of the (position, velocity) form.
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
     /// The Jacobian ∂f/∂y of the (position, velocity) form, row-major; false when the
@@ -331,6 +370,12 @@ impl<M: Model> DynModel for M {
     }
     fn energy(&self, t: f64, y: &[f64]) -> f64 {
         Energy::energy(self, t, y)
+    }
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        Model::energy_scale(self, y0)
+    }
+    fn power(&self, t: f64, y: &[f64]) -> f64 {
+        Model::power(self, t, y)
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         System::rhs(self, t, y, dydt);

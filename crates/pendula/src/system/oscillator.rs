@@ -61,6 +61,8 @@ pub static INFO: SystemInfo = SystemInfo {
     ],
     build: |v| Box::new(Oscillator::from_values(v)),
     variant: None,
+    dimensionless: false,
+    energy_scale: "E(0) (the energy above the minimum at x = 0) plus F^2/(2 k), the energy of the drive's static displacement; 1/2 k (1 m)^2 if both vanish",
 };
 
 /// The damping regime, from the damping ratio ζ = c / (2 √(k m)).
@@ -207,6 +209,17 @@ impl Model for Oscillator {
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[0] = z[0];
         y[1] = z[1] / self.m;
+    }
+
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        let drive = self.drive_amplitude * self.drive_amplitude / (2.0 * self.k);
+        let scale = Energy::energy(self, 0.0, y0) + drive;
+        if scale > 0.0 { scale } else { 0.5 * self.k }
+    }
+
+    /// v (F cos(Ω t) − c v).
+    fn power(&self, t: f64, y: &[f64]) -> f64 {
+        y[1] * (self.drive_amplitude * (self.drive_frequency * t).cos() - self.c * y[1])
     }
 
     fn exact(&self, t: f64, y0: &[f64], y: &mut [f64]) -> bool {

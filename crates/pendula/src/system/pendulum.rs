@@ -90,6 +90,8 @@ pub static INFO: SystemInfo = SystemInfo {
     ],
     build: |v| Box::new(Pendulum::from_values(v)),
     variant: None,
+    dimensionless: false,
+    energy_scale: "m g l, the potential energy gained from hanging at rest to horizontal, or E(0) - V_min if larger",
 };
 
 impl Pendulum {
@@ -208,6 +210,16 @@ impl Model for Pendulum {
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[0] = z[0];
         y[1] = z[1] / (self.m * self.l * self.l);
+    }
+
+    fn energy_scale(&self, y0: &[f64]) -> f64 {
+        let above_min = Energy::energy(self, 0.0, y0) - self.potential(0.0);
+        (self.m * self.g * self.l).max(above_min)
+    }
+
+    /// m l² ω (A cos(Ω t) − b ω): the drive and the damping act on the angular acceleration.
+    fn power(&self, t: f64, y: &[f64]) -> f64 {
+        self.m * self.l * self.l * y[1] * (self.drive(t) - self.damping * y[1])
     }
 
     fn exact(&self, t: f64, y0: &[f64], y: &mut [f64]) -> bool {
