@@ -32,7 +32,8 @@ pub struct Common {
 /// them.
 #[derive(Debug, Clone, Args)]
 pub struct StepRange {
-    /// Smallest step size, s [default: dt-max / 2^(levels - 1)].
+    /// Smallest step size, s [default: dt-max / 2^(levels - 1); without any of --dt-min,
+    /// --dt-max, --levels each method runs its own ladder of halved steps].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt_min: Option<String>,
     /// Largest step size, s [default: 0.05 for convergence, 0.1 for work-precision].
@@ -42,7 +43,9 @@ pub struct StepRange {
     /// work-precision].
     #[arg(long, value_name = "N")]
     pub levels: Option<usize>,
-    /// End time at which the error is measured, s [default: 10].
+    /// End time at which the error is measured, s [default: the system's study horizon, a
+    /// few small-oscillation periods: 10 s for the oscillator and the pendulum, 2 s for the
+    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
 }
@@ -67,6 +70,26 @@ impl StepRange {
         let hs =
             (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
         Ok((hs, t_end))
+    }
+}
+
+impl StepRange {
+    /// The given steps (when any of --dt-min, --dt-max, --levels is given; the others take
+    /// [`StepRange::resolve`]'s defaults) or each method's default ladder, and the end time
+    /// (`default_t_end` unless --t-end is given).
+    pub fn resolve_or_default(
+        &self,
+        default_t_end: f64,
+    ) -> Result<(crate::commands::convergence::Ladder, f64)> {
+        use crate::commands::convergence::Ladder;
+        let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
+        if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
+            pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) }.schedule()?;
+            return Ok((Ladder::PerMethod, t_end));
+        }
+        let with_t = StepRange { t_end: Some(t_end.to_string()), ..self.clone() };
+        let (hs, t_end) = with_t.resolve(0.05, 5)?;
+        Ok((Ladder::Given(hs), t_end))
     }
 }
 

@@ -23,6 +23,7 @@ mod fractal;
 mod implicit;
 mod lyapunov;
 mod poincare;
+mod scales;
 mod schedule;
 mod special;
 mod support;

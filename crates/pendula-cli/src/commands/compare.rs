@@ -1,12 +1,21 @@
 //! `pendula compare`: several methods on one problem — energy error, trajectories, phase
 //! portraits and cost (paper §7.3, §8.3, Figures 6 and 7).
+//!
+//! By default every method gets the same cost — the same number of right-hand-side
+//! evaluations per simulated second — and its step is chosen to spend it, so that the
+//! comparison is fair: the lesson of §8 (symplectic methods keep the energy error bounded,
+//! RK4's drifts) is a statement about long runs at equal work. `--dt` gives every method the
+//! same step instead.
 
+use std::ops::ControlFlow;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
-use pendula::analysis::{EnergySeries, drift_rate, envelope};
-use pendula::observe::{Every, Recorder};
+use pendula::analysis::{EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
+use pendula::integrator::Method;
+use pendula::observe::{Every, Observer, Recorder, Sample};
+use pendula::system::Values;
 use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, method_color};
 use serde_json::json;
@@ -21,26 +30,52 @@ pub struct CompareArgs {
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
-    /// Step size, s [default: 0.01].
+    /// The cost given to every method: right-hand-side evaluations per simulated second
+    /// (a Jacobian counts as one evaluation per state variable); each method's step is
+    /// chosen to spend it [default: 400, i.e. RK4 at h = 0.01 s].
+    #[arg(long, value_name = "N", conflicts_with = "dt", allow_hyphen_values = true)]
+    pub evals_per_second: Option<String>,
+    /// One step size for every method instead of equal cost, s.
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// End time, s [default: 100].
+    /// End time, s [default: 60000 for the double pendulum (where, at the default cost, RK4's
+    /// drift passes the symplectic methods' bounded errors), 500 otherwise].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
 
+/// How each method's step is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Steps {
+    /// The same step for every method, s.
+    Equal(f64),
+    /// The same cost: this many evaluations per simulated second.
+    EqualCost(f64),
+}
+
 /// One method's run.
 pub struct Run {
     pub method: &'static str,
+    /// Its step, s.
+    pub h: f64,
     pub steps: u64,
     pub rhs_evals: u64,
+    /// Evaluations counting each Jacobian as one per state variable: the cost compared.
+    pub cost: u64,
     pub wall_s: f64,
+    /// max |error| / energy scale.
     pub max_rel_energy_error: f64,
+    /// max |error|, J.
+    pub max_abs_energy_error: f64,
+    /// Slope of the relative error, 1/s.
     pub drift_rate: f64,
-    /// Where it failed, if it did.
+    /// Bounded or growing, from the series.
+    pub growth: Option<Growth>,
+    /// Where it failed or was refused, if it did.
     pub failure: Option<String>,
+    /// (t, |relative error|) samples.
     pub energy: Vec<(f64, f64)>,
     pub trajectory: Vec<f64>,
 }
@@ -48,149 +83,383 @@ pub struct Run {
 /// Samples kept per series: enough for a smooth curve, few enough for a light SVG.
 const SAMPLES: u64 = 2000;
 
+/// A run whose energy error exceeds the energy scale itself is stopped there: beyond it the
+/// motion has nothing to do with the system's (explicit Euler within seconds at coarse steps).
+const GIVE_UP: f64 = 1.0;
+
+/// The default cost, evaluations per simulated second (RK4 at h = 0.01 s).
+pub const DEFAULT_EVALS_PER_SECOND: f64 = 400.0;
+
+/// The default end time, s: on the double pendulum long enough, at the default cost, for
+/// RK4's secular drift to pass the bounded error of symplectic Euler and Verlet (at about
+/// 41 000 s and 53 000 s from the default state).
+pub fn default_t_end(system: &str) -> f64 {
+    if system == "double" { 60000.0 } else { 500.0 }
+}
+
 pub fn run(args: &CompareArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("double");
     let values = study::values(system, &args.common.set)?;
-    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 100.0, "an end time in seconds")?;
-    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    spec.schedule()?;
+    let steps = match &args.dt {
+        Some(text) => Steps::Equal(f64_arg("--dt", Some(text), 0.0, "a step size in seconds")?),
+        None => {
+            let n = f64_arg(
+                "--evals-per-second",
+                args.evals_per_second.as_deref(),
+                DEFAULT_EVALS_PER_SECOND,
+                "a number of evaluations per second > 0",
+            )?;
+            if !(n.is_finite() && n > 0.0) {
+                bail!("invalid --evals-per-second {n}: must be finite and > 0");
+            }
+            Steps::EqualCost(n)
+        }
+    };
+    let t_end = f64_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
+    let h_check = match steps {
+        Steps::Equal(h) => h,
+        Steps::EqualCost(n) => 1.0 / n,
+    };
+    RunSpec { t0: 0.0, h: h_check, end: End::Time(t_end) }.schedule()?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(h))?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
 
     let bar = study::progress(methods.len() as u64, "compare");
     let mut runs = Vec::new();
     for method in &methods {
-        runs.push(compare_one(&values, method, &spec)?);
+        runs.push(compare_one(&values, method, steps, t_end)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
 
-    let header = ["method", "dt", "steps", "rhs_evals", "wall_s", "max_rel_energy_error", "drift_rate"];
+    let header = [
+        "method",
+        "dt",
+        "steps",
+        "rhs_evals",
+        "cost_evals",
+        "wall_s",
+        "max_rel_energy_error",
+        "max_abs_energy_error",
+        "drift_rate",
+        "growth",
+        "failure",
+    ];
     let rows: Vec<Vec<String>> = runs
         .iter()
         .map(|r| {
             vec![
                 r.method.to_owned(),
-                num(h),
+                num(r.h),
                 r.steps.to_string(),
                 r.rhs_evals.to_string(),
+                r.cost.to_string(),
                 num(r.wall_s),
                 num(r.max_rel_energy_error),
+                num(r.max_abs_energy_error),
                 num(r.drift_rate),
+                r.growth.map_or("", Growth::word).to_owned(),
+                r.failure.clone().unwrap_or_default(),
             ]
         })
         .collect();
     out.csv("summary.csv", &header, &rows)?;
+    let model_scale = model.energy_scale(values.initial_state());
+    let info = values.info();
+    let eu = info.energy_unit();
+    println!(
+        "{system}: {} over {t_end} {}, {}; relative to the energy scale {} {eu} ({})",
+        pendula::analysis::EnergyBalance::new(&*model, values.initial_state()).quantity(),
+        info.time_unit(),
+        match steps {
+            Steps::Equal(h) => format!("every method at h = {h}"),
+            Steps::EqualCost(n) => format!("every method at the same cost, {n} evaluations per unit time"),
+        },
+        short(model_scale),
+        info.energy_scale,
+    );
     let shown: Vec<Vec<String>> = runs
         .iter()
         .map(|r| {
             vec![
                 r.method.to_owned(),
-                r.steps.to_string(),
-                r.rhs_evals.to_string(),
+                short(r.h),
+                r.cost.to_string(),
                 format!("{:.3}", r.wall_s),
                 short(r.max_rel_energy_error),
                 short(r.drift_rate),
+                r.growth.map_or("-", Growth::word).to_owned(),
                 r.failure.clone().unwrap_or_default(),
             ]
         })
         .collect();
     print!(
         "{}",
-        study::table(&["method", "steps", "rhs evals", "wall s", "max |dE/E0|", "drift 1/s", "note"], &shown)
+        study::table(
+            &["method", "dt", "cost (evals)", "wall s", "max rel. error", "drift 1/s", "error", "note"],
+            &shown
+        )
     );
+    let crossings = crossovers(&runs);
+    for c in &crossings {
+        println!("{}", c.sentence(info.time_unit()));
+    }
 
-    for (name, figure) in figures(&values, &runs, h, t_end) {
+    for (name, figure) in figures(&values, &runs, steps, t_end) {
         out.figure(&name, &figure)?;
     }
     let doc = json!({
         "system": system,
-        "dt": h,
+        "steps": match steps {
+            Steps::Equal(h) => json!({ "mode": "equal step", "dt": h }),
+            Steps::EqualCost(n) => json!({ "mode": "equal cost", "evals_per_second": n }),
+        },
         "t_end": t_end,
+        "energy_scale": model_scale,
+        "energy_scale_definition": info.energy_scale,
         "methods": runs.iter().map(|r| (r.method.to_owned(), json!({
-            "steps": r.steps, "rhs_evals": r.rhs_evals, "wall_s": r.wall_s,
-            "max_rel_energy_error": r.max_rel_energy_error, "drift_rate": r.drift_rate,
-            "failure": r.failure,
+            "dt": r.h, "steps": r.steps, "rhs_evals": r.rhs_evals, "cost_evals": r.cost, "wall_s": r.wall_s,
+            "max_rel_energy_error": r.max_rel_energy_error, "max_abs_energy_error": r.max_abs_energy_error,
+            "drift_rate": r.drift_rate, "growth": r.growth.map(Growth::word), "failure": r.failure,
         }))).collect::<serde_json::Map<_, _>>(),
+        "crossovers": crossings.iter().map(|c| json!({
+            "growing": c.growing, "bounded": c.bounded, "bound": c.bound, "t": c.t,
+        })).collect::<Vec<_>>(),
     });
     study::summary(args.common.summary.as_deref(), &doc)?;
     out.report();
     Ok(())
 }
 
-/// Runs one method, keeping ~2000 samples of its energy error and trajectory. A run that
-/// fails numerically (Euler blowing up) is kept up to its failure and reported, not fatal.
-pub fn compare_one(
-    values: &pendula::system::Values,
-    method: &'static pendula::integrator::Method,
-    spec: &RunSpec,
-) -> Result<Run> {
+/// When a growing method's error passes a bounded method's largest error.
+pub struct Crossover {
+    pub growing: &'static str,
+    pub bounded: &'static str,
+    /// The bounded method's largest relative error.
+    pub bound: f64,
+    /// The first envelope window (centre time) where the growing error exceeds it; `None`
+    /// when it does not within the run.
+    pub t: Option<f64>,
+    /// The end of the growing method's run.
+    pub t_end: f64,
+}
+
+impl Crossover {
+    /// One sentence, checked against the numbers it is made of.
+    pub fn sentence(&self, time_unit: &str) -> String {
+        match self.t {
+            Some(t) => format!(
+                "crossover: {}'s growing error passes {}'s bounded error ({}) at t ≈ {} {time_unit}",
+                self.growing,
+                self.bounded,
+                short(self.bound),
+                short(t)
+            ),
+            None => format!(
+                "crossover: {}'s growing error stays below {}'s bounded error ({}) up to t = {} {time_unit}",
+                self.growing,
+                self.bounded,
+                short(self.bound),
+                short(self.t_end)
+            ),
+        }
+    }
+}
+
+/// Windows of the energy-error envelope in figures and crossovers.
+const WINDOWS: usize = 300;
+
+/// For RK4 (the growing method of §7.3), when its error passes each bounded method's.
+pub fn crossovers(runs: &[Run]) -> Vec<Crossover> {
+    let Some(rk4) = runs.iter().find(|r| r.method == "rk4" && r.growth == Some(Growth::Growing)) else {
+        return Vec::new();
+    };
+    let (t, e): (Vec<f64>, Vec<f64>) = rk4.energy.iter().copied().unzip();
+    let env = envelope(&t, &e, WINDOWS);
+    runs.iter()
+        .filter(|r| r.growth == Some(Growth::Bounded) && r.failure.is_none())
+        .map(|r| Crossover {
+            growing: rk4.method,
+            bounded: r.method,
+            bound: r.max_rel_energy_error,
+            t: first_exceeding(&env, r.max_rel_energy_error),
+            t_end: t.last().copied().unwrap_or(0.0),
+        })
+        .collect()
+}
+
+/// Stops a run once its relative energy error passes [`GIVE_UP`].
+struct GiveUp<'a, 'b> {
+    series: &'a mut EnergySeries<'b>,
+    stopped_at: Option<f64>,
+}
+
+impl Observer for GiveUp<'_, '_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        let _ = self.series.observe(s);
+        if self.series.max_abs > GIVE_UP {
+            self.stopped_at = Some(s.t);
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// The cost of a run: evaluations, a Jacobian counting one per state variable.
+fn cost(report: &pendula::simulate::Report, dim: usize) -> u64 {
+    report.rhs_evals + report.jacobian_evals * dim as u64
+}
+
+/// The step at which `method` spends `per_second` evaluations per simulated second: exact
+/// for explicit methods (a fixed number per step); for implicit ones, whose iterations per
+/// step depend on the step, refined from pilot runs over the first `pilot` seconds.
+pub fn equal_cost_step(values: &Values, method: &Method, per_second: f64, pilot: f64) -> Result<f64> {
     let model = values.build();
-    let steps = spec.schedule()?.steps;
-    let every = (steps / SAMPLES).max(1);
+    let dim = values.initial_state().len();
+    let mut h = 1.0 / per_second;
+    for _ in 0..4 {
+        let spec = RunSpec { t0: 0.0, h, end: End::Time(pilot.max(h)) };
+        let report = model.solve(method, values.initial_state(), &spec, &mut pendula::observe::Ignore)?;
+        let per_step = cost(&report, dim) as f64 / report.outcome.steps() as f64;
+        let next = per_step / per_second;
+        let settled = (next / h - 1.0).abs() < 0.01;
+        h = next;
+        if settled {
+            break;
+        }
+    }
+    Ok(h)
+}
+
+/// Runs one method, keeping ~2000 samples of its energy error and trajectory. A run that
+/// fails numerically (Euler blowing up, a Newton failure) or is refused at its step (Tao's
+/// maps above ω h = 1) is reported with the library's reason, not fatal.
+pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end: f64) -> Result<Run> {
+    let h = match steps {
+        Steps::Equal(h) => Ok(h),
+        Steps::EqualCost(n) => equal_cost_step(values, method, n, t_end.min(20.0)),
+    };
+    let failed = |h: f64, reason: String| Run {
+        method: method.name,
+        h,
+        steps: 0,
+        rhs_evals: 0,
+        cost: 0,
+        wall_s: 0.0,
+        max_rel_energy_error: f64::NAN,
+        max_abs_energy_error: f64::NAN,
+        drift_rate: f64::NAN,
+        growth: None,
+        failure: Some(reason),
+        energy: Vec::new(),
+        trajectory: Vec::new(),
+    };
+    let h = match h {
+        Ok(h) => h,
+        Err(e) => return refusal(e).map(|reason| failed(f64::NAN, reason)),
+    };
+    let model = values.build();
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
+    let total = spec.schedule()?.steps;
+    let every = (total / SAMPLES).max(1);
     let mut energy = EnergySeries::new(&*model, values.initial_state(), every);
     let mut traj = Every { n: every, inner: Recorder::default() };
     let start = Instant::now();
-    let result = model.solve(method, values.initial_state(), spec, &mut (&mut energy, &mut traj));
+    let mut guard = GiveUp { series: &mut energy, stopped_at: None };
+    let result = model.solve(method, values.initial_state(), &spec, &mut (&mut guard, &mut traj));
     let wall_s = start.elapsed().as_secs_f64();
-    let (steps, rhs_evals, failure) = match result {
-        Ok(report) => (report.outcome.steps(), report.rhs_evals, None),
-        Err(e @ (pendula::Error::NonFinite { .. } | pendula::Error::NewtonDidNotConverge { .. })) => {
-            (0, 0, Some(e.to_string()))
-        }
-        Err(e) => return Err(e.into()),
+    let stopped_at = guard.stopped_at;
+    let dim = values.initial_state().len();
+    let failed_run = result.is_err();
+    let (steps, rhs_evals, cost, failure) = match result {
+        Ok(report) => (
+            report.outcome.steps(),
+            report.rhs_evals,
+            cost(&report, dim),
+            stopped_at
+                .map(|t| format!("stopped at t = {}: the energy error exceeded the energy scale", short(t))),
+        ),
+        Err(e) => (0, 0, 0, Some(refusal(e.into())?)),
     };
+    let scale = energy.balance.scale;
+    if failed_run {
+        return Ok(Run { steps, rhs_evals, cost, wall_s, ..failed(h, failure.unwrap_or_default()) });
+    }
     Ok(Run {
         method: method.name,
+        h,
         steps,
         rhs_evals,
+        cost,
         wall_s,
         max_rel_energy_error: energy.max_abs,
+        max_abs_energy_error: energy.max_abs * scale,
         drift_rate: drift_rate(&energy.t, &energy.error),
+        // A run stopped for its error has grown past everything else, whatever its shape.
+        growth: if stopped_at.is_some() { Some(Growth::Growing) } else { growth(&energy.t, &energy.error) },
         failure,
         energy: energy.t.iter().copied().zip(energy.error.iter().map(|e| e.abs())).collect(),
         trajectory: traj.inner.rows,
     })
 }
 
+/// The library's reason for a failed or refused run, or the error itself when it is not
+/// one a study reports per method.
+pub fn refusal(e: anyhow::Error) -> Result<String> {
+    match e.downcast_ref::<pendula::Error>() {
+        Some(
+            pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::InvalidValue { .. }
+            | pendula::Error::UnmetRequirement { .. },
+        ) => Ok(e.to_string()),
+        _ => Err(e),
+    }
+}
+
 /// Energy error envelope, early trajectories, and one phase portrait per method.
-pub fn figures(values: &pendula::system::Values, runs: &[Run], h: f64, t_end: f64) -> Vec<(String, Figure)> {
+pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(String, Figure)> {
     let info = values.info();
     let dim = info.state.len();
     let n = dim / 2;
     let system = info.name;
     let (q, v) = (&info.state[0], &info.state[n]);
     let angle = q.is_angle();
+    let scale = values.build().energy_scale(values.initial_state());
+    let how = match steps {
+        Steps::Equal(h) => format!("h = {h} s"),
+        Steps::EqualCost(n) => format!("equal cost, {n} evaluations/s"),
+    };
     // |error| crosses zero every oscillation; on a log axis its envelope reads better.
     let mut energy = Figure::new(
-        format!("{system}: energy error (envelope over {t_end} s / 300), h = {h} s"),
+        format!("{system}: relative energy error (envelope over {t_end} s / {WINDOWS}), {how}"),
         "time t (s)",
-        "max |E(t) - E(0)| / |E(0)|",
+        format!("max |E(t) - E(0)| / E_scale (E_scale = {} J)", short(scale)),
     )
     .scales(Scale::Linear, Scale::Log);
     let t_show = t_end.min(20.0);
     let mut trajectory = Figure::new(
-        format!("{system}: {} against time, h = {h} s", q.name),
+        format!("{system}: {} against time, {how}", q.name),
         "time t (s)",
         format!("{} ({})", q.name, q.unit),
     );
     let mut figures = Vec::new();
-    for r in runs {
+    for r in runs.iter().filter(|r| r.failure.is_none() || !r.energy.is_empty()) {
         let color = method_color(r.method);
+        let label = format!("{} (h = {})", r.method, short(r.h));
         let (t, e): (Vec<f64>, Vec<f64>) = r.energy.iter().copied().unzip();
-        energy = energy.with(r.method, color, Kind::Line, envelope(&t, &e, 300));
+        energy = energy.with(label.clone(), color, Kind::Line, envelope(&t, &e, WINDOWS));
         let rows = r.trajectory.chunks(dim + 1);
         trajectory = trajectory.with(
-            r.method,
+            label,
             color,
             Kind::Line,
             rows.clone().take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
         );
         let wrap = |x: f64| if angle { pendula::system::wrap_angle(x) } else { x };
         let phase = Figure::new(
-            format!("{system}: phase portrait with {}, h = {h} s, t <= {t_end} s", r.method),
+            format!("{system}: phase portrait with {}, h = {} s, t <= {t_end} s", r.method, short(r.h)),
             format!("{} ({}{})", q.name, q.unit, if angle { ", wrapped to [-pi, pi)" } else { "" }),
             format!("{} ({})", v.name, v.unit),
         )

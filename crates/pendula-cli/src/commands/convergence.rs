@@ -1,13 +1,23 @@
 //! `pendula convergence`: global error against step size on log-log axes, and the fitted
 //! order of each method (paper §7.3, §8.3).
+//!
+//! On defaults the horizon and the steps are chosen per system and per method: the horizon
+//! is the system's `study_periods` small-oscillation periods (short of chaos's growth), and
+//! each method runs a ladder of halved steps that starts where its order needs it and stops
+//! at a cost cap. The order is fitted where the errors are in the asymptotic range — between
+//! saturation and the round-off floor, on a straight stretch — found without reference to
+//! the declared order; a method with no such range is reported with the reason.
 
 use anyhow::Result;
 use clap::Args;
-use pendula::analysis::{self, fit_order};
+use pendula::analysis::{self, OrderEstimate, default_ladder, estimate_order};
+use pendula::integrator::Method;
+use pendula::system::Values;
 use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
-use crate::study::{self, Common, OutDir, StepRange, num};
+use crate::commands::compare::refusal;
+use crate::study::{self, Common, OutDir, StepRange, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -27,23 +37,58 @@ pub struct MethodConvergence {
     pub method: &'static str,
     pub hs: Vec<f64>,
     pub errors: Vec<f64>,
-    /// Fitted order over the errors above the round-off floor.
-    pub order: Option<f64>,
+    /// What the fit found.
+    pub estimate: OrderEstimate,
+    /// Where the method failed or was refused, if it did (the library's reason).
+    pub failure: Option<String>,
 }
 
-/// Errors below this (relative to the state's size) are round-off, not truncation, and
-/// are left out of the fit.
-const ROUNDOFF_FLOOR: f64 = 1e-12;
+impl MethodConvergence {
+    /// The fitted order, if any.
+    pub fn order(&self) -> Option<f64> {
+        self.estimate.order()
+    }
+
+    /// The table's note: the fit's range, or why there is no order.
+    pub fn note(&self) -> String {
+        match (&self.estimate, &self.failure) {
+            (OrderEstimate::Fitted { points, h_min, h_max, .. }, _) => {
+                format!("fitted over {points} steps, {} .. {}", short(*h_min), short(*h_max))
+            }
+            (e, None) if self.hs.is_empty() => e.reason().unwrap_or_default().to_owned(),
+            (e, None) => e.reason().unwrap_or_default().to_owned(),
+            (_, Some(f)) if self.hs.is_empty() => f.clone(),
+            (e, Some(f)) => format!("{}; {f}", e.reason().unwrap_or_default()),
+        }
+    }
+}
+
+/// Most rungs of a default ladder.
+pub const LEVELS: usize = 14;
+
+/// Which steps each method runs.
+#[derive(Debug, Clone)]
+pub enum Ladder {
+    /// The same steps for every method (given on the command line).
+    Given(Vec<f64>),
+    /// Each method's default ladder ([`default_ladder`]).
+    PerMethod,
+}
+
+/// The horizon on defaults: the system's `study_periods` times its time scale.
+pub fn default_t_end(values: &Values) -> f64 {
+    values.info().study_periods * values.build().time_scale()
+}
 
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("oscillator");
     let values = study::values(system, &args.common.set)?;
-    let (hs, t_end) = args.steps.resolve(0.05, 5)?;
+    let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
 
-    let (results, reference) = study_orders(&values, &methods, &hs, t_end)?;
+    let (results, reference) = study_orders(&values, &methods, &ladder, t_end)?;
 
     let mut rows = Vec::new();
     for r in &results {
@@ -52,33 +97,54 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         }
     }
     out.csv("convergence.csv", &["method", "dt", "error"], &rows)?;
-    println!("{system}: error at t = {t_end} s against the {}", reference.source);
+    let unit = values.info().time_unit();
+    println!("{system}: error at t = {} {unit} against the {}", short(t_end), reference.source);
     let shown: Vec<Vec<String>> = results
         .iter()
         .map(|r| {
             let declared =
                 pendula::integrator::find(r.method).map(|m| m.order.to_string()).unwrap_or_default();
-            vec![r.method.to_owned(), declared, r.order.map_or("-".into(), |o| format!("{o:.3}"))]
+            vec![r.method.to_owned(), declared, r.order().map_or("-".into(), |o| format!("{o:.3}")), r.note()]
         })
         .collect();
-    print!("{}", study::table(&["method", "declared order", "fitted order"], &shown));
+    print!("{}", study::table(&["method", "declared order", "fitted order", "note"], &shown));
     out.figure("convergence", &figure(system, t_end, &results, reference.source))?;
     let orders: serde_json::Map<String, serde_json::Value> =
-        results.iter().map(|r| (r.method.to_owned(), json!(r.order))).collect();
+        results.iter().map(|r| (r.method.to_owned(), json!(r.order()))).collect();
+    let notes: serde_json::Map<String, serde_json::Value> =
+        results.iter().map(|r| (r.method.to_owned(), json!(r.note()))).collect();
+    let dts: serde_json::Map<String, serde_json::Value> =
+        results.iter().map(|r| (r.method.to_owned(), json!(r.hs))).collect();
     study::summary(
         args.common.summary.as_deref(),
-        &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": hs, "orders": orders }),
+        &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
     )?;
     out.report();
     Ok(())
 }
 
-/// Errors and fitted orders of `methods` at steps `hs`, against the exact solution or a
-/// dop853 reference at tolerance 1e-14.
+/// The steps `method` runs on `values` under `ladder`.
+pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) -> Vec<f64> {
+    match ladder {
+        Ladder::Given(hs) => hs.clone(),
+        Ladder::PerMethod => {
+            // Tao's maps are defined only for ω h ≤ 1: the ladder starts inside that.
+            let limit = match method.scheme {
+                pendula::integrator::Scheme::Tao(t) => 1.0 / t.binding,
+                _ => f64::INFINITY,
+            };
+            default_ladder(values.build().time_scale(), method.order, t_end, LEVELS, limit)
+        }
+    }
+}
+
+/// Errors and fitted orders of `methods`, against the exact solution or a dop853 reference
+/// at tolerance 1e-14. A method that fails (non-finite state, Newton failure) or is refused
+/// (Tao's maps above ω h = 1) at some step keeps the errors of the steps before and says why.
 pub fn study_orders(
-    values: &pendula::system::Values,
-    methods: &[&'static pendula::integrator::Method],
-    hs: &[f64],
+    values: &Values,
+    methods: &[&'static Method],
+    ladder: &Ladder,
     t_end: f64,
 ) -> Result<(Vec<MethodConvergence>, analysis::Reference)> {
     let model = values.build();
@@ -87,22 +153,26 @@ pub fn study_orders(
     let bar = study::progress(methods.len() as u64, "convergence");
     let mut results = Vec::new();
     for method in methods {
-        let errors = analysis::convergence_errors(
-            &*model,
-            method,
-            values.initial_state(),
-            t_end,
-            hs,
-            &reference.state,
-        )?;
-        let (fit_h, fit_e): (Vec<f64>, Vec<f64>) = hs
-            .iter()
-            .zip(&errors)
-            .filter(|(_, e)| **e > ROUNDOFF_FLOOR * scale)
-            .map(|(h, e)| (*h, *e))
-            .unzip();
-        let order = fit_order(&fit_h, &fit_e).map(|f| f.order);
-        results.push(MethodConvergence { method: method.name, hs: hs.to_vec(), errors, order });
+        let (mut hs, mut errors, mut failure) = (Vec::new(), Vec::new(), None);
+        for h in steps_for(values, method, ladder, t_end) {
+            match analysis::convergence_errors(
+                &*model,
+                method,
+                values.initial_state(),
+                t_end,
+                &[h],
+                &reference.state,
+            ) {
+                Ok(e) => {
+                    hs.push(h);
+                    errors.push(e[0]);
+                }
+                // Large steps may be refused or blow up where smaller ones work: keep going.
+                Err(e) => failure = Some(format!("at h = {}: {}", short(h), refusal(e.into())?)),
+            }
+        }
+        let estimate = estimate_order(&hs, &errors, scale, t_end);
+        results.push(MethodConvergence { method: method.name, hs, errors, estimate, failure });
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -112,16 +182,16 @@ pub fn study_orders(
 /// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
     let mut fig = Figure::new(
-        format!("{system}: global error at t = {t_end} s, against the {reference}"),
+        format!("{system}: global error at t = {} s, against the {reference}", short(t_end)),
         "step size h (s)",
         "max |y(t) - y_ref(t)|",
     )
     .scales(Scale::Log, Scale::Log)
     .legend(Legend::LowerRight);
-    for r in results {
-        let label = match r.order {
+    for r in results.iter().filter(|r| !r.hs.is_empty()) {
+        let label = match r.order() {
             Some(o) => format!("{} (order {o:.2})", r.method),
-            None => r.method.to_owned(),
+            None => format!("{} (no order)", r.method),
         };
         fig = fig.with(
             label,
@@ -130,9 +200,10 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
             r.hs.iter().copied().zip(r.errors.iter().copied()).collect(),
         );
     }
-    if let Some(first) = results.first() {
-        let (h0, h1) = (first.hs[0], first.hs[first.hs.len() - 1]);
-        let anchor = results.iter().map(|r| r.errors[0]).fold(f64::INFINITY, f64::min);
+    let all_h = results.iter().flat_map(|r| r.hs.iter().copied());
+    let (h0, h1) = all_h.fold((f64::NEG_INFINITY, f64::INFINITY), |(a, b), h| (a.max(h), b.min(h)));
+    if h0.is_finite() && h1 < h0 {
+        let anchor = results.iter().filter_map(|r| r.errors.first()).fold(f64::INFINITY, |m, e| m.min(*e));
         // Dense points: a dashed line is interpolated in data coordinates, which bends on log axes.
         for p in [1, 2, 4] {
             let c = anchor / h0.powi(p);

@@ -146,3 +146,140 @@ pub fn work_precision_adaptive(
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
+
+/// What a convergence study found for one method.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OrderEstimate {
+    /// An order fitted over `points` consecutive steps from `h_min` to `h_max` (s), where the
+    /// errors lie between the saturation level and the round-off floor and the log-log curve
+    /// is straight.
+    Fitted {
+        /// The least-squares slope.
+        order: f64,
+        /// Points in the fit.
+        points: usize,
+        /// Smallest step in the fit, s.
+        h_min: f64,
+        /// Largest step in the fit, s.
+        h_max: f64,
+    },
+    /// Every error is at or above the saturation level: the steps are too large for the
+    /// asymptotic range (or chaos has amplified the errors to the size of the motion).
+    Saturated,
+    /// Every usable error is at the round-off floor: the method is exact to rounding at
+    /// these steps (a high order, or a problem it solves exactly).
+    RoundOff,
+    /// Too few points between saturation and round-off, or no straight stretch of three.
+    Irregular,
+}
+
+impl OrderEstimate {
+    /// The fitted order, if there is one.
+    pub fn order(&self) -> Option<f64> {
+        match self {
+            OrderEstimate::Fitted { order, .. } => Some(*order),
+            _ => None,
+        }
+    }
+
+    /// Why there is no order, in words; `None` when fitted.
+    pub fn reason(&self) -> Option<&'static str> {
+        match self {
+            OrderEstimate::Fitted { .. } => None,
+            OrderEstimate::Saturated => Some("saturated: every error is as large as the motion"),
+            OrderEstimate::RoundOff => Some("round-off floor: the errors are rounding, not truncation"),
+            OrderEstimate::Irregular => {
+                Some("no straight stretch of 3 steps between saturation and round-off")
+            }
+        }
+    }
+}
+
+/// Errors at or above this share of the state's size are saturated: no longer small, so
+/// not in the asymptotic range where error ≈ C hᵖ.
+pub const SATURATION: f64 = 1e-2;
+
+/// The round-off floor of a run of `steps` steps, relative to the state's size: each step
+/// adds rounding errors of a few ulp, which accumulate like a random walk; a hundredfold
+/// margin keeps errors that rounding disturbs out of the fit.
+pub fn roundoff_floor(steps: f64) -> f64 {
+    100.0 * f64::EPSILON * steps.max(1.0).sqrt()
+}
+
+/// The largest spread of local slopes (between consecutive points) that still counts as a
+/// straight line in log-log coordinates.
+const STRAIGHT: f64 = 0.2;
+
+/// Estimates the order of convergence from errors at steps `hs` (largest first, as a
+/// ladder), without reference to the method's declared order: the points between
+/// [`SATURATION`] × `scale` and the round-off floor ([`roundoff_floor`] × `scale`, at each
+/// point's number of steps over `t_end`) are candidates; the longest run of consecutive
+/// candidates that ends at the smallest usable step (the most asymptotic) and reaches up to
+/// larger steps while the local slopes differ by at most 0.2 is fitted by least squares,
+/// when it has at least 3 points.
+pub fn estimate_order(hs: &[f64], errors: &[f64], scale: f64, t_end: f64) -> OrderEstimate {
+    let usable: Vec<bool> = hs
+        .iter()
+        .zip(errors)
+        .map(|(h, e)| *e < SATURATION * scale && *e > roundoff_floor(t_end / h) * scale && e.is_finite())
+        .collect();
+    if !usable.iter().any(|u| *u) {
+        let small = |e: f64| e < SATURATION * scale;
+        let saturated = errors.iter().all(|e| !small(*e));
+        let at_floor =
+            hs.iter().zip(errors).all(|(h, e)| *e <= roundoff_floor(t_end / h) * scale || !small(*e));
+        return if saturated {
+            OrderEstimate::Saturated
+        } else if at_floor {
+            OrderEstimate::RoundOff
+        } else {
+            OrderEstimate::Irregular
+        };
+    }
+    let slope = |i: usize| (errors[i] / errors[i + 1]).ln() / (hs[i] / hs[i + 1]).ln();
+    // The asymptotic range is at small steps: the stretch ends at the smallest usable step
+    // and grows towards larger ones while it stays straight.
+    let end = usable.iter().rposition(|u| *u).expect("some point is usable");
+    let mut start = end;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    while start > 0 && usable[start - 1] {
+        let s = slope(start - 1);
+        let (nlo, nhi) = (lo.min(s), hi.max(s));
+        if nhi - nlo > STRAIGHT {
+            break;
+        }
+        (lo, hi) = (nlo, nhi);
+        start -= 1;
+    }
+    let best = (end + 1 - start >= 3).then_some((start, end));
+    let Some((start, end)) = best else {
+        return OrderEstimate::Irregular;
+    };
+    match fit_order(&hs[start..=end], &errors[start..=end]) {
+        Some(fit) => OrderEstimate::Fitted {
+            order: fit.order,
+            points: end + 1 - start,
+            h_min: hs[end],
+            h_max: hs[start],
+        },
+        None => OrderEstimate::Irregular,
+    }
+}
+
+/// The default ladder of steps for a method of `order` on a model of time scale T: halvings
+/// from a start that shrinks with the order's need for accuracy (order 1 from T/64, orders
+/// 2 and 3 from T/32, higher orders from T/16), and no larger than `h_limit` (a method's own
+/// limit, such as Tao's ω h ≤ 1), down to where a run would take more steps over `t_end` than
+/// a cap that grows as the order falls (2·10⁶ for order 1, 10⁶ for order 2, 2·10⁵ above:
+/// low orders need small steps to reach their asymptotic range and are cheap per step), at
+/// most `levels` steps.
+pub fn default_ladder(time_scale: f64, order: u32, t_end: f64, levels: usize, h_limit: f64) -> Vec<f64> {
+    let (divisor, max_steps) = match order {
+        0 | 1 => (64.0, 2e6),
+        2 => (32.0, 1e6),
+        3 => (32.0, 2e5),
+        _ => (16.0, 2e5),
+    };
+    let start = (time_scale / divisor).min(t_end / 4.0).min(h_limit);
+    (0..levels).map(|k| start / 2f64.powi(k as i32)).take_while(|h| t_end / h <= max_steps).collect()
+}

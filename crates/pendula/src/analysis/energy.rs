@@ -76,10 +76,9 @@ impl<'a> EnergyBalance<'a> {
             let p = self.model.power(t, y);
             if self.started {
                 let h = t - self.t_previous;
-                for i in 0..y.len() {
-                    // The cubic Hermite interpolant at the step's midpoint.
-                    self.mid[i] =
-                        0.5 * (self.previous[i] + y[i]) + 0.125 * h * (self.f_previous[i] - self.f[i]);
+                // The cubic Hermite interpolant at the step's midpoint.
+                for (i, m) in self.mid.iter_mut().enumerate() {
+                    *m = 0.5 * (self.previous[i] + y[i]) + 0.125 * h * (self.f_previous[i] - self.f[i]);
                 }
                 let p_mid = self.model.power(self.t_previous + 0.5 * h, &self.mid);
                 self.work += h / 6.0 * (self.p_previous + 4.0 * p_mid + p);
@@ -180,4 +179,52 @@ pub fn envelope(t: &[f64], error: &[f64], windows: usize) -> Vec<(f64, f64)> {
         out[k].1 = out[k].1.max(e.abs());
     }
     out
+}
+
+/// Whether an energy error stays bounded or grows, judged from its series.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Growth {
+    /// The largest |error| of the last fifth of the run is under twice that of the first
+    /// fifth: the error oscillates about a level it reached early (symplectic methods).
+    Bounded,
+    /// It is at least twice as large: the error grows (a secular drift, or worse).
+    Growing,
+}
+
+impl Growth {
+    /// One word, for tables and sentences.
+    pub fn word(self) -> &'static str {
+        match self {
+            Growth::Bounded => "bounded",
+            Growth::Growing => "growing",
+        }
+    }
+}
+
+/// Judges a series of |error| (any scale) sampled at times `t` (see [`Growth`]); `None`
+/// with fewer than ten samples or an error that is zero throughout the first fifth.
+///
+/// A linear drift from zero gives a ratio of about 9 (the last fifth's maximum against the
+/// first's), a bounded oscillating error about 1; the threshold 2 sits between them with a
+/// margin on both sides, and is independent of the method.
+pub fn growth(t: &[f64], error: &[f64]) -> Option<Growth> {
+    if t.len() < 10 || t.len() != error.len() {
+        return None;
+    }
+    let (t0, t1) = (t[0], t[t.len() - 1]);
+    let fifth = 0.2 * (t1 - t0);
+    let max_where = |keep: &dyn Fn(f64) -> bool| {
+        t.iter().zip(error).filter(|(ti, _)| keep(**ti)).map(|(_, e)| e.abs()).fold(0.0, f64::max)
+    };
+    let first = max_where(&|ti| ti <= t0 + fifth);
+    let last = max_where(&|ti| ti >= t1 - fifth);
+    if first.is_nan() || first <= 0.0 {
+        return None;
+    }
+    Some(if last < 2.0 * first { Growth::Bounded } else { Growth::Growing })
+}
+
+/// The first time at which an envelope (window centre, max |error|) exceeds `level`.
+pub fn first_exceeding(envelope: &[(f64, f64)], level: f64) -> Option<f64> {
+    envelope.iter().find(|(_, e)| *e > level).map(|(t, _)| *t)
 }

@@ -12,11 +12,12 @@ pub mod stability;
 pub mod strobe;
 
 pub use convergence::{
-    OrderFit, REFERENCE_TOLERANCE, Reference, WorkPoint, convergence_errors, fit_order, reference_state,
-    work_precision, work_precision_adaptive,
+    OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference, SATURATION, WorkPoint, convergence_errors,
+    default_ladder, estimate_order, fit_order, reference_state, roundoff_floor, work_precision,
+    work_precision_adaptive,
 };
 pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
-pub use energy::{EnergyBalance, EnergySeries, drift_rate, envelope};
+pub use energy::{EnergyBalance, EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
 pub use lyapunov::{Lyapunov, LyapunovSpec, Tangent, lyapunov};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, is_stable, largest_stable_step};

@@ -156,6 +156,7 @@ const fn member_info(n: usize, parameters: &'static [Quantity], states: &'static
         build: |v| Box::new(Chain::from_values(v)),
         variant: None,
         dimensionless: false,
+        study_periods: 0.5,
         energy_scale: "the potential energy gained from hanging at rest to every rod horizontal, sum over k of (m_k + ... + m_N) g l_k, or E(0) - V_min if larger",
     }
 }
@@ -357,6 +358,12 @@ impl Model for Chain {
         let n = self.n;
         y[..n].copy_from_slice(&z[..n]);
         self.velocities(&z[..n], &z[n..], &mut y[n..]);
+    }
+
+    /// 2π √(L/g) with L the chain's total length: the slowest mode's period, within a
+    /// factor of order one.
+    fn time_scale(&self) -> f64 {
+        std::f64::consts::TAU * (self.l[..self.n].iter().sum::<f64>() / self.g).sqrt()
     }
 
     fn energy_scale(&self, y0: &[f64]) -> f64 {

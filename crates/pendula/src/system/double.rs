@@ -145,6 +145,7 @@ pub static INFO: SystemInfo = SystemInfo {
     build: |v| Box::new(DoublePendulum::from_values(v)),
     variant: None,
     dimensionless: false,
+    study_periods: 1.0,
     energy_scale: "(m1 + m2) g l1 + m2 g l2, the potential energy gained from hanging at rest to both rods horizontal, or E(0) - V_min if larger",
 };
 
@@ -301,6 +302,11 @@ impl Model for DoublePendulum {
         self.form().dh_dp(0.0, &z[..2], &z[2..4], &mut w);
         y[..2].copy_from_slice(&z[..2]);
         y[2..4].copy_from_slice(&w);
+    }
+
+    /// 2π √(max(l₁, l₂)/g): the longer rod's pendulum period.
+    fn time_scale(&self) -> f64 {
+        std::f64::consts::TAU * (self.l1.max(self.l2) / self.g).sqrt()
     }
 
     fn energy_scale(&self, y0: &[f64]) -> f64 {

@@ -71,6 +71,7 @@ pub static INFO: SystemInfo = SystemInfo {
     build: |v| Box::new(DrivenPendulum::from_values(v)),
     variant: None,
     dimensionless: true,
+    study_periods: 1.6,
     energy_scale: "1 (m g l, from hanging at rest to horizontal), or E(0) - V_min if larger",
 };
 
@@ -169,6 +170,11 @@ impl Model for DrivenPendulum {
 
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[..2].copy_from_slice(&z[..2]);
+    }
+
+    /// 2π: time is in units of 1/ω₀.
+    fn time_scale(&self) -> f64 {
+        std::f64::consts::TAU
     }
 
     /// In units of m g l: 1, or the energy above the bottom (−1) when larger.

@@ -156,6 +156,11 @@ pub struct SystemInfo {
     /// The energy scale that relative energy errors are taken against, in words (see
     /// [`Model::energy_scale`]).
     pub energy_scale: &'static str,
+    /// The horizon of the accuracy studies (convergence, work-precision), in periods
+    /// [`Model::time_scale`]: a real stretch of motion, yet short of the time over which
+    /// chaos amplifies every error by orders of magnitude (which would hide the methods'
+    /// orders behind the Lyapunov growth).
+    pub study_periods: f64,
 }
 
 impl std::fmt::Debug for SystemInfo {
@@ -316,6 +321,10 @@ pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     fn power(&self, _t: f64, _y: &[f64]) -> f64 {
         0.0
     }
+    /// The period of small oscillations about the stable equilibrium, s (in the system's
+    /// units when dimensionless): the time scale that steps and horizons of studies are
+    /// measured in.
+    fn time_scale(&self) -> f64;
 }
 
 /// The object-safe face of a [`Model`], used where the system is chosen at run time.
@@ -328,6 +337,8 @@ pub trait DynModel: Send + Sync {
     fn energy_scale(&self, y0: &[f64]) -> f64;
     /// The power of the non-conservative forces at (t, y), J/s (see [`Model::power`]).
     fn power(&self, t: f64, y: &[f64]) -> f64;
+    /// The period of small oscillations, s (see [`Model::time_scale`]).
+    fn time_scale(&self) -> f64;
     /// The right-hand side f(t, y) of the (position, velocity) form.
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
     /// The Jacobian ∂f/∂y of the (position, velocity) form, row-major; false when the
@@ -376,6 +387,9 @@ impl<M: Model> DynModel for M {
     }
     fn power(&self, t: f64, y: &[f64]) -> f64 {
         Model::power(self, t, y)
+    }
+    fn time_scale(&self) -> f64 {
+        Model::time_scale(self)
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         System::rhs(self, t, y, dydt);

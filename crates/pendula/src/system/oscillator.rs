@@ -62,6 +62,7 @@ pub static INFO: SystemInfo = SystemInfo {
     build: |v| Box::new(Oscillator::from_values(v)),
     variant: None,
     dimensionless: false,
+    study_periods: 1.6,
     energy_scale: "E(0) (the energy above the minimum at x = 0) plus F^2/(2 k), the energy of the drive's static displacement; 1/2 k (1 m)^2 if both vanish",
 };
 
@@ -209,6 +210,11 @@ impl Model for Oscillator {
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[0] = z[0];
         y[1] = z[1] / self.m;
+    }
+
+    /// 2π √(m/k).
+    fn time_scale(&self) -> f64 {
+        std::f64::consts::TAU * (self.m / self.k).sqrt()
     }
 
     fn energy_scale(&self, y0: &[f64]) -> f64 {

@@ -91,6 +91,7 @@ pub static INFO: SystemInfo = SystemInfo {
     build: |v| Box::new(Pendulum::from_values(v)),
     variant: None,
     dimensionless: false,
+    study_periods: 5.0,
     energy_scale: "m g l, the potential energy gained from hanging at rest to horizontal, or E(0) - V_min if larger",
 };
 
@@ -210,6 +211,11 @@ impl Model for Pendulum {
     fn to_velocities(&self, z: &[f64], y: &mut [f64]) {
         y[0] = z[0];
         y[1] = z[1] / (self.m * self.l * self.l);
+    }
+
+    /// 2π √(l/g).
+    fn time_scale(&self) -> f64 {
+        std::f64::consts::TAU * (self.l / self.g).sqrt()
     }
 
     fn energy_scale(&self, y0: &[f64]) -> f64 {

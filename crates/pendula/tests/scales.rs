@@ -1,0 +1,103 @@
+//! Energy scales, the energy balance of forced runs, the bounded/growing verdict and the
+//! order estimate of convergence studies, against closed forms and synthetic series whose
+//! answer is known by construction.
+
+use pendula::analysis::{EnergyBalance, Growth, OrderEstimate, estimate_order, growth, roundoff_floor};
+use pendula::integrator::explicit_rk::RK4;
+use pendula::system::{self, CATALOGUE};
+use pendula::{End, RunSpec};
+
+#[test]
+fn ref_double_pendulum_scale_is_the_well_depth_to_horizontal() {
+    let values = system::find("double").unwrap().values(&[]).unwrap();
+    let model = values.build();
+    // From (90°, 90°) E(0) = 0 J (to rounding): relative to |E(0)| any error is infinite.
+    let y = [std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2, 0.0, 0.0];
+    assert!(model.energy(0.0, &y).abs() < 1e-12);
+    // (m1 + m2) g l1 + m2 g l2 = 2 · 9.81 + 9.81 = 29.43 J.
+    assert!((model.energy_scale(&y) - 29.43).abs() < 1e-12);
+    // The default (120°, −10°) lies above the horizontal position: E(0) − V_min is larger.
+    let y0 = values.initial_state();
+    let above = model.energy(0.0, y0) - model.energy(0.0, &[0.0; 4]);
+    assert!((model.energy_scale(y0) - above).abs() < 1e-12 && above > 29.43);
+}
+
+#[test]
+fn every_system_declares_a_scale_far_from_zero_even_at_rest() {
+    for info in CATALOGUE {
+        let values = info.values(&[]).unwrap();
+        let model = values.build();
+        let rest = vec![0.0; values.initial_state().len()];
+        for y in [values.initial_state(), &rest[..]] {
+            let scale = model.energy_scale(y);
+            assert!(scale.is_finite() && scale >= 0.1, "{}: scale {scale} at {y:?}", info.name);
+        }
+        assert!(!info.energy_scale.is_empty() && model.time_scale() > 0.0);
+    }
+}
+
+/// max |balance| / scale and max |E − E(0)| / scale of an RK4 run.
+fn balance_of(system: &str, set: &[(&str, f64)], h: f64, t_end: f64) -> (f64, f64) {
+    let settings: Vec<(String, f64)> = set.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect();
+    let values = system::find(system).unwrap().values(&settings).unwrap();
+    let model = values.build();
+    let mut balance = EnergyBalance::new(&*model, values.initial_state());
+    let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
+    model.solve(&RK4, values.initial_state(), &spec, &mut balance).unwrap();
+    assert!(balance.forced);
+    let change = (balance.last - balance.initial).abs() / balance.scale;
+    (balance.max_rel(), change)
+}
+
+#[test]
+fn energy_balance_of_damped_and_driven_runs_stays_at_the_integrators_error() {
+    for (system, set) in [
+        ("double", vec![("damping", 0.1)]),
+        ("double", vec![("damping", 0.15), ("drive_amplitude", 2.5), ("drive_frequency", 1.7)]),
+        ("pendulum", vec![("damping", 0.3), ("drive_amplitude", 1.2), ("drive_frequency", 2.0)]),
+        ("oscillator", vec![("c", 0.2), ("drive_amplitude", 1.0), ("drive_frequency", 1.0)]),
+        ("driven-pendulum", vec![]),
+    ] {
+        let (coarse, change) = balance_of(system, &set, 2e-3, 10.0);
+        let (fine, _) = balance_of(system, &set, 1e-3, 10.0);
+        // The energy itself changes by a sizeable share of its scale ...
+        assert!(change > 1e-2, "{system} {set:?}: E changed by only {change}");
+        // ... while the balance stays at RK4's error, and falls as h⁴ does (16× for h/2).
+        assert!(coarse < 1e-7, "{system} {set:?}: balance {coarse}");
+        assert!(coarse / fine > 8.0, "{system} {set:?}: {coarse} then {fine}");
+    }
+}
+
+#[test]
+fn growth_tells_a_drift_from_a_bounded_oscillation() {
+    let t: Vec<f64> = (0..1000).map(|k| k as f64 * 0.1).collect();
+    let drift: Vec<f64> = t.iter().map(|t| 1e-6 * t + 1e-8 * (3.0 * t).sin()).collect();
+    let bounded: Vec<f64> = t.iter().map(|t| 1e-3 * (2.0 * t).sin() * (0.3 * t).cos()).collect();
+    let random_walk_free: Vec<f64> = t.iter().map(|t| 1e-3 * (t * t).sin()).collect();
+    assert_eq!(growth(&t, &drift), Some(Growth::Growing));
+    assert_eq!(growth(&t, &bounded), Some(Growth::Bounded));
+    assert_eq!(growth(&t, &random_walk_free), Some(Growth::Bounded));
+    assert_eq!(growth(&t[..5], &drift[..5]), None);
+}
+
+#[test]
+fn estimate_order_fits_the_straight_stretch_and_names_saturation_and_round_off() {
+    let t_end = 1.0;
+    let hs: Vec<f64> = (0..12).map(|k| 0.1 / 2f64.powi(k)).collect();
+    // error = min(1, 3 h⁴) + rounding: saturated at the largest steps, floor at the smallest.
+    let errors: Vec<f64> = hs.iter().map(|h| (3.0 * h.powi(4)).min(1.0) + 1e-17 * (t_end / h)).collect();
+    match estimate_order(&hs, &errors, 1.0, t_end) {
+        OrderEstimate::Fitted { order, points, .. } => {
+            assert!((order - 4.0).abs() < 0.05 && points >= 3, "{order} over {points}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let saturated = vec![0.5; hs.len()];
+    assert_eq!(estimate_order(&hs, &saturated, 1.0, t_end), OrderEstimate::Saturated);
+    let rounding: Vec<f64> = hs.iter().map(|h| 0.5 * roundoff_floor(t_end / h)).collect();
+    assert_eq!(estimate_order(&hs, &rounding, 1.0, t_end), OrderEstimate::RoundOff);
+    // A bending curve (h² then h⁵ as h grows) has no straight stretch of three at the bottom.
+    let bent: Vec<f64> =
+        hs.iter().enumerate().map(|(k, h)| if k % 2 == 0 { h * h } else { h.powi(5) }).collect();
+    assert_eq!(estimate_order(&hs, &bent, 1.0, t_end), OrderEstimate::Irregular);
+}
