@@ -12,7 +12,7 @@ use pendula_viz::{Figure, Kind, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num, short};
+use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct CompareArgs {
@@ -58,6 +58,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(h))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let bar = study::progress(methods.len() as u64, "compare");
     let mut runs = Vec::new();
@@ -97,7 +98,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             ]
         })
         .collect();
-    print!(
+    say!(
+        summary,
         "{}",
         study::table(&["method", "steps", "rhs evals", "wall s", "max |dE/E0|", "drift 1/s", "note"], &shown)
     );
@@ -115,8 +117,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "failure": r.failure,
         }))).collect::<serde_json::Map<_, _>>(),
     });
-    study::summary(args.common.summary.as_deref(), &doc)?;
-    out.report();
+    summary.write(&doc)?;
+    out.finish()?;
     Ok(())
 }
 

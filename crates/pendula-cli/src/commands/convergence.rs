@@ -7,7 +7,7 @@ use pendula::analysis::{self, fit_order};
 use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
-use crate::study::{self, Common, OutDir, StepRange, num};
+use crate::study::{self, Common, OutDir, StepRange, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -42,6 +42,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let (results, reference) = study_orders(&values, &methods, &hs, t_end)?;
 
@@ -52,7 +53,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         }
     }
     out.csv("convergence.csv", &["method", "dt", "error"], &rows)?;
-    println!("{system}: error at t = {t_end} s against the {}", reference.source);
+    sayln!(summary, "{system}: error at t = {t_end} s against the {}", reference.source);
     let shown: Vec<Vec<String>> = results
         .iter()
         .map(|r| {
@@ -61,15 +62,14 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
             vec![r.method.to_owned(), declared, r.order.map_or("-".into(), |o| format!("{o:.3}"))]
         })
         .collect();
-    print!("{}", study::table(&["method", "declared order", "fitted order"], &shown));
+    say!(summary, "{}", study::table(&["method", "declared order", "fitted order"], &shown));
     out.figure("convergence", &figure(system, t_end, &results, reference.source))?;
     let orders: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|r| (r.method.to_owned(), json!(r.order))).collect();
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": hs, "orders": orders }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }
 
