@@ -66,10 +66,7 @@ pub fn on_interrupt() -> Result<()> {
                 // Clear a progress bar's line first when one may be drawn.
                 let clear =
                     if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };
-                let _ = writeln!(
-                    std::io::stderr(),
-                    "{clear}interrupted by {name}: no partial output left, existing files unchanged"
-                );
+                let _ = writeln!(std::io::stderr(), "{clear}interrupted by {name}: unfinished files removed");
                 std::process::exit(128 + signal);
             }
         })
