@@ -1,5 +1,5 @@
 //! Writing results: files appear whole or not at all — also when the run is interrupted by
-//! SIGINT or SIGTERM — and trajectories stream to disk as CSV or .npy, so memory does not
+//! SIGINT, SIGTERM or SIGHUP — and trajectories stream to disk as CSV or .npy, so memory does not
 //! grow with the run's length.
 //!
 //! Every [`AtomicFile`] registers its temporary path in a process-wide list while it lives;
@@ -42,12 +42,13 @@ impl Live {
     }
 }
 
-/// Starts the thread that turns SIGINT and SIGTERM into a clean exit: children killed,
-/// temporary files removed, exit status 130 or 143 (128 + the signal, as shells report it).
+/// Starts the thread that turns SIGINT, SIGTERM and SIGHUP (the terminal closed) into a clean
+/// exit: children killed, temporary files removed, exit status 130, 143 or 129 (128 + the
+/// signal, as shells report it).
 pub fn on_interrupt() -> Result<()> {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    let mut signals =
-        signal_hook::iterator::Signals::new([SIGINT, SIGTERM]).context("cannot watch for interrupts")?;
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
+        .context("cannot watch for interrupts")?;
     std::thread::Builder::new()
         .name("interrupt".into())
         .spawn(move || {
@@ -62,7 +63,11 @@ pub fn on_interrupt() -> Result<()> {
                 for path in &live.temps {
                     let _ = std::fs::remove_file(path);
                 }
-                let name = if signal == SIGINT { "SIGINT" } else { "SIGTERM" };
+                let name = match signal {
+                    SIGINT => "SIGINT",
+                    SIGTERM => "SIGTERM",
+                    _ => "SIGHUP",
+                };
                 // Clear a progress bar's line first when one may be drawn.
                 let clear =
                     if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };

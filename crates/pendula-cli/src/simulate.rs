@@ -25,10 +25,11 @@ struct Writer<F> {
     progress: Progress,
 }
 
-/// A progress bar over simulated time (stderr, drawn only on a terminal), moved every 4096
-/// steps: a per-step check of one bit pattern.
+/// A progress bar over simulated time (stderr, drawn only on a terminal) for runs longer
+/// than half a second, looked at every 4096 steps: a per-step check of one bit pattern.
 struct Progress {
-    bar: ProgressBar,
+    bar: Option<ProgressBar>,
+    start: Instant,
     t0: f64,
     span: f64,
 }
@@ -38,19 +39,34 @@ const PROGRESS_TICKS: u64 = 1000;
 
 impl Progress {
     fn new(t0: f64, t_end: f64) -> Self {
-        let bar = ProgressBar::new(PROGRESS_TICKS);
-        bar.set_style(
-            ProgressStyle::with_template("simulate [{bar:30}] {percent:>3}% {elapsed} (eta {eta})")
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
-        Progress { bar, t0, span: t_end - t0 }
+        Progress { bar: None, start: Instant::now(), t0, span: t_end - t0 }
     }
 
-    fn at(&self, step: u64, t: f64) {
-        if step.is_multiple_of(4096) {
-            let done = ((t - self.t0) / self.span).clamp(0.0, 1.0);
-            self.bar.set_position((done * PROGRESS_TICKS as f64) as u64);
+    fn at(&mut self, step: u64, t: f64) {
+        if !step.is_multiple_of(4096) {
+            return;
+        }
+        let bar = match &self.bar {
+            Some(bar) => bar,
+            // A short run finishes before a bar would be read: none is drawn.
+            None if self.start.elapsed().as_secs_f64() < 0.5 => return,
+            None => {
+                let bar = ProgressBar::new(PROGRESS_TICKS);
+                bar.set_style(
+                    ProgressStyle::with_template("simulate [{bar:30}] {percent:>3}% {elapsed} (eta {eta})")
+                        .expect("valid template")
+                        .progress_chars("=> "),
+                );
+                self.bar.insert(bar)
+            }
+        };
+        let done = ((t - self.t0) / self.span).clamp(0.0, 1.0);
+        bar.set_position((done * PROGRESS_TICKS as f64) as u64);
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
         }
     }
 }
@@ -125,7 +141,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => model.solve(method, values.initial_state(), spec, observers),
     };
     let wall_s = start.elapsed().as_secs_f64();
-    writer.progress.bar.finish_and_clear();
+    writer.progress.finish();
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }

@@ -1,4 +1,4 @@
-//! Outputs end to end, on real processes: SIGINT and SIGTERM leave no temporary file and an
+//! Outputs end to end, on real processes: SIGINT, SIGTERM and SIGHUP leave no temporary file and an
 //! existing output intact; `.npy` trajectories stream to the same values as CSV; `--summary -`
 //! puts parseable JSON alone on stdout for every kind of command; a study directory re-run
 //! holds only the new run's files.
@@ -120,6 +120,29 @@ fn sigterm_during_a_fractal_leaves_the_existing_picture_intact() {
     assert_eq!(interrupt(dir.path(), &args, "TERM"), Some(143));
     assert_eq!(tree(dir.path()), ["pendula-out/fractal/fractal.png"]);
     assert_eq!(std::fs::read(existing).unwrap(), PRECIOUS);
+}
+
+#[test]
+fn sighup_during_a_study_command_leaves_its_directory_and_summary_intact() {
+    let dir = TempDir::new().unwrap();
+    let figure = precious(dir.path(), "c/energy.png");
+    let summary = precious(dir.path(), "s.json");
+    let args = [
+        "compare",
+        "double",
+        "--methods",
+        "rk4",
+        "--t-end",
+        "100000",
+        "--out-dir",
+        "c",
+        "--summary",
+        "s.json",
+    ];
+    assert_eq!(interrupt(dir.path(), &args, "HUP"), Some(129));
+    assert_eq!(tree(dir.path()), ["c/energy.png", "s.json"]);
+    assert_eq!(std::fs::read(figure).unwrap(), PRECIOUS);
+    assert_eq!(std::fs::read(summary).unwrap(), PRECIOUS);
 }
 
 /// The .npy trajectory (streamed, header written last) holds the CSV's rows exactly: CSV
