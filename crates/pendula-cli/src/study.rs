@@ -160,6 +160,8 @@ pub struct OutDir {
     manifest: String,
     /// Names in the previous run's manifest.
     previous: Vec<String>,
+    /// Names the manifest on disk lists now: the previous run's, and this run's so far.
+    listed: Vec<String>,
     /// Names this run wrote.
     written: Vec<String>,
 }
@@ -177,10 +179,10 @@ impl OutDir {
         AtomicFile::create(&path.join(".pendula-probe"), "--out-dir")?;
         let manifest = format!(".pendula-{command}.files");
         // A missing or unreadable manifest means nothing to tidy.
-        let previous = std::fs::read_to_string(path.join(&manifest))
+        let previous: Vec<String> = std::fs::read_to_string(path.join(&manifest))
             .map(|text| text.lines().filter(|n| plain_name(n)).map(str::to_owned).collect())
             .unwrap_or_default();
-        Ok(OutDir { path, manifest, previous, written: Vec::new() })
+        Ok(OutDir { path, manifest, listed: previous.clone(), previous, written: Vec::new() })
     }
 
     /// Where the files go.
@@ -201,11 +203,13 @@ impl OutDir {
             .collect();
         // A name new to the manifest goes into it before the file appears: an interrupted
         // run's files are still tidied by the next one.
-        let known = |n: &String| self.previous.contains(n) || self.written.contains(n);
-        if !names.iter().all(known) {
-            let mut all: Vec<String> = self.previous.iter().chain(&self.written).cloned().collect();
-            all.extend(names.iter().filter(|n| !all.contains(n)).cloned().collect::<Vec<_>>());
-            self.write_manifest(&all)?;
+        if !names.iter().all(|n| self.listed.contains(n)) {
+            for n in &names {
+                if !self.listed.contains(n) {
+                    self.listed.push(n.clone());
+                }
+            }
+            self.write_manifest(&self.listed)?;
         }
         AtomicFile::commit_all(files)?;
         for n in names {
