@@ -13,7 +13,8 @@ pub struct Cli {
 }
 
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
-step did not converge); 2 invalid input (arguments, values, scenario file, output path).";
+step did not converge); 2 invalid input (arguments, values, scenario file, output path); 130, 143, \
+129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {

@@ -1,12 +1,15 @@
 //! The `pendula` command: parse → validate → run → write.
 
+// First: its `say!` and `sayln!` macros are used by the modules after it.
+#[macro_use]
+mod study;
+
 mod cli;
 mod commands;
 mod config;
 mod list;
 mod output;
 mod simulate;
-mod study;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -17,6 +20,11 @@ use cli::{Cli, Command};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Without it an interrupt would still leave no partial output file, only a stray
+    // temporary one: worth a warning, not a refusal.
+    if let Err(err) = output::on_interrupt() {
+        let _ = writeln!(std::io::stderr(), "warning: {err:#}");
+    }
     let result = match &cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Compare(args) => commands::compare::run(args),

@@ -5,6 +5,7 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
+use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
 use pendula::events::{EventLocator, EventSpec};
 use pendula::observe::{Observer, Sample};
@@ -13,18 +14,68 @@ use serde_json::{Map, Value, json};
 use crate::cli::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, Sink};
+use crate::study::Summary;
 
-/// Tracks the energy error (or balance) at every step and writes the kept steps.
+/// Tracks the energy error (or balance) at every step, writes the kept steps and moves the
+/// progress bar.
 struct Writer<'a> {
     energy: EnergyBalance<'a>,
     every: u64,
     sink: Sink,
     rows: u64,
     failure: Option<anyhow::Error>,
+    progress: Progress,
+}
+
+/// A progress bar over simulated time (stderr, drawn only on a terminal) for runs longer
+/// than half a second, looked at every 4096 steps: a per-step check of one bit pattern.
+struct Progress {
+    bar: Option<ProgressBar>,
+    start: Instant,
+    t0: f64,
+    span: f64,
+}
+
+/// Ticks of the bar from t0 to t_end.
+const PROGRESS_TICKS: u64 = 1000;
+
+impl Progress {
+    fn new(t0: f64, t_end: f64) -> Self {
+        Progress { bar: None, start: Instant::now(), t0, span: t_end - t0 }
+    }
+
+    fn at(&mut self, step: u64, t: f64) {
+        if !step.is_multiple_of(4096) {
+            return;
+        }
+        let bar = match &self.bar {
+            Some(bar) => bar,
+            // A short run finishes before a bar would be read: none is drawn.
+            None if self.start.elapsed().as_secs_f64() < 0.5 => return,
+            None => {
+                let bar = ProgressBar::new(PROGRESS_TICKS);
+                bar.set_style(
+                    ProgressStyle::with_template("simulate [{bar:30}] {percent:>3}% {elapsed} (eta {eta})")
+                        .expect("valid template")
+                        .progress_chars("=> "),
+                );
+                self.bar.insert(bar)
+            }
+        };
+        let done = ((t - self.t0) / self.span).clamp(0.0, 1.0);
+        bar.set_position((done * PROGRESS_TICKS as f64) as u64);
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 impl Observer for Writer<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        self.progress.at(s.step, s.t);
         self.energy.track(s.t, s.y, s.energy);
         let (e, work) = (self.energy.last, self.energy.work);
         if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
@@ -50,10 +101,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
         _ => None,
     };
-    // `--summary -` prints the summary on stdout.
-    let to_stdout = summary.as_deref() == Some(std::path::Path::new("-"));
-    let summary_file =
-        summary.as_deref().filter(|_| !to_stdout).map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+    // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
+    let summary_out = Summary::open(summary.as_deref())?;
 
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
@@ -69,6 +118,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
         rows: 0,
         failure: None,
+        progress: Progress::new(spec.t0, spec.schedule()?.t_end),
     };
     let specs = args
         .events
@@ -94,6 +144,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => model.solve(method, values.initial_state(), spec, observers),
     };
     let wall_s = start.elapsed().as_secs_f64();
+    writer.progress.finish();
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }
@@ -101,7 +152,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let energy = &writer.energy;
     let energy_unit = info.energy_unit();
     let rows = writer.rows;
-    writer.sink.finish(out_file.as_ref())?;
+    writer.sink.finish()?;
     if let Some(f) = out_file {
         f.commit()?;
     }
@@ -118,60 +169,45 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     let parameters: Map<String, Value> = values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect();
     let steps = report.outcome.steps();
-    if summary.is_some() {
-        let doc = json!({
-            "system": info.name,
-            "method": method.name,
-            "parameters": parameters,
-            "initial": initial,
-            "dt": if tolerances.is_some() { serde_json::Value::Null } else { json!(spec.h) },
-            "steps": steps,
-            "steps_accepted": steps,
-            "steps_rejected": report.steps_rejected,
-            "binding": match method.scheme {
-                pendula::integrator::Scheme::Tao(t) => json!(t.binding),
-                _ => serde_json::Value::Null,
-            },
-            "rtol": tolerances.map(|t| t.rtol),
-            "atol": tolerances.map(|t| t.atol),
-            "rhs_evals": report.rhs_evals,
-            "t_end": t_end,
-            "final": final_state,
-            "energy": {
-                "initial": energy.initial,
-                "final": energy.last,
-                "tracked": energy.quantity(),
-                "work": energy.forced.then_some(energy.work),
-                "scale": energy.scale,
-                "scale_definition": info.energy_scale,
-                "max_abs_error": energy.max_abs,
-                "max_rel_error": energy.max_rel(),
-            },
-            "wall_s": wall_s,
-            "events": events.found.iter().map(|e| {
-                let mut state = Map::new();
-                for (q, v) in info.state.iter().zip(&e.state) {
-                    state.insert(q.name.into(), json!(v));
-                }
-                json!({ "name": e.name, "t": e.t, "state": state })
-            }).collect::<Vec<_>>(),
-        });
-        match summary_file {
-            Some(f) => {
-                // Serialised whole, then written at once: a File takes one syscall per token.
-                let mut handle = std::io::BufWriter::new(f.handle()?);
-                serde_json::to_writer_pretty(&mut handle, &doc)?;
-                writeln!(handle)?;
-                handle.into_inner().map_err(|e| e.into_error())?;
-                f.commit()?;
+    let doc = json!({
+        "system": info.name,
+        "method": method.name,
+        "parameters": parameters,
+        "initial": initial,
+        "dt": if tolerances.is_some() { serde_json::Value::Null } else { json!(spec.h) },
+        "steps": steps,
+        "steps_accepted": steps,
+        "steps_rejected": report.steps_rejected,
+        "binding": match method.scheme {
+            pendula::integrator::Scheme::Tao(t) => json!(t.binding),
+            _ => serde_json::Value::Null,
+        },
+        "rtol": tolerances.map(|t| t.rtol),
+        "atol": tolerances.map(|t| t.atol),
+        "rhs_evals": report.rhs_evals,
+        "t_end": t_end,
+        "final": final_state,
+        "energy": {
+            "initial": energy.initial,
+            "final": energy.last,
+            "tracked": energy.quantity(),
+            "work": energy.forced.then_some(energy.work),
+            "scale": energy.scale,
+            "scale_definition": info.energy_scale,
+            "max_abs_error": energy.max_abs,
+            "max_rel_error": energy.max_rel(),
+        },
+        "wall_s": wall_s,
+        "events": events.found.iter().map(|e| {
+            let mut state = Map::new();
+            for (q, v) in info.state.iter().zip(&e.state) {
+                state.insert(q.name.into(), json!(v));
             }
-            None => {
-                let mut out = std::io::stdout().lock();
-                serde_json::to_writer_pretty(&mut out, &doc)?;
-                writeln!(out)?;
-            }
-        }
-    }
+            json!({ "name": e.name, "t": e.t, "state": state })
+        }).collect::<Vec<_>>(),
+    });
+    let summary_path = summary_out.path().map(std::path::Path::to_path_buf);
+    summary_out.write(&doc)?;
 
     // The human summary is composed first and written at once (stderr is unbuffered).
     let mut err = Vec::new();
@@ -206,7 +242,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(first) = events.found.first() {
         writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
     }
-    if let Some(p) = summary.as_deref().filter(|_| !to_stdout) {
+    if let Some(p) = summary_path {
         writeln!(err, "wrote {}", p.display())?;
     }
     std::io::stderr().write_all(&err)?;

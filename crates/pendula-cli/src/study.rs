@@ -12,6 +12,16 @@ use pendula::system::{self, DynModel, Values};
 use pendula_viz::Figure;
 
 use crate::config::{f64_arg, parse_settings};
+
+/// `print!` for a command's human output, through its [`Summary`]: `say!(summary, "...")`.
+macro_rules! say {
+    ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!($($arg)*)) };
+}
+
+/// `println!` for a command's human output, through its [`Summary`].
+macro_rules! sayln {
+    ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
+}
 use crate::output::AtomicFile;
 
 /// Arguments every study command takes.
@@ -23,7 +33,7 @@ pub struct Common {
     /// Directory for CSV, PNG and SVG outputs [default: pendula-out/<command>].
     #[arg(long, value_name = "DIR")]
     pub out_dir: Option<PathBuf>,
-    /// Write the headline numbers as JSON here.
+    /// Write the headline numbers as JSON here (`-`: on stdout, and the tables on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
 }
@@ -163,10 +173,20 @@ fn applies(method: &Method, model: &dyn DynModel, values: &Values) -> bool {
     }
 }
 
-/// The output directory: created if needed; files appear whole (temporary name, then rename).
+/// The output directory: created if needed; files appear whole (temporary name, then
+/// rename). A hidden manifest per command (`.pendula-<command>.files`) lists the files that
+/// command wrote there; when a run finishes, the files of the previous run's manifest that
+/// this run did not write are removed, so no figure of another system or method set stays
+/// beside the new ones. Only files named in a manifest are ever removed.
 pub struct OutDir {
     path: PathBuf,
-    written: Vec<PathBuf>,
+    manifest: String,
+    /// Names in the previous run's manifest.
+    previous: Vec<String>,
+    /// Names the manifest on disk lists now: the previous run's, and this run's so far.
+    listed: Vec<String>,
+    /// Names this run wrote.
+    written: Vec<String>,
 }
 
 impl OutDir {
@@ -180,7 +200,12 @@ impl OutDir {
             .with_context(|| format!("cannot create --out-dir {}", path.display()))?;
         // Fail now, not after the work, if the directory cannot be written.
         AtomicFile::create(&path.join(".pendula-probe"), "--out-dir")?;
-        Ok(OutDir { path, written: Vec::new() })
+        let manifest = format!(".pendula-{command}.files");
+        // A missing or unreadable manifest means nothing to tidy.
+        let previous: Vec<String> = std::fs::read_to_string(path.join(&manifest))
+            .map(|text| text.lines().filter(|n| plain_name(n)).map(str::to_owned).collect())
+            .unwrap_or_default();
+        Ok(OutDir { path, manifest, listed: previous.clone(), previous, written: Vec::new() })
     }
 
     /// Where the files go.
@@ -188,13 +213,50 @@ impl OutDir {
         &self.path
     }
 
+    /// A file `name` in the directory, to be written and then given to [`OutDir::commit`].
+    pub fn file(&self, name: &str) -> Result<AtomicFile> {
+        AtomicFile::create(&self.path.join(name), "--out-dir")
+    }
+
+    /// Renames finished files of this directory into place, all at once.
+    pub fn commit(&mut self, files: Vec<AtomicFile>) -> Result<()> {
+        let names: Vec<String> = files
+            .iter()
+            .map(|f| f.path().file_name().expect("a file in the directory").to_string_lossy().into_owned())
+            .collect();
+        // A name new to the manifest goes into it before the file appears: an interrupted
+        // run's files are still tidied by the next one.
+        if !names.iter().all(|n| self.listed.contains(n)) {
+            for n in &names {
+                if !self.listed.contains(n) {
+                    self.listed.push(n.clone());
+                }
+            }
+            self.write_manifest(&self.listed)?;
+        }
+        AtomicFile::commit_all(files)?;
+        for n in names {
+            if !self.written.contains(&n) {
+                self.written.push(n);
+            }
+        }
+        Ok(())
+    }
+
+    fn write_manifest(&self, names: &[String]) -> Result<()> {
+        let file = self.file(&self.manifest)?;
+        let mut text = names.join("\n");
+        text.push('\n');
+        std::io::Write::write_all(&mut file.handle()?, text.as_bytes())?;
+        file.commit()
+    }
+
     /// Writes `bytes` to `name` in the directory.
     pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf> {
-        let path = self.path.join(name);
-        let file = AtomicFile::create(&path, "--out-dir")?;
+        let file = self.file(name)?;
         std::io::Write::write_all(&mut file.handle()?, bytes)?;
-        file.commit()?;
-        self.written.push(path.clone());
+        let path = file.path().to_owned();
+        self.commit(vec![file])?;
         Ok(path)
     }
 
@@ -216,24 +278,102 @@ impl OutDir {
         Ok(())
     }
 
-    /// Tells stderr what was written.
-    pub fn report(&self) {
-        eprintln!("wrote {} files to {}", self.written.len(), self.path.display());
+    /// Ends a successful run: the manifest becomes this run's files, the previous run's
+    /// files that this one did not write are removed, and stderr is told.
+    pub fn finish(self) -> Result<()> {
+        self.write_manifest(&self.written)?;
+        let mut removed = 0;
+        for name in self.previous.iter().filter(|n| !self.written.contains(n)) {
+            let path = self.path.join(name);
+            // A file only: whatever else has taken the name is not ours.
+            if path.symlink_metadata().is_ok_and(|m| m.is_file()) && std::fs::remove_file(&path).is_ok() {
+                removed += 1;
+            }
+        }
+        let stale = match removed {
+            0 => String::new(),
+            n => format!(" (removed {n} stale files of an earlier run)"),
+        };
+        eprintln!("wrote {} files to {}{stale}", self.written.len(), self.path.display());
+        Ok(())
     }
 }
 
-/// Writes the `--summary` JSON, if asked for.
-pub fn summary(path: Option<&Path>, doc: &serde_json::Value) -> Result<()> {
-    if let Some(path) = path {
-        let file = AtomicFile::create(path, "--summary")?;
-        // Serialised through a buffer: a File takes one syscall per token.
-        let mut handle = std::io::BufWriter::new(file.handle()?);
-        serde_json::to_writer_pretty(&mut handle, doc)?;
-        std::io::Write::write_all(&mut handle, b"\n")?;
-        handle.into_inner().map_err(|e| e.into_error())?;
-        file.commit()?;
+/// A bare file name, as manifests hold: no directory, nothing hidden (manifests, temporary
+/// files).
+fn plain_name(name: &str) -> bool {
+    !name.is_empty() && !name.starts_with('.') && !name.contains(['/', '\\'])
+}
+
+/// Where `--summary` goes: nowhere, a file (opened before the work, so that a path that
+/// cannot be written fails first), or stdout for `-`. Every command that takes `--summary`
+/// opens it with [`Summary::open`] and prints what is for people with [`Summary::say`],
+/// which goes to stderr when stdout carries the JSON, so that stdout parses.
+pub struct Summary {
+    target: Target,
+}
+
+enum Target {
+    None,
+    Stdout,
+    File(AtomicFile),
+}
+
+impl Summary {
+    /// Opens `--summary`: `-` is stdout.
+    pub fn open(path: Option<&Path>) -> Result<Self> {
+        let target = match path {
+            None => Target::None,
+            Some(p) if p == Path::new("-") => Target::Stdout,
+            Some(p) => Target::File(AtomicFile::create(p, "--summary")?),
+        };
+        Ok(Summary { target })
     }
-    Ok(())
+
+    /// Whether the JSON goes to stdout.
+    pub fn on_stdout(&self) -> bool {
+        matches!(self.target, Target::Stdout)
+    }
+
+    /// The summary file, if there is one.
+    pub fn path(&self) -> Option<&Path> {
+        match &self.target {
+            Target::File(f) => Some(f.path()),
+            _ => None,
+        }
+    }
+
+    /// Prints `text` for people: on stdout, or on stderr when stdout carries the JSON. A
+    /// reader that went away is not an error. [`say!`] and [`sayln!`] call it as `print!`
+    /// and `println!` would.
+    pub fn say(&self, text: std::fmt::Arguments<'_>) {
+        use std::io::Write as _;
+        let _ = if self.on_stdout() {
+            std::io::stderr().lock().write_fmt(text)
+        } else {
+            std::io::stdout().lock().write_fmt(text)
+        };
+    }
+
+    /// Writes the JSON (a file is renamed into place).
+    pub fn write(self, doc: &serde_json::Value) -> Result<()> {
+        let write = |w: &mut dyn std::io::Write| -> Result<()> {
+            // Serialised through a buffer: a File takes one syscall per token.
+            let mut w = std::io::BufWriter::new(w);
+            serde_json::to_writer_pretty(&mut w, doc)?;
+            std::io::Write::write_all(&mut w, b"\n")?;
+            std::io::Write::flush(&mut w)?;
+            Ok(())
+        };
+        match self.target {
+            Target::None => Ok(()),
+            Target::Stdout => write(&mut std::io::stdout().lock()),
+            Target::File(file) => {
+                write(&mut file.handle()?)?;
+                file.commit()
+            }
+        }
+    }
 }
 
 /// A progress bar on stderr for `n` units of work; invisible when stderr is not a terminal.

@@ -15,7 +15,7 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
 use crate::config::{f64_arg, parse_value};
-use crate::output::AtomicFile;
+use crate::output::{AtomicFile, WatchedChild};
 use crate::study;
 
 #[derive(Debug, Clone, Args)]
@@ -179,19 +179,21 @@ fn ffmpeg_available() -> bool {
 fn encode_mp4(animation: &Animation, file: &AtomicFile) -> Result<()> {
     let (w, h) = animation.size;
     let target = file.temp_path();
-    let mut child = Command::new("ffmpeg")
+    let mut command = Command::new("ffmpeg");
+    command
         .args(["-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
         .args(["-s", &format!("{w}x{h}"), "-r", &animation.fps.to_string(), "-i", "-"])
         .args(["-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4"])
         .arg(target)
-        .stdin(Stdio::piped())
-        .spawn()
-        .context("cannot start ffmpeg")?;
+        .stdin(Stdio::piped());
+    // Watched: an interrupt kills it before removing the file it writes.
+    let (child, stdin) = WatchedChild::spawn(&mut command).context("cannot start ffmpeg")?;
     {
-        let stdin = child.stdin.as_mut().expect("piped");
+        let mut stdin = stdin.expect("piped");
         for k in 0..animation.frames.len() {
             stdin.write_all(&animation.frame_rgb(k)?)?;
         }
+        // Dropped here: ffmpeg sees the end of its input.
     }
     let status = child.wait()?;
     if !status.success() {

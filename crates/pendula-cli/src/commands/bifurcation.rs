@@ -19,7 +19,7 @@ use serde_json::json;
 
 use crate::commands::sweep::parse_axis;
 use crate::config::{f64_arg, parse_number};
-use crate::study::{self, OutDir, num};
+use crate::study::{self, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct BifurcationArgs {
@@ -123,6 +123,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         );
     }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
@@ -195,7 +196,8 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     .scales(Scale::Linear, Scale::Linear)
     .with("", palette(1), Kind::Dots, points);
     out.figure("bifurcation", &fig)?;
-    println!(
+    sayln!(
+        summary,
         "{system}: {} values of {} in [{}, {}], {samples} samples each after {transient} s; {} [{wall:.2} s, {threads} threads]",
         axis.n,
         axis.name,
@@ -203,15 +205,12 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         axis.hi,
         if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
     );
-    study::summary(
-        args.common.summary.as_deref(),
-        &json!({
-            "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
-            "transient": transient, "samples": samples, "steps_per_period": m,
-            "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
-            "threads": threads, "wall_s": wall,
-        }),
-    )?;
-    out.report();
+    summary.write(&json!({
+        "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
+        "transient": transient, "samples": samples, "steps_per_period": m,
+        "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
+        "threads": threads, "wall_s": wall,
+    }))?;
+    out.finish()?;
     Ok(())
 }

@@ -21,7 +21,7 @@ use pendula_viz::{Figure, Kind, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num, short};
+use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct CompareArgs {
@@ -124,6 +124,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let bar = study::progress(methods.len() as u64, "compare");
     let mut runs = Vec::new();
@@ -168,7 +169,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let model_scale = model.energy_scale(values.initial_state());
     let info = values.info();
     let eu = info.energy_unit();
-    println!(
+    sayln!(
+        summary,
         "{system}: {} over {t_end} {}, {}; relative to the energy scale {} {eu} ({})",
         pendula::analysis::EnergyBalance::new(&*model, values.initial_state()).quantity(),
         info.time_unit(),
@@ -194,7 +196,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             ]
         })
         .collect();
-    print!(
+    say!(
+        summary,
         "{}",
         study::table(
             &["method", "dt", "cost (evals)", "wall s", "max rel. error", "drift 1/s", "error", "note"],
@@ -203,7 +206,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     );
     let crossings = crossovers(&runs);
     for c in &crossings {
-        println!("{}", c.sentence(info.time_unit()));
+        sayln!(summary, "{}", c.sentence(info.time_unit()));
     }
 
     for (name, figure) in figures(&values, &runs, steps, t_end) {
@@ -227,8 +230,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "growing": c.growing, "bounded": c.bounded, "bound": c.bound, "t": c.t,
         })).collect::<Vec<_>>(),
     });
-    study::summary(args.common.summary.as_deref(), &doc)?;
-    out.report();
+    summary.write(&doc)?;
+    out.finish()?;
     Ok(())
 }
 

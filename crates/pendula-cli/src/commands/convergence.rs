@@ -17,7 +17,7 @@ use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
 use crate::commands::compare::refusal;
-use crate::study::{self, Common, OutDir, StepRange, num, short};
+use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -87,6 +87,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let (results, reference) = study_orders(&values, &methods, &ladder, t_end)?;
 
@@ -98,7 +99,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     }
     out.csv("convergence.csv", &["method", "dt", "error"], &rows)?;
     let unit = values.info().time_unit();
-    println!("{system}: error at t = {} {unit} against the {}", short(t_end), reference.source);
+    sayln!(summary, "{system}: error at t = {} {unit} against the {}", short(t_end), reference.source);
     let shown: Vec<Vec<String>> = results
         .iter()
         .map(|r| {
@@ -107,7 +108,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
             vec![r.method.to_owned(), declared, r.order().map_or("-".into(), |o| format!("{o:.3}")), r.note()]
         })
         .collect();
-    print!("{}", study::table(&["method", "declared order", "fitted order", "note"], &shown));
+    say!(summary, "{}", study::table(&["method", "declared order", "fitted order", "note"], &shown));
     out.figure("convergence", &figure(system, t_end, &results, reference.source))?;
     let orders: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|r| (r.method.to_owned(), json!(r.order()))).collect();
@@ -115,11 +116,10 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         results.iter().map(|r| (r.method.to_owned(), json!(r.note()))).collect();
     let dts: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|r| (r.method.to_owned(), json!(r.hs))).collect();
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }
 

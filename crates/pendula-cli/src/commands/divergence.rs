@@ -10,7 +10,7 @@ use pendula_viz::{Figure, Kind, Legend, Scale, palette};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct DivergenceArgs {
@@ -66,6 +66,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
     let schedule = spec.schedule()?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let model = values.build();
     // About 2000 samples, whatever the step.
     let every = (schedule.steps / 2000).max(1);
@@ -76,11 +77,15 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     out.csv("divergence.csv", &["t", "distance"], &rows)?;
     let variable = info.state[index].name;
     match fit {
-        Some(f) => println!(
+        Some(f) => sayln!(
+            summary,
             "{system}: separation {delta:e} in {variable}; growth rate {:.4} 1/s fitted over t = {:.2} … {:.2} s",
-            f.rate, f.t_start, f.t_end
+            f.rate,
+            f.t_start,
+            f.t_end
         ),
-        None => println!(
+        None => sayln!(
+            summary,
             "{system}: separation {delta:e} in {variable}; too few samples below --saturation to fit"
         ),
     }
@@ -116,15 +121,12 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         );
     }
     out.figure("divergence", &fig)?;
-    study::summary(
-        args.common.summary.as_deref(),
-        &json!({
-            "system": system, "method": method.name, "dt": h, "t_end": t_end,
-            "delta": delta, "variable": variable, "saturation": saturation,
-            "growth_rate": fit.map(|f| f.rate),
-            "fit_window": fit.map(|f| [f.t_start, f.t_end]),
-        }),
-    )?;
-    out.report();
+    summary.write(&json!({
+        "system": system, "method": method.name, "dt": h, "t_end": t_end,
+        "delta": delta, "variable": variable, "saturation": saturation,
+        "growth_rate": fit.map(|f| f.rate),
+        "fit_window": fit.map(|f| [f.t_start, f.t_end]),
+    }))?;
+    out.finish()?;
     Ok(())
 }

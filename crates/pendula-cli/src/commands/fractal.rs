@@ -5,7 +5,8 @@
 //! Writes FILE.npy (float64, shape (N₂, N₁), θ₁ fastest as in `pendula sweep`, NaN where no
 //! flip happens before --t-max), FILE.png (viridis, log time, colour bar; black: no flip),
 //! FILE-converged.npy (uint8, 1 where the flip time moved by at most --tolerance between the
-//! two steps) and FILE-converged.png; all files appear whole or not at all.
+//! two steps) and FILE-converged.png, in `--out-dir` (default `pendula-out/fractal/`, with
+//! FILE = fractal) or beside `--out FILE.npy`; all files appear whole or not at all.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -20,9 +21,10 @@ use pendula::system::{self, Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
-use crate::commands::sweep::{batch_method, parse_axis, write_json, write_npy};
+use crate::commands::sweep::{batch_method, parse_axis, write_npy};
 use crate::config::{f64_arg, parse_settings};
 use crate::output::AtomicFile;
+use crate::study::{OutDir, Summary};
 
 #[derive(Debug, Clone, Args)]
 pub struct FractalArgs {
@@ -49,10 +51,14 @@ pub struct FractalArgs {
     /// Worker threads [default: all cores]; the result does not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
-    /// Output .npy file; the PNG and the convergence flags go beside it [default: fractal.npy].
+    /// Directory for fractal.npy, fractal.png, fractal-converged.npy and fractal-converged.png
+    /// [default: pendula-out/fractal].
+    #[arg(long, value_name = "DIR", conflicts_with = "out")]
+    pub out_dir: Option<PathBuf>,
+    /// Output .npy file instead, anywhere; the PNG and the convergence flags go beside it.
     #[arg(long, value_name = "FILE.npy")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary here.
+    /// Write a JSON summary here (`-`: on stdout, and the report line on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
 }
@@ -120,15 +126,26 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         integrator::tao::check_binding_step(&scheme, h)?;
     }
     let threads = crate::config::parse_threads(args.threads.as_deref())?;
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("fractal.npy"));
-    if out.extension().and_then(|e| e.to_str()) != Some("npy") {
+    if let Some(out) = &args.out
+        && out.extension().and_then(|e| e.to_str()) != Some("npy")
+    {
         bail!("invalid --out {}: the fractal is written as .npy", out.display());
     }
+    // An explicit --out is the user's path; otherwise the study's directory, tidied of an
+    // earlier run's files like every study command's.
+    let dir = match &args.out {
+        Some(_) => None,
+        None => Some(OutDir::new(args.out_dir.as_deref(), "fractal")?),
+    };
+    let (out, flag) = match (&args.out, &dir) {
+        (Some(out), _) => (out.clone(), "--out"),
+        (None, Some(dir)) => (dir.path().join("fractal.npy"), "--out-dir"),
+        (None, None) => unreachable!("a directory when there is no --out"),
+    };
     let paths =
         [out.clone(), beside(&out, ".png"), beside(&out, "-converged.npy"), beside(&out, "-converged.png")];
-    let files: Vec<AtomicFile> =
-        paths.iter().map(|p| AtomicFile::create(p, "--out")).collect::<Result<_>>()?;
-    let summary_file = args.summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+    let files: Vec<AtomicFile> = paths.iter().map(|p| AtomicFile::create(p, flag)).collect::<Result<_>>()?;
+    let summary = Summary::open(args.summary.as_deref())?;
 
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     let pool =
@@ -221,22 +238,24 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         "threads": threads, "wall_s": wall,
         "files": paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     });
-    if let Some(f) = &summary_file {
-        write_json(f, &doc)?;
+    // The four files appear together or not at all.
+    let files = vec![npy, png, flags_npy, flags_png];
+    match dir {
+        Some(mut dir) => {
+            dir.commit(files)?;
+            dir.finish()?;
+        }
+        None => AtomicFile::commit_all(files)?,
     }
-    for f in [npy, png, flags_npy, flags_png] {
-        f.commit()?;
-    }
-    if let Some(f) = summary_file {
-        f.commit()?;
-    }
-    println!(
+    sayln!(
+        summary,
         "fractal {n1}x{n2}, t-max {t_max} s, {} at dt = {h} s and {} s: {flipped} pixels flip, {} cannot (energy), {unconverged} unconverged ({:.2}%) [{wall:.1} s, {threads} threads]",
         method.name,
         h / 2.0,
         fractal.forbidden,
         100.0 * share
     );
-    println!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    sayln!(summary, "wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    summary.write(&doc)?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use pendula_viz::{Figure, Kind, Legend, Scale, palette};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct LyapunovArgs {
@@ -64,6 +64,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let model = values.build();
     let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
 
     let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
     let mut header = vec!["t"];
@@ -73,12 +74,12 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     out.csv("lyapunov.csv", &header, &rows)?;
 
     let (lambda, err) = (result.exponents[0], result.uncertainty[0]);
-    println!("{system} ({}, dt = {h} s, {t_end} s after a {transient} s transient):", method.name);
+    sayln!(summary, "{system} ({}, dt = {h} s, {t_end} s after a {transient} s transient):", method.name);
     for (j, (l, e)) in result.exponents.iter().zip(&result.uncertainty).enumerate() {
-        println!("  lambda{} = {l:.5} ± {e:.5} 1/s", j + 1);
+        sayln!(summary, "  lambda{} = {l:.5} ± {e:.5} 1/s", j + 1);
     }
     if args.spectrum {
-        println!("  sum = {:.3e} 1/s", result.exponents.iter().sum::<f64>());
+        sayln!(summary, "  sum = {:.3e} 1/s", result.exponents.iter().sum::<f64>());
     }
 
     let mut fig = Figure::new(
@@ -106,8 +107,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
         band(lambda - err),
     );
     out.figure("lyapunov", &fig)?;
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({
             "system": system, "method": method.name, "dt": h, "t_end": t_end,
             "transient": transient, "renormalise": renormalise,
@@ -117,6 +117,6 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             "spectrum_uncertainty": args.spectrum.then(|| result.uncertainty.clone()),
         }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }

@@ -12,7 +12,7 @@ use pendula_viz::{Figure, Kind, Legend, REFERENCE, Scale, method_color, palette}
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PeriodArgs {
@@ -46,6 +46,7 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
     }
     pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }.schedule()?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "period")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();
     let rows = periods(&args.common.set, method, h, &amplitudes)?;
 
@@ -67,7 +68,8 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
             ]
         })
         .collect();
-    print!(
+    say!(
+        summary,
         "{}",
         study::table(
             &[
@@ -85,15 +87,14 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
         out.figure(name, &fig)?;
     }
     let worst = rows.iter().map(|r| (r.simulated / r.exact - 1.0).abs()).fold(0.0, f64::max);
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({
             "method": method.name, "dt": h,
             "max_rel_error_simulated": worst,
             "rows": rows.iter().map(|r| json!({"amplitude_deg": r.amplitude_deg, "simulated": r.simulated, "exact": r.exact, "small_angle": r.small_angle})).collect::<Vec<_>>(),
         }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }
 

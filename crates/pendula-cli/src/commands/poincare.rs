@@ -12,7 +12,7 @@ use pendula_viz::{Figure, Kind, Scale, palette};
 use serde_json::json;
 
 use crate::config::{f64_arg, parse_number, parse_value};
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PoincareArgs {
@@ -133,22 +133,21 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
         bail!("no orbit crossed the section in {t_end} s: raise --t-end or change --energy");
     }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let p_section = format!("p{}", &name[5..]);
     out.csv("poincare.csv", &["orbit", "t", q_name, &p_name, name, &p_section], &rows)?;
     out.figure("poincare", &fig)?;
-    println!(
+    sayln!(
+        summary,
         "{system}: {count} orbits at E = {energy} J, {total} crossings of {name} = {value} (rising) in {t_end} s; max |H - E| at crossings {worst_energy:.2e} J"
     );
-    study::summary(
-        args.common.summary.as_deref(),
-        &json!({
-            "system": system, "method": method.name, "energy": energy, "count": count,
-            "section": {"name": name, "value": value, "direction": "rising"},
-            "t_end": t_end, "crossings": total,
-            "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
-            "max_energy_error": worst_energy,
-        }),
-    )?;
-    out.report();
+    summary.write(&json!({
+        "system": system, "method": method.name, "energy": energy, "count": count,
+        "section": {"name": name, "value": value, "direction": "rising"},
+        "t_end": t_end, "crossings": total,
+        "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
+        "max_energy_error": worst_energy,
+    }))?;
+    out.finish()?;
     Ok(())
 }

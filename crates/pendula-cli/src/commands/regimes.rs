@@ -11,7 +11,7 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Legend, palette};
 use serde_json::json;
 
-use crate::study::{self, Common, OutDir, num};
+use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct RegimesArgs {
@@ -47,6 +47,7 @@ fn oscillator(set: &[String], extra: &[String]) -> Result<(pendula::system::Valu
 
 pub fn run(args: &RegimesArgs) -> Result<()> {
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "oscillator-regimes")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let (transients, transient_rows) = transients(&args.common.set)?;
     out.csv("transients.csv", &["zeta", "t", "exact", "simulated"], &transient_rows)?;
     let points = resonance(&args.common.set)?;
@@ -80,19 +81,19 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
             vec![format!("{z}"), at(|p| p.ratio), at(|p| p.amplitude_exact), at(|p| p.amplitude_simulated)]
         })
         .collect();
-    print!("{}", study::table(&["zeta", "W/w0 at peak", "X k/F exact", "X k/F simulated"], &shown));
-    println!(
+    say!(summary, "{}", study::table(&["zeta", "W/w0 at peak", "X k/F exact", "X k/F simulated"], &shown));
+    sayln!(
+        summary,
         "largest deviation of simulated from exact: amplitude {worst_amp:.2e} (relative), phase {worst_phase:.2e} rad"
     );
     out.figure("regimes", &transients)?;
     for (name, fig) in resonance_figures(&points) {
         out.figure(name, &fig)?;
     }
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({ "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4" }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }
 

@@ -263,7 +263,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     );
     page.out.write("report.html", html.as_bytes())?;
     println!("report: {}", page.out.path().join("report.html").display());
-    page.out.report();
+    page.out.finish()?;
     Ok(())
 }
 

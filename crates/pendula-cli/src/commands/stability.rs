@@ -7,7 +7,7 @@ use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, num, short};
+use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct StabilityArgs {
@@ -38,13 +38,17 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "stability")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let criterion = StabilityCriterion { t_end, max_rel_energy_error: bound };
     let results = stable_steps(&values, &methods, &criterion)?;
     let rows: Vec<Vec<String>> =
         results.iter().map(|(m, h)| vec![(*m).to_owned(), h.map_or(String::new(), num)]).collect();
     out.csv("stability.csv", &["method", "largest_stable_dt"], &rows)?;
     let (h_min, h_max) = H_RANGE;
-    println!("{system}: largest step with |dE/E0| <= {bound} over {t_end} s (searched {h_min} .. {h_max} s)");
+    sayln!(
+        summary,
+        "{system}: largest step with |dE/E0| <= {bound} over {t_end} s (searched {h_min} .. {h_max} s)"
+    );
     let shown: Vec<Vec<String>> = results
         .iter()
         .map(|(m, h)| {
@@ -54,15 +58,14 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
             ]
         })
         .collect();
-    print!("{}", study::table(&["method", "largest stable dt (s)"], &shown));
+    say!(summary, "{}", study::table(&["method", "largest stable dt (s)"], &shown));
     out.figure("stability", &figure(system, &criterion, &results))?;
     let map: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|(m, h)| ((*m).to_owned(), json!(h))).collect();
-    study::summary(
-        args.common.summary.as_deref(),
+    summary.write(
         &json!({ "system": system, "criterion": { "t_end": t_end, "max_rel_energy_error": bound }, "largest_stable_dt": map }),
     )?;
-    out.report();
+    out.finish()?;
     Ok(())
 }
 

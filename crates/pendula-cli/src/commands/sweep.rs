@@ -65,7 +65,7 @@ pub struct SweepArgs {
     /// Output .npy file [default: sweep.npy].
     #[arg(long, value_name = "FILE.npy")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary here.
+    /// Write a JSON summary here (`-`: on stdout).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
 }
@@ -322,7 +322,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let side_path = PathBuf::from(format!("{}.json", out_path.display()));
     let side_file =
         if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
-    let summary_file = args.summary.as_deref().map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+    let summary = crate::study::Summary::open(args.summary.as_deref())?;
 
     let (start, end) = sweep.range();
     let cols = sweep.columns.len();
@@ -353,7 +353,6 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         shape = vec![end - start, cols];
     }
     write_npy(&out_file, &shape, &data)?;
-    out_file.commit()?;
     let description = json!({
         "pendula_sweep": 1,
         "system": sweep.info.name,
@@ -372,14 +371,14 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         "threads": threads,
         "wall_s": wall_s,
     });
+    let mut files = vec![out_file];
     if let Some(f) = side_file {
         write_json(&f, &description)?;
-        f.commit()?;
+        files.push(f);
     }
-    if let Some(f) = summary_file {
-        write_json(&f, &description)?;
-        f.commit()?;
-    }
+    // The array and its shard description appear together or not at all.
+    AtomicFile::commit_all(files)?;
+    summary.write(&description)?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
         sweep.info.name,

@@ -9,7 +9,7 @@ use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, StepRange, num, short};
+use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
 use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
@@ -59,6 +59,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)?;
     let bar = study::progress(methods.len() as u64, "work-precision");
     let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
@@ -106,8 +107,12 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             ]
         })
         .collect();
-    println!("{system}: error at t = {t_end} s against the {}", reference.source);
-    print!("{}", study::table(&["method", "rhs evals for error <= 1e-6", "at", "smallest error"], &shown));
+    sayln!(summary, "{system}: error at t = {t_end} s against the {}", reference.source);
+    say!(
+        summary,
+        "{}",
+        study::table(&["method", "rhs evals for error <= 1e-6", "at", "smallest error"], &shown)
+    );
     for (name, x_label, cost) in [
         (
             "work_precision_evals",
@@ -139,7 +144,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             "dt": p.h, "tol": p.tol, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
         })).collect::<Vec<_>>()))).collect::<serde_json::Map<_, _>>(),
     });
-    study::summary(args.common.summary.as_deref(), &doc)?;
-    out.report();
+    summary.write(&doc)?;
+    out.finish()?;
     Ok(())
 }
