@@ -157,19 +157,33 @@ pub fn methods(
         _ => true,
     };
     match list {
-        Some(text) => text.split(',').map(|name| Ok(integrator::find(name.trim())?)).collect(),
+        // A method asked for by name must apply: the library's refusal is the error.
+        Some(text) => text
+            .split(',')
+            .map(|name| {
+                let method = integrator::find(name.trim())?;
+                requirement_met(method, model, values)?;
+                Ok(method)
+            })
+            .collect(),
         None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values) && stable(m)).collect()),
     }
 }
 
 /// Whether `method` can run on the model (its requirement is met).
 fn applies(method: &Method, model: &dyn DynModel, values: &Values) -> bool {
-    method.requirement == Requirement::Any || {
-        let spec = pendula::RunSpec { t0: 0.0, h: 1e-3, end: pendula::End::Steps(1) };
-        !matches!(
-            model.solve(method, values.initial_state(), &spec, &mut pendula::observe::Ignore),
-            Err(pendula::Error::UnmetRequirement { .. })
-        )
+    requirement_met(method, model, values).is_ok()
+}
+
+/// The library's refusal when `method`'s requirement is not met by the model.
+fn requirement_met(method: &Method, model: &dyn DynModel, values: &Values) -> Result<(), pendula::Error> {
+    if method.requirement == Requirement::Any {
+        return Ok(());
+    }
+    let spec = pendula::RunSpec { t0: 0.0, h: 1e-3, end: pendula::End::Steps(1) };
+    match model.solve(method, values.initial_state(), &spec, &mut pendula::observe::Ignore) {
+        Err(e @ pendula::Error::UnmetRequirement { .. }) => Err(e),
+        _ => Ok(()),
     }
 }
 

@@ -61,21 +61,68 @@ fn compare_writes_its_summary_and_figures() {
         pendula(dir.path(), &["compare", "pendulum", "--dt", "0.05", "--t-end", "200", "--out-dir", "c"])
             .success();
     let table = String::from_utf8(out.get_output().stdout.clone()).unwrap();
-    assert!(table.contains("verlet") && table.contains("max |dE/E0|"));
+    assert!(table.contains("verlet") && table.contains("max rel. error"), "{table}");
+    assert!(table.contains("relative to the energy scale 9.81"), "m g l for the pendulum: {table}");
     assert_eq!(
         header(&dir.path().join("c/summary.csv")),
-        "method,dt,steps,rhs_evals,wall_s,max_rel_energy_error,drift_rate"
+        "method,dt,steps,rhs_evals,cost_evals,wall_s,max_rel_energy_error,max_abs_energy_error,drift_rate,growth,failure"
     );
     let csv = std::fs::read_to_string(dir.path().join("c/summary.csv")).unwrap();
-    let error = |method: &str| -> f64 {
+    let field = |method: &str, k: usize| -> String {
         let line = csv.lines().find(|l| l.starts_with(&format!("{method},"))).unwrap();
-        line.split(',').nth(5).unwrap().parse().unwrap()
+        line.split(',').nth(k).unwrap().to_owned()
     };
+    let error = |method: &str| -> f64 { field(method, 6).parse().unwrap() };
     // Euler's energy runs away; Verlet's stays bounded and small at this step.
     assert!(error("euler") > 100.0 * error("verlet"), "{csv}");
+    assert_eq!(field("verlet", 9), "bounded");
+    assert_eq!(field("euler", 9), "growing");
     for name in ["energy", "trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"]
     {
         assert_eq!(png_size(&dir.path().join(format!("c/{name}.png"))), (960, 600), "{name}");
+    }
+}
+
+#[test]
+fn compare_at_equal_cost_spends_the_same_evaluations_and_times_the_crossover() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(
+        dir.path(),
+        &[
+            "compare",
+            "pendulum",
+            "--set",
+            "theta=150deg",
+            "--methods",
+            "rk4,verlet,symplectic-euler",
+            "--evals-per-second",
+            "40",
+            "--t-end",
+            "3000",
+            "--out-dir",
+            "c",
+            "--summary",
+            "s.json",
+        ],
+    )
+    .success();
+    let s = json(&dir.path().join("s.json"));
+    let m = &s["methods"];
+    let cost = |name: &str| m[name]["cost_evals"].as_f64().unwrap();
+    for name in ["verlet", "symplectic-euler"] {
+        let ratio = cost(name) / cost("rk4");
+        assert!((ratio - 1.0).abs() < 0.05, "{name} spent {ratio} of rk4's evaluations");
+        assert_eq!(m[name]["growth"], "bounded", "{name}");
+    }
+    assert_eq!(m["rk4"]["growth"], "growing");
+    // The sentence printed matches the crossover recorded beside the numbers.
+    let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
+    for c in s["crossovers"].as_array().unwrap() {
+        let bounded = c["bounded"].as_str().unwrap();
+        let bound = c["bound"].as_f64().unwrap();
+        assert!((bound - m[bounded]["max_rel_energy_error"].as_f64().unwrap()).abs() <= 1e-12 * bound);
+        let line = stdout.lines().find(|l| l.starts_with("crossover:") && l.contains(bounded)).unwrap();
+        assert_eq!(line.contains("passes"), c["t"].is_number(), "{line}");
     }
 }
 

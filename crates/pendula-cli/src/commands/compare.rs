@@ -469,7 +469,10 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
         .with(r.method, color, Kind::Dots, rows.map(|row| (wrap(row[1]), row[1 + n])).collect());
         figures.push((format!("phase_{}", r.method), phase));
     }
-    figures.insert(0, ("trajectory".to_owned(), trajectory));
-    figures.insert(0, ("energy".to_owned(), energy));
+    // Every method may have failed before its first step (all refused): no curves to draw.
+    if !energy.series.is_empty() {
+        figures.insert(0, ("trajectory".to_owned(), trajectory));
+        figures.insert(0, ("energy".to_owned(), energy));
+    }
     figures
 }
