@@ -8,6 +8,7 @@ use pendula::analysis::{self, WorkPoint};
 use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
 use serde_json::json;
 
+use crate::commands::compare::refusal;
 use crate::config::f64_arg;
 use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
 use pendula::integrator::Scheme;
@@ -54,23 +55,47 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("pendulum");
     let values = study::values(system, &args.common.set)?;
-    let (hs, t_end) = args.steps.resolve(0.1, 7)?;
+    let (ladder, t_end) =
+        args.steps.resolve_or_default(crate::commands::convergence::default_t_end(&values))?;
     let tols = tolerances(args)?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, Some(hs[0]))?;
+    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)?;
     let bar = study::progress(methods.len() as u64, "work-precision");
     let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
+    // Per method: why some runs are missing (the library's reason), if any are.
+    let mut notes: Vec<Option<String>> = Vec::new();
     for method in &methods {
         let y0 = values.initial_state();
-        let points = if let Scheme::Embedded(_) = method.scheme {
-            analysis::work_precision_adaptive(&*model, method, y0, t_end, &tols, &reference.state)?
+        let (mut points, mut note) = (Vec::new(), None);
+        // One run per step or tolerance: a failure (a large step blowing up, Tao's refusal above
+        // ω h = 1, a Newton failure) drops that point and is reported, and the study goes on.
+        let runs: Vec<(f64, bool)> = if let Scheme::Embedded(_) = method.scheme {
+            tols.iter().map(|t| (*t, true)).collect()
         } else {
-            analysis::work_precision(&*model, method, y0, t_end, &hs, &reference.state)?
+            crate::commands::convergence::steps_for(&values, method, &ladder, t_end)
+                .into_iter()
+                .map(|h| (h, false))
+                .collect()
         };
+        for (x, adaptive) in runs {
+            let point = if adaptive {
+                analysis::work_precision_adaptive(&*model, method, y0, t_end, &[x], &reference.state)
+            } else {
+                analysis::work_precision(&*model, method, y0, t_end, &[x], &reference.state)
+            };
+            match point {
+                Ok(p) => points.extend(p),
+                Err(e) => {
+                    let what = if adaptive { "tol" } else { "h" };
+                    note = Some(format!("at {what} = {}: {}", short(x), refusal(e.into())?));
+                }
+            }
+        }
         results.push((method.name, points));
+        notes.push(note);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -94,8 +119,14 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let target = 1e-6;
     let shown: Vec<Vec<String>> = results
         .iter()
-        .map(|(m, points)| {
+        .zip(&notes)
+        .map(|((m, points), note)| {
             let best = points.iter().filter(|p| p.error <= target).min_by_key(|p| p.rhs_evals);
+            let why = match (best, note) {
+                (_, Some(n)) => n.clone(),
+                (None, None) => "no run reached 1e-6".to_owned(),
+                (Some(_), None) => String::new(),
+            };
             vec![
                 (*m).to_owned(),
                 best.map_or("-".into(), |p| p.rhs_evals.to_string()),
@@ -104,14 +135,16 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
                     None => format!("dt {}", short(p.h)),
                 }),
                 short(points.iter().map(|p| p.error).fold(f64::INFINITY, f64::min)),
+                why,
             ]
         })
         .collect();
-    sayln!(summary, "{system}: error at t = {t_end} s against the {}", reference.source);
+    let unit = values.info().time_unit();
+    sayln!(summary, "{system}: error at t = {} {unit} against the {}", short(t_end), reference.source);
     say!(
         summary,
         "{}",
-        study::table(&["method", "rhs evals for error <= 1e-6", "at", "smallest error"], &shown)
+        study::table(&["method", "rhs evals for error <= 1e-6", "at", "smallest error", "note"], &shown)
     );
     for (name, x_label, cost) in [
         (
