@@ -137,7 +137,7 @@ fn stability_and_regimes_write_their_tables() {
         s["largest_stable_dt"]["verlet"].as_f64().unwrap(),
     );
     assert!(euler < verlet / 10.0, "euler {euler}, verlet {verlet}");
-    assert_eq!(header(&dir.path().join("s/stability.csv")), "method,largest_stable_dt");
+    assert_eq!(header(&dir.path().join("s/stability.csv")), "method,largest_stable_dt,note");
     pendula(dir.path(), &["oscillator-regimes", "--out-dir", "r", "--summary", "r.json"]).success();
     let r = json(&dir.path().join("r.json"));
     assert!(r["max_rel_amplitude_error"].as_f64().unwrap() < 1e-6);

@@ -41,32 +41,53 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let summary = Summary::open(args.common.summary.as_deref())?;
     let criterion = StabilityCriterion { t_end, max_rel_energy_error: bound };
     let results = stable_steps(&values, &methods, &criterion)?;
-    let rows: Vec<Vec<String>> =
-        results.iter().map(|(m, h)| vec![(*m).to_owned(), h.map_or(String::new(), num)]).collect();
-    out.csv("stability.csv", &["method", "largest_stable_dt"], &rows)?;
+    let notes: Vec<String> = methods.iter().zip(&results).map(|(m, (_, h))| note(m, *h)).collect();
+    let rows: Vec<Vec<String>> = results
+        .iter()
+        .zip(&notes)
+        .map(|((m, h), n)| vec![(*m).to_owned(), h.map_or(String::new(), num), n.clone()])
+        .collect();
+    out.csv("stability.csv", &["method", "largest_stable_dt", "note"], &rows)?;
     let (h_min, h_max) = H_RANGE;
     sayln!(
         summary,
-        "{system}: largest step with |dE/E0| <= {bound} over {t_end} s (searched {h_min} .. {h_max} s)"
+        "{system}: largest step whose relative energy error (against the energy scale {}) stays <= {bound} over {t_end} s (searched {h_min} .. {h_max} s)",
+        short(model.energy_scale(values.initial_state()))
     );
     let shown: Vec<Vec<String>> = results
         .iter()
-        .map(|(m, h)| {
+        .zip(&notes)
+        .map(|((m, h), n)| {
             vec![
                 (*m).to_owned(),
                 h.map_or(format!("< {h_min}"), |h| if h >= h_max { format!(">= {h_max}") } else { short(h) }),
+                n.clone(),
             ]
         })
         .collect();
-    say!(summary, "{}", study::table(&["method", "largest stable dt (s)"], &shown));
+    say!(summary, "{}", study::table(&["method", "largest stable dt (s)", "note"], &shown));
     out.figure("stability", &figure(system, &criterion, &results))?;
     let map: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|(m, h)| ((*m).to_owned(), json!(h))).collect();
+    let note_map: serde_json::Map<String, serde_json::Value> =
+        results.iter().zip(&notes).map(|((m, _), n)| ((*m).to_owned(), json!(n))).collect();
     summary.write(
-        &json!({ "system": system, "criterion": { "t_end": t_end, "max_rel_energy_error": bound }, "largest_stable_dt": map }),
+        &json!({ "system": system, "criterion": { "t_end": t_end, "max_rel_energy_error": bound }, "largest_stable_dt": map, "notes": note_map }),
     )?;
     out.finish()?;
     Ok(())
+}
+
+/// What the number means, when it is not plainly the stability limit.
+pub fn note(method: &pendula::integrator::Method, h: Option<f64>) -> String {
+    match (pendula::analysis::accepted_step_limit(method), h) {
+        (Some(limit), Some(h)) if h >= limit / 1.01 => format!(
+            "refused above h = {} s (binding * h <= 1): stable at every step it accepts",
+            short(limit)
+        ),
+        (_, None) => format!("unstable at every step tried, down to {} s", H_RANGE.0),
+        _ => String::new(),
+    }
 }
 
 /// Search range of the step, s.

@@ -20,4 +20,4 @@ pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
 pub use energy::{EnergyBalance, EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
 pub use lyapunov::{Lyapunov, LyapunovSpec, Tangent, lyapunov};
 pub use period::measure_period;
-pub use stability::{StabilityCriterion, is_stable, largest_stable_step};
+pub use stability::{StabilityCriterion, accepted_step_limit, is_stable, largest_stable_step};

@@ -60,7 +60,17 @@ pub fn is_stable(
     }
 }
 
-/// The largest step in [`h_min`, `h_max`] at which the run is stable, by bisection in log h
+/// The largest step `method` accepts at all, s, when it has such a limit: Tao's maps refuse
+/// ω h > 1 (ω the binding constant). A refusal is not an instability, and studies report it
+/// as what it is.
+pub fn accepted_step_limit(method: &Method) -> Option<f64> {
+    match method.scheme {
+        crate::integrator::Scheme::Tao(tao) => Some(1.0 / tao.binding),
+        _ => None,
+    }
+}
+
+/// The largest step in [`h_min`, `h_max`] (capped at [`accepted_step_limit`]) at which the run is stable, by bisection in log h
 /// to 1% (`None` if even `h_min` is unstable; `h_max` if it is stable).
 ///
 /// Stability is not always monotone in h (a method can be stable again at a larger step in
@@ -74,6 +84,7 @@ pub fn largest_stable_step(
     h_max: f64,
     criterion: &StabilityCriterion,
 ) -> Result<Option<f64>, Error> {
+    let h_max = accepted_step_limit(method).map_or(h_max, |limit| h_max.min(limit));
     if !is_stable(model, method, y0, h_min, criterion)? {
         return Ok(None);
     }
