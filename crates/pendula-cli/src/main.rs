@@ -25,7 +25,22 @@ fn main() -> ExitCode {
     if let Err(err) = output::on_interrupt() {
         let _ = writeln!(std::io::stderr(), "warning: {err:#}");
     }
-    let result = match &cli.command {
+    let result = dispatch(&cli.command);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            if is_broken_pipe(&err) {
+                return ExitCode::SUCCESS;
+            }
+            let _ = writeln!(std::io::stderr(), "error: {err:#}");
+            ExitCode::from(exit_code(&err))
+        }
+    }
+}
+
+/// Runs one parsed command (the report runs others through it).
+pub fn dispatch(command: &Command) -> anyhow::Result<()> {
+    match command {
         Command::Simulate(args) => simulate::run(args),
         Command::Compare(args) => commands::compare::run(args),
         Command::Convergence(args) => commands::convergence::run(args),
@@ -43,16 +58,6 @@ fn main() -> ExitCode {
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(err) => {
-            if is_broken_pipe(&err) {
-                return ExitCode::SUCCESS;
-            }
-            let _ = writeln!(std::io::stderr(), "error: {err:#}");
-            ExitCode::from(exit_code(&err))
-        }
     }
 }
 

@@ -308,7 +308,9 @@ impl OutDir {
             0 => String::new(),
             n => format!(" (removed {n} stale files of an earlier run)"),
         };
-        eprintln!("wrote {} files to {}{stale}", self.written.len(), self.path.display());
+        if !QUIET.load(std::sync::atomic::Ordering::Relaxed) {
+            eprintln!("wrote {} files to {}{stale}", self.written.len(), self.path.display());
+        }
         Ok(())
     }
 }
@@ -323,6 +325,9 @@ fn plain_name(name: &str) -> bool {
 /// cannot be written fails first), or stdout for `-`. Every command that takes `--summary`
 /// opens it with [`Summary::open`] and prints what is for people with [`Summary::say`],
 /// which goes to stderr when stdout carries the JSON, so that stdout parses.
+/// Set while `report` runs other commands: their tables and file counts would bury its own.
+pub static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 pub struct Summary {
     target: Target,
 }
@@ -362,6 +367,9 @@ impl Summary {
     /// and `println!` would.
     pub fn say(&self, text: std::fmt::Arguments<'_>) {
         use std::io::Write as _;
+        if QUIET.load(std::sync::atomic::Ordering::Relaxed) {
+            return;
+        }
         let _ = if self.on_stdout() {
             std::io::stderr().lock().write_fmt(text)
         } else {
