@@ -5,6 +5,7 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
+use pendula::error::Short;
 use pendula::events::{EventLocator, EventSpec};
 use pendula::observe::{EnergyTracker, Observer, Sample};
 use serde_json::{Map, Value, json};
@@ -170,14 +171,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let mut err = Vec::new();
     writeln!(
         err,
-        "{} with {}: {steps} steps {} to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
+        "{} with {}: {steps} steps {} to t = {} s, {} rhs evaluations, {wall_s:.3} s",
         info.name,
         method.name,
         match tolerances {
             Some(t) =>
                 format!("(adaptive, rtol {:e} atol {:e}, {} rejected)", t.rtol, t.atol, report.steps_rejected),
-            None => format!("of {} s", spec.h),
+            None => format!("of {} s", Short(spec.h)),
         },
+        Short(t_end),
         report.rhs_evals
     )?;
     writeln!(
@@ -194,7 +196,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => writeln!(err, "no trajectory written (--every 0)")?,
     }
     if let Some(first) = events.found.first() {
-        writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
+        writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, Short(first.t))?;
     }
     if let Some(p) = summary.as_deref().filter(|_| !to_stdout) {
         writeln!(err, "wrote {}", p.display())?;
