@@ -3,6 +3,7 @@
 mod cli;
 mod commands;
 mod config;
+mod generate;
 mod list;
 mod output;
 mod simulate;
@@ -35,6 +36,8 @@ fn main() -> ExitCode {
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
+        Command::Completions { shell } => generate::completions(*shell),
+        Command::Man { out_dir } => generate::man(out_dir.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
