@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use pendula::ensemble::{self, BatchMethod, BatchSpec, Member};
-use pendula::error::Short;
+use pendula::error::{Short, did_you_mean, suggestions};
 use pendula::integrator::{self, Method};
 use pendula::observe::{Observer, Sample};
 use pendula::system::double::DoublePendulum;
@@ -234,7 +234,9 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         None => false,
         Some("flip") if info.state.iter().any(|q| q.is_angle()) => true,
         Some("flip") => bail!("invalid --until flip: the `{}` system has no angle", info.name),
-        Some(other) => bail!("invalid --until `{other}`: expected flip"),
+        Some(other) => {
+            bail!("invalid --until `{other}`{}: expected flip", did_you_mean(&suggestions(other, ["flip"])))
+        }
     };
     let mut records = Vec::new();
     for name in args.record.as_deref().unwrap_or("final").split(',').map(str::trim) {
@@ -243,7 +245,10 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             "flip-time" if info.state.iter().any(|q| q.is_angle()) => Record::FlipTime,
             "flip-time" => bail!("invalid --record flip-time: the `{}` system has no angle", info.name),
             "energy-error" => Record::EnergyError,
-            other => bail!("invalid --record `{other}`: expected final, flip-time or energy-error"),
+            other => bail!(
+                "invalid --record `{other}`{}: expected final, flip-time or energy-error",
+                did_you_mean(&suggestions(other, ["final", "flip-time", "energy-error"]))
+            ),
         };
         if records.contains(&record) {
             bail!("invalid --record: `{name}` is given twice");
@@ -407,7 +412,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         },
         sweep.method.name,
         sweep.steps,
-        sweep.h,
+        Short(sweep.h),
         out_path.display(),
         shape,
         if sharded { format!(" and {}", side_path.display()) } else { String::new() },
