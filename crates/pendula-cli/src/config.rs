@@ -222,7 +222,8 @@ pub fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str
 }
 
 /// [`RunSpec::schedule`], its errors naming the flags the step and the end came from
-/// (`--dt-min` for a convergence study's smallest step, `t_end` in a scenario file).
+/// (`--dt-min` for a convergence study's smallest step); a name without `--` is a scenario
+/// file's key (`t_end`).
 pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula::simulate::Schedule> {
     spec.schedule().map_err(|e| match e {
         pendula::Error::InvalidValue { name, value, allowed } => {
@@ -231,7 +232,11 @@ pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula
                 "t-end" | "steps" => end_flag,
                 _ => return anyhow::Error::new(pendula::Error::InvalidValue { name, value, allowed }),
             };
-            anyhow!("invalid {flag} {}: {allowed}", Short(value))
+            if flag.starts_with("--") {
+                anyhow!("invalid {flag} {}: {allowed}", Short(value))
+            } else {
+                anyhow!("invalid {flag} = {} in the scenario file: {allowed}", Short(value))
+            }
         }
         other => other.into(),
     })
@@ -284,13 +289,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     };
     let spec = RunSpec { t0: 0.0, h, end };
     // Name where each value came from: a flag, or the scenario file.
-    let dt_flag =
-        if args.dt.is_none() && scenario.dt.is_some() { "`dt` in the scenario file" } else { "--dt" };
+    let dt_flag = if args.dt.is_none() && scenario.dt.is_some() { "dt" } else { "--dt" };
     let end_flag = match (&args.t_end, &args.steps, end) {
         (Some(_), _, _) => "--t-end",
         (None, Some(_), _) => "--steps",
-        (None, None, End::Steps(_)) => "`steps` in the scenario file",
-        (None, None, End::Time(_)) if scenario.t_end.is_some() => "`t_end` in the scenario file",
+        (None, None, End::Steps(_)) => "steps",
+        (None, None, End::Time(_)) if scenario.t_end.is_some() => "t_end",
         (None, None, End::Time(_)) => "--t-end",
     };
     schedule(&spec, dt_flag, end_flag)?;

@@ -625,6 +625,29 @@ fn step_range_errors_name_dt_min() {
     assert!(stderr.contains("invalid --dt-min 1e-14"), "{stderr}");
 }
 
+/// A value from a scenario file is named by its key there, one from a flag by the flag.
+#[test]
+fn schedule_errors_name_the_source_of_the_value() {
+    rejects_with(
+        &["simulate", "--scenario", "s.toml"],
+        &["invalid t_end = -1 in the scenario file", "> 0"],
+        2,
+        &[("s.toml", "t_end = -1.0\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "s.toml"],
+        &["invalid dt = 0 in the scenario file"],
+        2,
+        &[("s.toml", "dt = 0.0\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "s.toml", "--t-end", "-2"],
+        &["invalid --t-end -2"],
+        2,
+        &[("s.toml", "t_end = 5.0\n")],
+    );
+}
+
 /// The `--set` examples in each study command's help are for the system that command runs
 /// (the one it defaults to, or the preset the help names): each runs on that system.
 #[test]
