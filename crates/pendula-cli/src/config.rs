@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use pendula::control::Tolerances;
+use pendula::error::Short;
 use pendula::integrator::{self, Method, Scheme};
 use pendula::system::{self, Quantity, SystemInfo, Values};
 use pendula::{End, RunSpec};
@@ -113,18 +114,58 @@ pub fn parse_value(name: &str, text: &str, quantity: Option<&Quantity>) -> Resul
             )
         })?,
     };
+    if factor == 1.0 && angle {
+        warn_radians(name, t, value);
+    }
     // (deg · π) / 180, the same rounding as the catalogue's defaults and the benchmark spec.
     Ok(if factor == DEGREE { value * pi / 180.0 } else { value * factor })
 }
 
+/// Warns on stderr, once per name and value, when a bare number for an angle exceeds a full
+/// turn: `theta1=120` is far more likely 120° than 19 turns. It is a warning, not an error,
+/// because spun-up starts (several turns) are legitimate.
+fn warn_radians(name: &str, text: &str, value: f64) {
+    use std::sync::Mutex;
+    static WARNED: Mutex<Vec<(String, String)>> = Mutex::new(Vec::new());
+    if !(value.abs() > std::f64::consts::TAU && value.is_finite()) {
+        return;
+    }
+    let key = (name.to_owned(), text.to_owned());
+    let mut warned = WARNED.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if warned.contains(&key) {
+        return;
+    }
+    warned.push(key);
+    let turns = value / std::f64::consts::TAU;
+    eprintln!("warning: {name}={text} is {} rad ({turns:.1} turns); did you mean {text}deg?", Short(value));
+}
+
 fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f64> {
     match value {
-        toml::Value::Float(f) => Ok(*f),
-        toml::Value::Integer(i) => Ok(*i as f64),
+        toml::Value::Float(f) => number_value(name, *f, quantity),
+        toml::Value::Integer(i) => number_value(name, *i as f64, quantity),
         toml::Value::String(s) => parse_value(name, s, Some(quantity)),
         other => bail!(
             "invalid value {other} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\""
         ),
+    }
+}
+
+/// A scenario's bare number: radians for an angle, so it gets the same warning as `--set`.
+fn number_value(name: &str, value: f64, quantity: &Quantity) -> Result<f64> {
+    if quantity.is_angle() {
+        warn_radians(name, &Short(value).to_string(), value);
+    }
+    Ok(value)
+}
+
+/// An example `--set` item for `info`: its first angle in degrees, else its first parameter.
+pub fn set_example(info: &SystemInfo) -> String {
+    match info.state.iter().find(|q| q.is_angle()) {
+        Some(q) => format!("{}=120deg", q.name),
+        None => {
+            info.parameters.first().map_or_else(String::new, |q| format!("{}={}", q.name, q.default * 2.0))
+        }
     }
 }
 
@@ -133,9 +174,9 @@ pub fn parse_settings(info: &SystemInfo, items: &[String]) -> Result<Vec<(String
     items
         .iter()
         .map(|item| {
-            let (name, text) = item
-                .split_once('=')
-                .ok_or_else(|| anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. theta1=120deg"))?;
+            let (name, text) = item.split_once('=').ok_or_else(|| {
+                anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. {}", set_example(info))
+            })?;
             let name = name.trim();
             let q = info.quantity(name)?;
             Ok((name.to_owned(), parse_value(name, text, Some(q))?))
@@ -178,6 +219,27 @@ pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> 
 /// Parses a number given to `flag`, naming the flag and what was expected on failure.
 pub fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
     text.trim().parse().map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
+}
+
+/// [`RunSpec::schedule`], its errors naming the flags the step and the end came from
+/// (`--dt-min` for a convergence study's smallest step); a name without `--` is a scenario
+/// file's key (`t_end`).
+pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula::simulate::Schedule> {
+    spec.schedule().map_err(|e| match e {
+        pendula::Error::InvalidValue { name, value, allowed } => {
+            let flag = match name.as_str() {
+                "dt" => dt_flag,
+                "t-end" | "steps" => end_flag,
+                _ => return anyhow::Error::new(pendula::Error::InvalidValue { name, value, allowed }),
+            };
+            if flag.starts_with("--") {
+                anyhow!("invalid {flag} {}: {allowed}", Short(value))
+            } else {
+                anyhow!("invalid {flag} = {} in the scenario file: {allowed}", Short(value))
+            }
+        }
+        other => other.into(),
+    })
 }
 
 /// Validates `simulate`'s arguments (and scenario file) into a [`SimulateConfig`].
@@ -226,7 +288,16 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         },
     };
     let spec = RunSpec { t0: 0.0, h, end };
-    spec.schedule()?;
+    // Name where each value came from: a flag, or the scenario file.
+    let dt_flag = if args.dt.is_none() && scenario.dt.is_some() { "dt" } else { "--dt" };
+    let end_flag = match (&args.t_end, &args.steps, end) {
+        (Some(_), _, _) => "--t-end",
+        (None, Some(_), _) => "--steps",
+        (None, None, End::Steps(_)) => "steps",
+        (None, None, End::Time(_)) if scenario.t_end.is_some() => "t_end",
+        (None, None, End::Time(_)) => "--t-end",
+    };
+    schedule(&spec, dt_flag, end_flag)?;
     let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
         Ok(match text {
             Some(t) => parse_number(flag, t, "a number")?,

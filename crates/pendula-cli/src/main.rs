@@ -7,6 +7,7 @@ mod study;
 mod cli;
 mod commands;
 mod config;
+mod generate;
 mod list;
 mod output;
 mod simulate;
@@ -58,6 +59,8 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
         Command::List { what } => list::run(*what),
+        Command::Completions { shell } => generate::completions(*shell),
+        Command::Man { out_dir } => generate::man(out_dir.as_deref()),
     }
 }
 

@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
+use pendula::error::Short;
 use pendula::events::{EventLocator, EventSpec};
 use pendula::observe::{Observer, Sample};
 use serde_json::{Map, Value, json};
@@ -213,14 +214,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let mut err = Vec::new();
     writeln!(
         err,
-        "{} with {}: {steps} steps {} to t = {t_end} s, {} rhs evaluations, {wall_s:.3} s",
+        "{} with {}: {steps} steps {} to t = {} s, {} rhs evaluations, {wall_s:.3} s",
         info.name,
         method.name,
         match tolerances {
             Some(t) =>
                 format!("(adaptive, rtol {:e} atol {:e}, {} rejected)", t.rtol, t.atol, report.steps_rejected),
-            None => format!("of {} s", spec.h),
+            None => format!("of {} s", Short(spec.h)),
         },
+        Short(t_end),
         report.rhs_evals
     )?;
     writeln!(
@@ -240,7 +242,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => writeln!(err, "no trajectory written (--every 0)")?,
     }
     if let Some(first) = events.found.first() {
-        writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
+        writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, Short(first.t))?;
     }
     if let Some(p) = summary_path {
         writeln!(err, "wrote {}", p.display())?;

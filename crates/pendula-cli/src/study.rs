@@ -27,7 +27,8 @@ use crate::output::AtomicFile;
 /// Arguments every study command takes.
 #[derive(Debug, Clone, Args)]
 pub struct Common {
-    /// Set a parameter or initial-state variable (`--set theta1=120deg`).
+    /// Set a parameter or initial-state variable of the system, NAME=VALUE (`pendula list
+    /// systems` names them; each command's help gives an example for its system).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
     /// Directory for CSV, PNG and SVG outputs [default: pendula-out/<command>].
@@ -76,7 +77,8 @@ impl StepRange {
                 "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
             );
         }
-        pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) }.schedule()?;
+        let spec = pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) };
+        crate::config::schedule(&spec, "--dt-min", "--t-end")?;
         let hs =
             (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
         Ok((hs, t_end))

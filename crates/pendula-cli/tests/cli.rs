@@ -474,3 +474,267 @@ fn failed_run_keeps_the_previous_file() {
     assert_eq!(std::fs::read_to_string(dir.path().join("x.csv")).unwrap(), "precious");
     assert_eq!(files(dir.path()), ["x.csv"]);
 }
+
+/// Stderr of a run that must fail with `code`.
+fn stderr_of(args: &[&str], code: i32) -> String {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path()).args(args).assert().code(code);
+    String::from_utf8_lossy(&out.get_output().stderr).into_owned()
+}
+
+/// A misspelt name gets the valid name one edit away, and still the full list, exit 2.
+#[test]
+fn unknown_names_suggest_the_closest_valid_name() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["simulate", "pendulm"], "unknown system `pendulm` (did you mean `pendulum`?)"),
+        (&["simulate", "--method", "rk5"], "unknown method `rk5` (did you mean `rk4`?)"),
+        (&["simulate", "--method", "RK4"], "(did you mean `rk4`?)"),
+        (
+            &["simulate", "pendulum", "--set", "thta=1"],
+            "unknown name `thta` for system `pendulum` (did you mean `theta`?)",
+        ),
+        (&["simulate", "--preset", "baker-gollub-chaotc"], "(did you mean `baker-gollub-chaotic`?)"),
+        (
+            &["simulate", "pendulum", "--event", "zero:thta"],
+            "unknown name `thta` for system `pendulum` (did you mean `theta`?)",
+        ),
+        (&["simulate", "--event", "flp"], "unknown name `flp` for system `double` (did you mean `flip`?)"),
+        (&["simulate", "pendulum", "--event", "zeros:theta"], "(did you mean `zero:theta`?)"),
+        (&["compare", "--methods", "euler,verlett"], "(did you mean `verlet`?)"),
+        (&["sweep", "--grid", "theta=0:1:4"], "(did you mean `theta1` or `theta2`?)"),
+        (&["sweep", "--grid", "theta1=0:1:2", "--record", "flip_time"], "(did you mean `flip-time`?)"),
+        (&["poincare", "--section", "theta3=0"], "(did you mean `theta1` or `theta2`?)"),
+        (&["bifurcation", "--variable", "omgea"], "(did you mean `omega`?)"),
+    ];
+    for (args, needle) in cases {
+        let stderr = stderr_of(args, 2);
+        assert!(stderr.contains(needle), "{args:?}: `{needle}` not in: {stderr}");
+        assert!(
+            stderr.contains("valid") || stderr.contains("expected"),
+            "{args:?}: the valid names are gone: {stderr}"
+        );
+    }
+    // Nothing is close to `triple` (four edits from `double`): no guess.
+    let stderr = stderr_of(&["simulate", "triple"], 2);
+    assert!(!stderr.contains("did you mean"), "{stderr}");
+}
+
+/// A bare angle beyond a full turn is radians, as documented, with a warning that names
+/// the likelier degrees; within a turn, or with `deg`, there is none.
+#[test]
+fn bare_angle_beyond_a_turn_warns_once() {
+    let run = |set: &str| {
+        let dir = TempDir::new().unwrap();
+        let out = pendula(dir.path())
+            .args(["simulate", "double", "--steps", "1", "--every", "0", "--set", set])
+            .assert()
+            .success();
+        String::from_utf8_lossy(&out.get_output().stderr).into_owned()
+    };
+    let stderr = run("theta1=120");
+    // 120 / (2π) = 19.0986 turns.
+    let warning = "warning: theta1=120 is 120 rad (19.1 turns); did you mean 120deg?";
+    assert_eq!(stderr.matches(warning).count(), 1, "{stderr}");
+    for quiet in ["theta1=2", "theta1=120deg", "theta1=-6.28", "m1=120"] {
+        assert!(!run(quiet).contains("warning"), "{quiet}");
+    }
+    let dir = TempDir::new().unwrap();
+    std::fs::write(dir.path().join("s.toml"), "[set]\ntheta2 = -30\n").unwrap();
+    pendula(dir.path())
+        .args(["simulate", "--scenario", "s.toml", "--steps", "1", "--every", "0"])
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("warning: theta2=-30 is -30 rad (-4.8 turns)"));
+}
+
+/// Times in messages are rounded for reading: Euler at h = 0.7 on the double pendulum
+/// overflows at a step k where k · 0.7 in floating point is 7.699999999999999; the message
+/// says t = 7.7 s (a whole number of steps, in at most 10 significant digits).
+#[test]
+fn non_finite_time_is_printed_short() {
+    let stderr = stderr_of(
+        &["simulate", "double", "--method", "euler", "--dt", "0.7", "--t-end", "100000", "--every", "0"],
+        1,
+    );
+    let t = stderr.split("t = ").nth(1).and_then(|r| r.split(" s").next()).expect(&stderr);
+    let k = t.parse::<f64>().unwrap() / 0.7;
+    assert!((k - k.round()).abs() < 1e-9, "{t} is no whole number of steps: {stderr}");
+    let digits = t.replace('.', "");
+    assert!(digits.trim_start_matches('0').len() <= 10, "{t} is not short: {stderr}");
+}
+
+/// The resonance peak of the forced oscillator is where d/dΩ of 1/√((1 − r²)² + (2ζr)²)
+/// vanishes: r = √(1 − 2ζ²), for ζ = 0.7 √0.02 = 0.141421..., with X k/F = 1/(2ζ√(1 − ζ²)).
+#[test]
+fn ref_resonance_peak_is_the_closed_form() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path())
+        .args(["oscillator-regimes", "--out-dir", "r", "--summary", "r.json"])
+        .assert()
+        .success();
+    let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let peaks = s["resonance_peaks"].as_array().unwrap();
+    assert_eq!(peaks.len(), 4);
+    for p in peaks {
+        let zeta = p["zeta"].as_f64().unwrap();
+        let ratio = p["drive_ratio"].as_f64().unwrap();
+        assert!((ratio - (1.0 - 2.0 * zeta * zeta).sqrt()).abs() < 1e-12, "{p}");
+        let amplitude = 1.0 / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
+        assert!((p["amplitude_exact"].as_f64().unwrap() / amplitude - 1.0).abs() < 1e-12, "{p}");
+        let simulated = p["amplitude_simulated"].as_f64().unwrap();
+        assert!((simulated / amplitude - 1.0).abs() < 1e-6, "{p}");
+    }
+    let row = stdout.lines().find(|l| l.trim_start().starts_with("0.7 ")).expect(&stdout);
+    assert!(row.contains("0.1414"), "{row}");
+}
+
+/// `--param` is named as `--param`, not as sweep's `--grid`.
+#[test]
+fn bifurcation_param_errors_name_param() {
+    for param in ["1.5:1.5:1", "drive_amplitude=1.5:1.5:1", "drive_amplitude=1:1.5:x"] {
+        let stderr = stderr_of(&["bifurcation", "--param", param], 2);
+        assert!(
+            stderr.contains(&format!("invalid --param `{param}`")) || stderr.contains("for --param"),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("--grid"), "{stderr}");
+    }
+}
+
+/// The driven pendulum has no energy surface to cut: that is the error, not the section.
+#[test]
+fn poincare_of_the_driven_pendulum_says_why() {
+    let stderr = stderr_of(&["poincare", "driven-pendulum"], 2);
+    for needle in [
+        "poincare needs a conservative system with two degrees of freedom",
+        "1 degree of freedom",
+        "damped",
+        "no conserved energy surface",
+    ] {
+        assert!(stderr.contains(needle), "`{needle}` not in {stderr}");
+    }
+    assert!(!stderr.contains("--section"), "{stderr}");
+}
+
+/// A convergence study's smallest step is `--dt-min`, and is named so.
+#[test]
+fn step_range_errors_name_dt_min() {
+    let stderr = stderr_of(&["convergence", "--dt-min", "1e-14", "--dt-max", "0.1", "--t-end", "1000"], 2);
+    assert!(stderr.contains("invalid --dt-min 1e-14"), "{stderr}");
+}
+
+/// A value from a scenario file is named by its key there, one from a flag by the flag.
+#[test]
+fn schedule_errors_name_the_source_of_the_value() {
+    rejects_with(
+        &["simulate", "--scenario", "s.toml"],
+        &["invalid t_end = -1 in the scenario file", "> 0"],
+        2,
+        &[("s.toml", "t_end = -1.0\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "s.toml"],
+        &["invalid dt = 0 in the scenario file"],
+        2,
+        &[("s.toml", "dt = 0.0\n")],
+    );
+    rejects_with(
+        &["simulate", "--scenario", "s.toml", "--t-end", "-2"],
+        &["invalid --t-end -2"],
+        2,
+        &[("s.toml", "t_end = 5.0\n")],
+    );
+}
+
+/// The `--set` examples in each study command's help are for the system that command runs
+/// (the one it defaults to, or the preset the help names): each runs on that system.
+#[test]
+fn set_help_examples_belong_to_the_command() {
+    let commands: &[(&str, &[(&str, &str)])] = &[
+        ("compare", &[("--set theta1=90deg --set m2=2", "double")]),
+        ("convergence", &[("--set c=0.5", "oscillator"), ("--set x=0.2", "oscillator")]),
+        ("stability", &[("--set theta=30deg", "pendulum")]),
+        ("work-precision", &[("--set theta=90deg", "pendulum")]),
+        ("period", &[("--set l=2", "pendulum"), ("--set g=1.62", "pendulum")]),
+        ("oscillator-regimes", &[("--set k=4", "oscillator"), ("--set m=2", "oscillator")]),
+        ("divergence", &[("--set theta1=120deg --set m2=2", "double")]),
+        ("lyapunov", &[("--set theta1=120deg", "double"), ("--set q=4", "driven-pendulum")]),
+        ("poincare", &[("--set m2=2", "double")]),
+        (
+            "bifurcation",
+            &[("--set q=4", "driven-pendulum"), ("--set drive_frequency=0.5", "driven-pendulum")],
+        ),
+    ];
+    let dir = TempDir::new().unwrap();
+    for (command, examples) in commands {
+        let out = pendula(dir.path()).args([command, "--help"]).assert().success();
+        let help = String::from_utf8_lossy(&out.get_output().stdout)
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        // The --set paragraph: from its flag to the next one, --out-dir (both from study::Common).
+        let paragraph = help.split("--set <NAME=VALUE> ").nth(1).expect(&help);
+        let paragraph = paragraph.split(" --out-dir <DIR>").next().unwrap();
+        let spans: Vec<&str> =
+            paragraph.split('`').skip(1).step_by(2).filter(|s| s.starts_with("--set ")).collect();
+        let listed: Vec<&str> = examples.iter().map(|(e, _)| *e).collect();
+        assert_eq!(spans, listed, "{command}: {paragraph}");
+        for (example, system) in *examples {
+            let mut args = vec!["simulate", system, "--steps", "1", "--every", "0"];
+            args.extend(example.split(' '));
+            pendula(dir.path()).args(&args).assert().success();
+        }
+    }
+}
+
+/// Completion scripts for every shell clap_complete knows, naming the subcommands.
+#[test]
+fn completions_name_the_subcommands() {
+    let dir = TempDir::new().unwrap();
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let out = pendula(dir.path()).args(["completions", shell]).assert().success();
+        let script = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+        for sub in ["simulate", "oscillator-regimes", "bifurcation", "completions", "method"] {
+            assert!(script.contains(sub), "{shell}: no `{sub}`");
+        }
+    }
+    assert_eq!(files(dir.path()), Vec::<String>::new());
+    rejects(&["completions", "tcsh"], &["tcsh", "bash"]);
+}
+
+/// `man` prints the top page, or writes one roff page per command.
+#[test]
+fn man_pages_are_roff_for_every_command() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path()).arg("man").assert().success();
+    let page = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
+    assert!(page.starts_with(".ie \\n(.g .ds Aq") || page.contains(".TH pendula 1"), "{page}");
+    assert!(page.contains(".TH pendula 1") && page.contains("simulate"), "{page}");
+    pendula(dir.path())
+        .args(["man", "--out-dir", "man1"])
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("man1"));
+    let pages = files(&dir.path().join("man1"));
+    for name in ["pendula.1", "pendula-simulate.1", "pendula-oscillator-regimes.1", "pendula-man.1"] {
+        assert!(pages.contains(&name.to_owned()), "{name} not in {pages:?}");
+    }
+    // One page per command and nothing else (no temporary files).
+    let help = pendula(dir.path()).arg("--help").assert().success();
+    let help = String::from_utf8_lossy(&help.get_output().stdout).into_owned();
+    let commands = help
+        .split("Commands:")
+        .nth(1)
+        .unwrap()
+        .split("Options:")
+        .next()
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("  ") && !l.starts_with("   ") && !l.trim_start().starts_with("help "))
+        .count();
+    assert_eq!(pages.len(), commands + 1, "{pages:?}");
+    let simulate = std::fs::read_to_string(dir.path().join("man1/pendula-simulate.1")).unwrap();
+    assert!(simulate.contains(".TH pendula-simulate 1") && simulate.contains("\\-\\-method"), "{simulate}");
+}

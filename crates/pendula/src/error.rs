@@ -1,4 +1,7 @@
-//! The library's one error type.
+//! The library's one error type, and the two helpers its messages use: [`suggestions`] for
+//! names that are close to a misspelt one, and [`Short`] for floats written for people.
+
+use std::fmt;
 
 /// Everything that can go wrong in pendula, with the values that explain it.
 ///
@@ -8,31 +11,37 @@
 #[non_exhaustive]
 pub enum Error {
     /// No system of this name is in [`crate::system::CATALOGUE`].
-    #[error("unknown system `{name}`; valid systems: {valid}")]
+    #[error("unknown system `{name}`{}; valid systems: {valid}", did_you_mean(.suggestions))]
     UnknownSystem {
         /// The name asked for.
         name: String,
         /// The valid names, comma-separated.
         valid: String,
+        /// The valid names closest to `name` (see [`suggestions`]); empty when none is close.
+        suggestions: Vec<String>,
     },
     /// No method of this name is in [`crate::integrator::METHODS`].
-    #[error("unknown method `{name}`; valid methods: {valid}")]
+    #[error("unknown method `{name}`{}; valid methods: {valid}", did_you_mean(.suggestions))]
     UnknownMethod {
         /// The name asked for.
         name: String,
         /// The valid names, comma-separated.
         valid: String,
+        /// The valid names closest to `name` (see [`suggestions`]); empty when none is close.
+        suggestions: Vec<String>,
     },
     /// No preset of this name is in [`crate::system::driven::PRESETS`].
-    #[error("unknown preset `{name}`; valid presets: {valid}")]
+    #[error("unknown preset `{name}`{}; valid presets: {valid}", did_you_mean(.suggestions))]
     UnknownPreset {
         /// The name asked for.
         name: String,
         /// The valid names, comma-separated.
         valid: String,
+        /// The valid names closest to `name` (see [`suggestions`]); empty when none is close.
+        suggestions: Vec<String>,
     },
     /// The system has no parameter or state variable of this name.
-    #[error("unknown name `{name}` for system `{system}`; valid names: {valid}")]
+    #[error("unknown name `{name}` for system `{system}`{}; valid names: {valid}", did_you_mean(.suggestions))]
     UnknownName {
         /// The system.
         system: &'static str,
@@ -40,9 +49,11 @@ pub enum Error {
         name: String,
         /// The valid names, comma-separated.
         valid: String,
+        /// The valid names closest to `name` (see [`suggestions`]); empty when none is close.
+        suggestions: Vec<String>,
     },
     /// A value is outside the range its quantity allows.
-    #[error("invalid value {value} for `{name}`: {allowed}")]
+    #[error("invalid value {} for `{name}`: {allowed}", Short(*.value))]
     InvalidValue {
         /// The parameter, variable or option.
         name: String,
@@ -65,14 +76,16 @@ pub enum Error {
     },
     /// The state stopped being finite: the method is unstable at this step size, or the
     /// motion is singular.
-    #[error("the state became non-finite at t = {t} s (try a smaller step)")]
+    #[error("the state became non-finite at t = {} s (try a smaller step)", Short(*.t))]
     NonFinite {
         /// Time of the first non-finite state, s.
         t: f64,
     },
     /// The step-size controller asked for a step below the minimum.
     #[error(
-        "the step size fell to h = {h} s at t = {t} s, below the minimum (loosen the tolerances or lower --h-min)"
+        "the step size fell to h = {} s at t = {} s, below the minimum (loosen the tolerances or lower --h-min)",
+        Short(*.h),
+        Short(*.t)
     )]
     StepSizeTooSmall {
         /// Time, s.
@@ -83,7 +96,8 @@ pub enum Error {
     /// The iteration that solves an implicit step did not converge (Gauss–Legendre: neither
     /// Newton nor, after it, fixed-point iteration).
     #[error(
-        "the implicit step at t = {t} s did not converge (Newton where a Jacobian exists, then {iterations} fixed-point iterations; try a smaller step)"
+        "the implicit step at t = {} s did not converge (Newton where a Jacobian exists, then {iterations} fixed-point iterations; try a smaller step)",
+        Short(*.t)
     )]
     NewtonDidNotConverge {
         /// Time at the start of the failing step, s.
@@ -91,4 +105,74 @@ pub enum Error {
         /// Iterations performed.
         iterations: usize,
     },
+}
+
+impl Error {
+    /// [`Error::UnknownName`] for `name` among `valid`, with its suggestions.
+    pub fn unknown_name<'a>(
+        system: &'static str,
+        name: &str,
+        valid: impl IntoIterator<Item = &'a str>,
+    ) -> Self {
+        let valid: Vec<&str> = valid.into_iter().collect();
+        Error::UnknownName {
+            system,
+            name: name.to_owned(),
+            valid: valid.join(", "),
+            suggestions: suggestions(name, valid.iter().copied()),
+        }
+    }
+}
+
+/// The candidates closest to a misspelt `name`, best first (ties in the candidates' order), at
+/// most three; empty when none is close.
+///
+/// Closeness is the Damerau–Levenshtein distance (an insertion, deletion, substitution or swap
+/// of neighbours each count 1), case ignored: `pendulm` → `pendulum`, `rk5` → `rk4`, `thta` →
+/// `theta`, `RK4` → `rk4`. A candidate is close when at most a third of its characters (at
+/// least one) must change and it keeps at least one: replacing every character of `x` by `v`
+/// is no spelling mistake. Only the candidates at the smallest distance are kept.
+pub fn suggestions<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    let name = name.to_lowercase();
+    let mut best: Vec<(usize, &str)> = candidates
+        .into_iter()
+        .map(|c| (strsim::damerau_levenshtein(&name, &c.to_lowercase()), c))
+        .filter(|&(d, c)| {
+            let len = c.chars().count();
+            d <= (len / 3).max(1) && d < len
+        })
+        .collect();
+    let Some(min) = best.iter().map(|&(d, _)| d).min() else { return Vec::new() };
+    best.retain(|&(d, _)| d == min);
+    best.into_iter().take(3).map(|(_, c)| c.to_owned()).collect()
+}
+
+/// ` (did you mean `a`?)`, ` (did you mean `a` or `b`?)`, or nothing: the hint the
+/// unknown-name errors print after the name, for messages that make their own.
+pub fn did_you_mean(suggestions: &[String]) -> String {
+    let quoted: Vec<String> = suggestions.iter().map(|s| format!("`{s}`")).collect();
+    match quoted.split_last() {
+        None => String::new(),
+        Some((last, [])) => format!(" (did you mean {last}?)"),
+        Some((last, rest)) => format!(" (did you mean {} or {last}?)", rest.join(", ")),
+    }
+}
+
+/// A float for a message: at most 10 significant digits, in the shortest form that reads back
+/// as the rounded value, so that 9.200000000000001 prints as `9.2` and 0.1 + 0.2 as `0.3`.
+/// Magnitudes below 1e-4 or from 1e15 take an exponent (`1.5e-7`); non-finite values print as
+/// Rust does (`NaN`, `inf`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Short(pub f64);
+
+impl fmt::Display for Short {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if !v.is_finite() || v == 0.0 {
+            return write!(f, "{v}");
+        }
+        // Round to 10 significant digits, then let Rust print the shortest form of that.
+        let rounded: f64 = format!("{v:.9e}").parse().map_err(|_| fmt::Error)?;
+        if (1e-4..1e15).contains(&rounded.abs()) { write!(f, "{rounded}") } else { write!(f, "{rounded:e}") }
+    }
 }

@@ -81,6 +81,7 @@ impl EventSpec {
                 system: model.info().name,
                 name: text.to_owned(),
                 valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-] (flip has no direction)".into(),
+                suggestions: vec!["flip".into()],
             });
         }
         spec.direction = direction;
@@ -90,11 +91,10 @@ impl EventSpec {
     fn parse_kind(text: &str, full: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
         let state = model.info().state;
         let index_of = |name: &str| {
-            state.iter().position(|q| q.name == name).ok_or_else(|| Error::UnknownName {
-                system: model.info().name,
-                name: name.to_owned(),
-                valid: state.iter().map(|q| q.name).collect::<Vec<_>>().join(", "),
-            })
+            state
+                .iter()
+                .position(|q| q.name == name)
+                .ok_or_else(|| Error::unknown_name(model.info().name, name, state.iter().map(|q| q.name)))
         };
         let kind = if text == "flip" {
             if !state.iter().any(|q| q.is_angle()) {
@@ -102,6 +102,7 @@ impl EventSpec {
                     system: model.info().name,
                     name: "flip".into(),
                     valid: "zero:NAME, section:NAME=VALUE (this system has no angle)".into(),
+                    suggestions: Vec::new(),
                 });
             }
             EventKind::Flip
@@ -112,6 +113,7 @@ impl EventSpec {
                 system: model.info().name,
                 name: text.to_owned(),
                 valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]".into(),
+                suggestions: Vec::new(),
             })?;
             let value: f64 = value.trim().parse().map_err(|_| Error::InvalidValue {
                 name: text.to_owned(),
@@ -124,10 +126,16 @@ impl EventSpec {
             let index = index_of(name)?;
             EventKind::Section { index, value, periodic: state[index].is_angle() }
         } else {
+            // A misspelt kind keeps what follows it: `zeros:theta` → `zero:theta`.
+            let candidates: Vec<String> = match text.split_once(':') {
+                Some((_, rest)) => vec![format!("zero:{rest}"), format!("section:{rest}")],
+                None => vec!["flip".into()],
+            };
             return Err(Error::UnknownName {
                 system: model.info().name,
                 name: text.to_owned(),
                 valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]".into(),
+                suggestions: crate::error::suggestions(text, candidates.iter().map(String::as_str)),
             });
         };
         Ok(EventSpec { name: full.to_owned(), kind, direction: Direction::Both, terminal })

@@ -22,6 +22,7 @@ mod formulations;
 mod fractal;
 mod implicit;
 mod lyapunov;
+mod messages;
 mod poincare;
 mod scales;
 mod schedule;

@@ -31,7 +31,8 @@ pub struct AnimateArgs {
     /// Length of the animation in simulated seconds [default: 10].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
-    /// Set a parameter or initial-state variable (`--set theta1=120deg`).
+    /// Set a parameter or initial-state variable: `--set theta1=120deg` for the double pendulum,
+    /// `--set theta=120deg` for the pendulum (bare angles are radians).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
     /// Output: FILE.gif, or FILE.mp4 (needs ffmpeg on the PATH) [default: pendula-out/animate/animation.gif].

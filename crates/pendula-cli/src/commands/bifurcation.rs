@@ -67,7 +67,8 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let Some(param_text) = args.param.as_deref().or(default_param) else {
         bail!("--param NAME=LO:HI:N is required for {system}");
     };
-    let axis = parse_axis(info, param_text)?;
+    let axis =
+        parse_axis(info, "--param", default_param.unwrap_or("drive_amplitude=0.9:1.5:400"), param_text)?;
     if !info.parameters.iter().any(|q| q.name == axis.name) {
         bail!("invalid --param `{param_text}`: `{}` is not a parameter of {system}", axis.name);
     }
@@ -102,7 +103,11 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let variable = match &args.variable {
         Some(name) => state.iter().position(|q| q.name == name).with_context(|| {
             format!(
-                "invalid --variable `{name}`; valid: {}",
+                "invalid --variable `{name}`{}; valid: {}",
+                pendula::error::did_you_mean(&pendula::error::suggestions(
+                    name,
+                    state.iter().map(|q| q.name)
+                )),
                 state.iter().map(|q| q.name).collect::<Vec<_>>().join(", ")
             )
         })?,
@@ -201,8 +206,8 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         "{system}: {} values of {} in [{}, {}], {samples} samples each after {transient} s; {} [{wall:.2} s, {threads} threads]",
         axis.n,
         axis.name,
-        axis.lo,
-        axis.hi,
+        pendula::error::Short(axis.lo),
+        pendula::error::Short(axis.hi),
         if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
     );
     summary.write(&json!({

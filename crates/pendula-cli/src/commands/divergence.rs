@@ -52,13 +52,9 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     }
     let index = match &args.variable {
         None => 0,
-        Some(name) => {
-            info.state.iter().position(|q| q.name == name).ok_or_else(|| pendula::Error::UnknownName {
-                system: info.name,
-                name: name.clone(),
-                valid: info.state.iter().map(|q| q.name).collect::<Vec<_>>().join(", "),
-            })?
-        }
+        Some(name) => info.state.iter().position(|q| q.name == name).ok_or_else(|| {
+            pendula::Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name))
+        })?,
     };
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;

@@ -91,7 +91,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     let mut theta2 = theta1;
     let mut seen = Vec::new();
     for text in &args.grids {
-        let axis = parse_axis(info, text)?;
+        let axis = parse_axis(info, "--grid", "theta1=-pi:pi:512", text)?;
         let target = match axis.name.as_str() {
             "theta1" => &mut theta1,
             "theta2" => &mut theta2,

@@ -44,7 +44,7 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
     if !(max > 0.0 && max < 180.0) {
         anyhow::bail!("invalid --max-amplitude {max}: must be in (0, 180) degrees");
     }
-    pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }.schedule()?;
+    crate::config::schedule(&pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }, "--dt", "--dt")?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "period")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
     let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();

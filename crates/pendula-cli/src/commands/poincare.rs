@@ -7,6 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::poincare::{PoincareSpec, Stepping, poincare};
 use pendula::control::Tolerances;
+use pendula::error::{did_you_mean, suggestions};
 use pendula::integrator::{self, Scheme};
 use pendula_viz::{Figure, Kind, Scale, palette};
 use serde_json::json;
@@ -50,6 +51,9 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let values = study::values(system, &args.common.set)?;
     let info = values.info();
     let model = values.build();
+    // The system first: a section of a system without an energy surface is no question of
+    // which section.
+    pendula::analysis::poincare::check_system(&*model)?;
     let energy = f64_arg("--energy", args.energy.as_deref(), -15.0, "an energy in J")?;
     if !energy.is_finite() {
         bail!("invalid --energy {energy}: must be finite");
@@ -69,7 +73,8 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
     let Some(section) = info.state.iter().position(|q| q.name == name && q.is_angle()) else {
         bail!(
-            "invalid --section `{section_text}`: `{name}` is not an angle of {system}; valid: {}",
+            "invalid --section `{section_text}`: `{name}` is not an angle of {system}{}; valid: {}",
+            did_you_mean(&suggestions(name, angles.iter().copied())),
             angles.join(", ")
         );
     };

@@ -70,18 +70,21 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
     let worst_amp =
         points.iter().map(|p| (p.amplitude_simulated / p.amplitude_exact - 1.0).abs()).fold(0.0, f64::max);
     let worst_phase = points.iter().map(|p| (p.phase_simulated - p.phase_exact).abs()).fold(0.0, f64::max);
+    let peaks = RESONANCE.iter().map(|&z| peak(&args.common.set, z)).collect::<Result<Vec<_>>>()?;
     let shown: Vec<Vec<String>> = RESONANCE
         .iter()
-        .map(|&z| {
-            let peak = points
-                .iter()
-                .filter(|p| p.zeta == z)
-                .max_by(|a, b| a.amplitude_exact.total_cmp(&b.amplitude_exact));
-            let at = |f: fn(&ResonancePoint) -> f64| peak.map_or("-".into(), |p| format!("{:.4}", f(p)));
+        .zip(&peaks)
+        .map(|(&z, peak)| {
+            let at =
+                |f: fn(&ResonancePoint) -> f64| peak.as_ref().map_or("-".into(), |p| format!("{:.4}", f(p)));
             vec![format!("{z}"), at(|p| p.ratio), at(|p| p.amplitude_exact), at(|p| p.amplitude_simulated)]
         })
         .collect();
     say!(summary, "{}", study::table(&["zeta", "W/w0 at peak", "X k/F exact", "X k/F simulated"], &shown));
+    sayln!(
+        summary,
+        "peaks at W/w0 = sqrt(1 - 2 zeta^2), simulated there; zeta >= 1/sqrt(2) = 0.7071 has no peak (the amplitude falls from W = 0)"
+    );
     sayln!(
         summary,
         "largest deviation of simulated from exact: amplitude {worst_amp:.2e} (relative), phase {worst_phase:.2e} rad"
@@ -90,9 +93,15 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
     for (name, fig) in resonance_figures(&points) {
         out.figure(name, &fig)?;
     }
-    summary.write(
-        &json!({ "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4" }),
-    )?;
+    summary.write(&json!({
+        "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4",
+        "resonance_peaks": RESONANCE.iter().zip(&peaks).map(|(&zeta, p)| json!({
+            "zeta": zeta,
+            "drive_ratio": p.as_ref().map(|p| p.ratio),
+            "amplitude_exact": p.as_ref().map(|p| p.amplitude_exact),
+            "amplitude_simulated": p.as_ref().map(|p| p.amplitude_simulated),
+        })).collect::<Vec<_>>(),
+    }))?;
     out.finish()?;
     Ok(())
 }
@@ -145,41 +154,54 @@ pub fn resonance(set: &[String]) -> Result<Vec<ResonancePoint>> {
     let mut points = Vec::new();
     for &zeta in &RESONANCE {
         for &ratio in &ratios {
-            let (_, o) = oscillator(set, &[])?;
-            let w0 = o.natural_frequency();
-            let (c, w) = (2.0 * zeta * (o.k * o.m).sqrt(), ratio * w0);
-            let items = [
-                format!("c={c}"),
-                "drive_amplitude=1".into(),
-                format!("drive_frequency={w}"),
-                "x=0".into(),
-                "v=0".into(),
-            ];
-            let (values, o) = oscillator(set, &items)?;
-            let steady = o.steady_state();
-            // Transients decay as e^{−ζ ω₀ t}: wait 25 e-folds, then fit 10 drive periods.
-            let transient = 25.0 / (zeta * w0);
-            let window = 10.0 * std::f64::consts::TAU / w;
-            let mut rec = Recorder::default();
-            let model = values.build();
-            let spec = RunSpec { t0: 0.0, h: H, end: End::Time(transient + window) };
-            model.solve(&RK4, values.initial_state(), &spec, &mut rec)?;
-            let (a, b) =
-                fit_harmonic(rec.rows.chunks(3).filter(|r| r[0] >= transient).map(|r| (r[0], r[1])), w);
-            let scale = o.drive_amplitude / o.k;
-            points.push(ResonancePoint {
-                zeta,
-                ratio,
-                amplitude_exact: steady.amplitude / scale,
-                amplitude_simulated: a.hypot(b) / scale,
-                phase_exact: steady.phase_lag,
-                phase_simulated: b.atan2(a),
-            });
+            points.push(point(set, zeta, ratio)?);
             bar.inc(1);
         }
     }
     bar.finish_and_clear();
     Ok(points)
+}
+
+/// The amplitude peak at damping ratio `zeta`, at the exact ω_r = ω₀ √(1 − 2ζ²) and simulated
+/// there; `None` for ζ ≥ 1/√2, which has no peak.
+pub fn peak(set: &[String], zeta: f64) -> Result<Option<ResonancePoint>> {
+    let (_, o) = oscillator(set, &[])?;
+    let c = 2.0 * zeta * (o.k * o.m).sqrt();
+    let (_, damped) = oscillator(set, &[format!("c={c}")])?;
+    damped.resonance_frequency().map(|w| point(set, zeta, w / o.natural_frequency())).transpose()
+}
+
+/// One point of a resonance curve: damping ratio `zeta`, drive at `ratio` ω₀.
+fn point(set: &[String], zeta: f64, ratio: f64) -> Result<ResonancePoint> {
+    let (_, o) = oscillator(set, &[])?;
+    let w0 = o.natural_frequency();
+    let (c, w) = (2.0 * zeta * (o.k * o.m).sqrt(), ratio * w0);
+    let items = [
+        format!("c={c}"),
+        "drive_amplitude=1".into(),
+        format!("drive_frequency={w}"),
+        "x=0".into(),
+        "v=0".into(),
+    ];
+    let (values, o) = oscillator(set, &items)?;
+    let steady = o.steady_state();
+    // Transients decay as e^{−ζ ω₀ t}: wait 25 e-folds, then fit 10 drive periods.
+    let transient = 25.0 / (zeta * w0);
+    let window = 10.0 * std::f64::consts::TAU / w;
+    let mut rec = Recorder::default();
+    let model = values.build();
+    let spec = RunSpec { t0: 0.0, h: H, end: End::Time(transient + window) };
+    model.solve(&RK4, values.initial_state(), &spec, &mut rec)?;
+    let (a, b) = fit_harmonic(rec.rows.chunks(3).filter(|r| r[0] >= transient).map(|r| (r[0], r[1])), w);
+    let scale = o.drive_amplitude / o.k;
+    Ok(ResonancePoint {
+        zeta,
+        ratio,
+        amplitude_exact: steady.amplitude / scale,
+        amplitude_simulated: a.hypot(b) / scale,
+        phase_exact: steady.phase_lag,
+        phase_simulated: b.atan2(a),
+    })
 }
 
 /// Least-squares (a, b) in x(t) ≈ a cos(ω t) + b sin(ω t).

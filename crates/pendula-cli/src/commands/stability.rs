@@ -34,7 +34,8 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     if !(bound.is_finite() && bound > 0.0) {
         anyhow::bail!("invalid --max-energy-error {bound}: must be finite and > 0");
     }
-    pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) }.schedule()?;
+    let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
+    crate::config::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "stability")?;

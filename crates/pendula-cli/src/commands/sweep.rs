@@ -12,6 +12,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use pendula::ensemble::{self, BatchMethod, BatchSpec, Member};
+use pendula::error::{Short, did_you_mean, suggestions};
 use pendula::integrator::{self, Method};
 use pendula::observe::{Observer, Sample};
 use pendula::system::double::DoublePendulum;
@@ -159,20 +160,31 @@ impl Sweep {
     }
 }
 
-pub(crate) fn parse_axis(info: &'static SystemInfo, text: &str) -> Result<Axis> {
-    let bad = || anyhow!("invalid --grid `{text}`: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256");
+/// An example `--grid` axis for `info`: its first angle over a turn, else its first state
+/// variable.
+pub(crate) fn grid_example(info: &SystemInfo) -> String {
+    match info.state.iter().find(|q| q.is_angle()) {
+        Some(q) => format!("{}=-pi:pi:256", q.name),
+        None => format!("{}=-1:1:256", info.state[0].name),
+    }
+}
+
+/// Parses an axis `NAME=LO:HI:N` given to `flag` (`--grid`, or bifurcation's `--param`);
+/// `example` shows the form in the error.
+pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, text: &str) -> Result<Axis> {
+    let bad = || anyhow!("invalid {flag} `{text}`: expected NAME=LO:HI:N, e.g. {example}");
     let (name, range) = text.split_once('=').ok_or_else(bad)?;
     let name = name.trim();
     let q = info.quantity(name)?;
     let parts: Vec<&str> = range.split(':').collect();
     let [lo, hi, n] = parts[..] else { return Err(bad()) };
     let (lo, hi) = (parse_value(name, lo, Some(q))?, parse_value(name, hi, Some(q))?);
-    let n: usize = parse_number("--grid", n, "a whole number of cells >= 1")?;
+    let n: usize = parse_number(flag, n, "a whole number of cells >= 1")?;
     if n == 0 {
-        bail!("invalid --grid `{text}`: the number of cells must be >= 1");
+        bail!("invalid {flag} `{text}`: the number of cells must be >= 1");
     }
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        bail!("invalid --grid `{text}`: need finite LO < HI (got {lo} and {hi})");
+        bail!("invalid {flag} `{text}`: need finite LO < HI (got {} and {})", Short(lo), Short(hi));
     }
     Ok(Axis { name: name.to_owned(), lo, hi, n })
 }
@@ -183,7 +195,11 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
     // A family (the chain) resolves to the member the settings choose; an axis may not
     // change the member, since the state's size would change from cell to cell.
     let info = family.values(&base)?.info();
-    let axes = args.grids.iter().map(|g| parse_axis(info, g)).collect::<Result<Vec<_>>>()?;
+    let axes = args
+        .grids
+        .iter()
+        .map(|g| parse_axis(info, "--grid", &grid_example(info), g))
+        .collect::<Result<Vec<_>>>()?;
     for a in &axes {
         for v in [a.centre(0), a.centre(a.n - 1)] {
             let mut settings = base.clone();
@@ -218,7 +234,9 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         None => false,
         Some("flip") if info.state.iter().any(|q| q.is_angle()) => true,
         Some("flip") => bail!("invalid --until flip: the `{}` system has no angle", info.name),
-        Some(other) => bail!("invalid --until `{other}`: expected flip"),
+        Some(other) => {
+            bail!("invalid --until `{other}`{}: expected flip", did_you_mean(&suggestions(other, ["flip"])))
+        }
     };
     let mut records = Vec::new();
     for name in args.record.as_deref().unwrap_or("final").split(',').map(str::trim) {
@@ -227,7 +245,10 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             "flip-time" if info.state.iter().any(|q| q.is_angle()) => Record::FlipTime,
             "flip-time" => bail!("invalid --record flip-time: the `{}` system has no angle", info.name),
             "energy-error" => Record::EnergyError,
-            other => bail!("invalid --record `{other}`: expected final, flip-time or energy-error"),
+            other => bail!(
+                "invalid --record `{other}`{}: expected final, flip-time or energy-error",
+                did_you_mean(&suggestions(other, ["final", "flip-time", "energy-error"]))
+            ),
         };
         if records.contains(&record) {
             bail!("invalid --record: `{name}` is given twice");
@@ -390,7 +411,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         },
         sweep.method.name,
         sweep.steps,
-        sweep.h,
+        Short(sweep.h),
         out_path.display(),
         shape,
         if sharded { format!(" and {}", side_path.display()) } else { String::new() },

@@ -67,6 +67,37 @@ fn quadratic(model: &dyn DynModel, q: [f64; 2]) -> ([f64; 3], f64) {
     ([2.0 * t1, t12 - t1 - t2, 2.0 * t2], v)
 }
 
+/// Checks that `model` has what a Poincaré section on an energy surface needs: two degrees of
+/// freedom and a conserved energy, so that the section of the surface is two-dimensional.
+///
+/// # Errors
+/// [`Error::UnmetRequirement`] naming every need the system misses (a damped, driven pendulum
+/// misses both).
+pub fn check_system(model: &dyn DynModel) -> Result<(), Error> {
+    let info = model.info();
+    let mut reasons = Vec::new();
+    if info.state.len() != 4 {
+        let dof = info.state.len() / 2;
+        reasons.push(format!(
+            "`{}` has {dof} degree{} of freedom, not 2",
+            info.name,
+            if dof == 1 { "" } else { "s" }
+        ));
+    }
+    if let Err(reason) = model.conserves_energy() {
+        reasons.push(format!("{reason}: it has no conserved energy surface"));
+    }
+    if reasons.is_empty() {
+        return Ok(());
+    }
+    Err(Error::UnmetRequirement {
+        method: "poincare",
+        needs: "a conservative system with two degrees of freedom",
+        reason: reasons.join("; "),
+        suggestion: "the double pendulum, or the chain with links=2",
+    })
+}
+
 /// `count` initial states (positions, velocities) with energy `energy`, on the section
 /// (q_s = value) and crossing it upwards (q̇_s > 0): the other position q_o and its momentum
 /// p_o follow the R2 sequence over q_o ∈ [−π, π) and over the p_o allowed at that q_o: with
@@ -78,20 +109,7 @@ fn quadratic(model: &dyn DynModel, q: [f64; 2]) -> ([f64; 3], f64) {
 /// [`Error::UnmetRequirement`] unless the system has two degrees of freedom and conserves
 /// energy; [`Error::InvalidValue`] when no point of the section has V < E.
 pub fn energy_surface_states(model: &dyn DynModel, spec: &PoincareSpec) -> Result<Vec<Vec<f64>>, Error> {
-    let unmet = |reason: String| Error::UnmetRequirement {
-        method: "poincare",
-        needs: "a conservative system with two degrees of freedom",
-        reason,
-        suggestion: "the double pendulum, or the chain with links=2",
-    };
-    if model.info().state.len() != 4 {
-        return Err(unmet(format!(
-            "`{}` has {} state variables, not 4",
-            model.info().name,
-            model.info().state.len()
-        )));
-    }
-    model.conserves_energy().map_err(unmet)?;
+    check_system(model)?;
     let (s, o) = (spec.section, 1 - spec.section);
     let mut states = Vec::with_capacity(spec.count);
     let mut k = 0;

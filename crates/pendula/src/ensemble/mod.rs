@@ -76,7 +76,7 @@ pub struct MemberResult {
 
 /// A member's state became non-finite.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("member {member}: the state became non-finite at t = {t} s")]
+#[error("member {member}: the state became non-finite at t = {} s", crate::error::Short(*.t))]
 pub struct NonFiniteMember {
     /// Index of the member.
     pub member: usize,

@@ -120,5 +120,6 @@ pub fn find(name: &str) -> Result<&'static Method, Error> {
     METHODS.iter().copied().find(|m| m.name == name).ok_or_else(|| Error::UnknownMethod {
         name: name.to_owned(),
         valid: METHODS.iter().map(|m| m.name).collect::<Vec<_>>().join(", "),
+        suggestions: crate::error::suggestions(name, METHODS.iter().map(|m| m.name)),
     })
 }

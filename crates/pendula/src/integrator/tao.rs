@@ -32,6 +32,7 @@
 use super::composition::YOSHIDA_4_WEIGHTS;
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::error::Short;
 use crate::system::Hamiltonian;
 
 /// The binding constant ω used unless another is given, 1/s.
@@ -86,7 +87,7 @@ pub fn check_binding_step(scheme: &TaoScheme, h: f64) -> Result<(), Error> {
     let product = scheme.binding * h.abs();
     if product > MAX_BINDING_STEP {
         return Err(Error::InvalidValue {
-            name: format!("binding * dt (binding {} 1/s, dt {h} s)", scheme.binding),
+            name: format!("binding * dt (binding {} 1/s, dt {} s)", Short(scheme.binding), Short(h)),
             value: product,
             allowed: "Tao's methods are unstable above binding * dt = 1: lower --binding or --dt (for chaotic motion keep binding near 200 and dt <= 5 ms)",
         });

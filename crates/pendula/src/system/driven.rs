@@ -132,6 +132,7 @@ pub fn find_preset(name: &str) -> Result<&'static Preset, crate::Error> {
     PRESETS.iter().find(|p| p.name == name).ok_or_else(|| crate::Error::UnknownPreset {
         name: name.to_owned(),
         valid: PRESETS.iter().map(|p| p.name).collect::<Vec<_>>().join(", "),
+        suggestions: crate::error::suggestions(name, PRESETS.iter().map(|p| p.name)),
     })
 }
 

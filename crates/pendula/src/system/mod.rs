@@ -178,6 +178,7 @@ pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
     CATALOGUE.iter().copied().find(|s| s.name == name).ok_or_else(|| Error::UnknownSystem {
         name: name.to_owned(),
         valid: CATALOGUE.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
+        suggestions: crate::error::suggestions(name, CATALOGUE.iter().map(|s| s.name)),
     })
 }
 
@@ -205,11 +206,9 @@ impl SystemInfo {
 
     /// Looks up a parameter or state variable by name.
     pub fn quantity(&self, name: &str) -> Result<&'static Quantity, Error> {
-        self.quantities().find(|q| q.name == name).ok_or_else(|| Error::UnknownName {
-            system: self.name,
-            name: name.to_owned(),
-            valid: self.quantities().map(|q| q.name).collect::<Vec<_>>().join(", "),
-        })
+        self.quantities()
+            .find(|q| q.name == name)
+            .ok_or_else(|| Error::unknown_name(self.name, name, self.quantities().map(|q| q.name)))
     }
 
     /// The catalogue's defaults with `settings` (name, value) applied in order, validated.

@@ -114,6 +114,15 @@ impl Oscillator {
         }
     }
 
+    /// The drive frequency at which the steady-state amplitude peaks, rad/s: setting the
+    /// derivative of 1/√((k − mΩ²)² + (cΩ)²) to zero gives ω_r = ω₀ √(1 − 2ζ²). `None` for
+    /// ζ ≥ 1/√2, where the amplitude falls monotonically from its static value at Ω = 0.
+    pub fn resonance_frequency(&self) -> Option<f64> {
+        let zeta = self.damping_ratio();
+        let square = 1.0 - 2.0 * zeta * zeta;
+        (square > 0.0).then(|| self.natural_frequency() * square.sqrt())
+    }
+
     /// Amplitude and phase lag of the forced steady state.
     pub fn steady_state(&self) -> SteadyState {
         let w = self.drive_frequency;
