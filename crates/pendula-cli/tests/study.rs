@@ -341,3 +341,31 @@ fn ref_divergence_rates() {
     pendula(dir.path(), &["divergence", "--delta", "0"]).code(2);
     pendula(dir.path(), &["divergence", "--variable", "phi"]).code(2);
 }
+
+#[test]
+fn readme_gallery_captions_name_the_manifests_commands() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path(), &["report", "--gallery-list"]).success();
+    let manifest: Vec<(String, String)> = String::from_utf8(out.get_output().stdout.clone())
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let (name, command) = l.split_once('\t').unwrap();
+            (name.to_owned(), command.to_owned())
+        })
+        .collect();
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
+    // Every picture in the README is followed by the command that made it.
+    let mut shown = Vec::new();
+    for part in readme.split("](docs/gallery/").skip(1) {
+        let (name, rest) = part.split_once(')').unwrap();
+        let command = rest.trim_start().strip_prefix('`').and_then(|r| r.split_once('`')).map(|c| c.0);
+        shown.push((name.to_owned(), command.unwrap_or("").to_owned()));
+    }
+    assert_eq!(shown, manifest, "README gallery and `report --gallery-list` disagree");
+    let gallery = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/gallery");
+    for (name, _) in &manifest {
+        assert!(gallery.join(name).exists(), "docs/gallery/{name} is missing");
+    }
+}
