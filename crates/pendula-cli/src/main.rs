@@ -34,6 +34,7 @@ fn main() -> ExitCode {
         Command::Bifurcation(args) => commands::bifurcation::run(args),
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
+        Command::Plot(args) => commands::plot::run(args),
         Command::List { what } => list::run(*what),
     };
     match result {

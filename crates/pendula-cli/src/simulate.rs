@@ -5,47 +5,44 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
-use pendula::events::{EventLocator, EventSpec};
-use pendula::observe::{EnergyTracker, Observer, Sample};
+use pendula::events::{EndAtEvent, EventLocator, EventSpec};
+use pendula::observe::{EnergyTracker, Every, Ignore, Observer, Resample, Sample};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, Sink};
 
-/// Tracks energy at every step and writes the kept steps.
-struct Writer<F> {
-    energy: EnergyTracker<F>,
-    every: u64,
+/// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
+struct Writer<'a> {
+    model: &'a dyn pendula::system::DynModel,
     sink: Sink,
     rows: u64,
+    /// The rows, flat, when the run is to be drawn.
+    kept: Option<Vec<f64>>,
     failure: Option<anyhow::Error>,
 }
 
-impl<F: FnMut(f64, &[f64]) -> f64> Observer for Writer<F> {
+impl Observer for Writer<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = match s.energy {
-            Some(e) => {
-                self.energy.record(e);
-                e
-            }
-            None => self.energy.track(s.t, s.y),
-        };
-        if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
-            let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
-            if let Err(err) = self.sink.row(row) {
-                self.failure = Some(err);
-                return ControlFlow::Break(());
-            }
-            self.rows += 1;
+        let e = s.energy.unwrap_or_else(|| self.model.energy(s.t, s.y));
+        let row = || std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
+        if let Err(err) = self.sink.row(row()) {
+            self.failure = Some(err);
+            return ControlFlow::Break(());
         }
+        if let Some(kept) = &mut self.kept {
+            kept.extend(row());
+        }
+        self.rows += 1;
         ControlFlow::Continue(())
     }
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary } = &config;
+    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary, grid, plot } =
+        &config;
     let info = values.info();
     // Open the outputs first: a path that cannot be written fails before the work.
     let out_file = match out {
@@ -56,16 +53,18 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let to_stdout = summary.as_deref() == Some(std::path::Path::new("-"));
     let summary_file =
         summary.as_deref().filter(|_| !to_stdout).map(|p| AtomicFile::create(p, "--summary")).transpose()?;
+    let plot_file = plot.as_deref().map(|p| AtomicFile::create(p, "--plot")).transpose()?;
 
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
     columns.push("energy");
     let model = values.build();
+    let mut energy = EnergyTracker::new(|t, y: &[f64]| model.energy(t, y));
     let mut writer = Writer {
-        energy: EnergyTracker::new(|t, y: &[f64]| model.energy(t, y)),
-        every: every.unwrap_or(0),
+        model: &*model,
         sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
         rows: 0,
+        kept: plot.is_some().then(Vec::new),
         failure: None,
     };
     let specs = args
@@ -74,10 +73,28 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         .map(|e| EventSpec::parse(e, &*model, args.stop_on_event))
         .collect::<Result<Vec<_>, _>>()?;
     let watch_events = !specs.is_empty();
-    let mut events = EventLocator::new(&*model, specs);
-    let mut both = (&mut writer, &mut events);
-    // Without events the writer alone watches: one call per step less on the fast paths.
-    let observers: &mut dyn Observer = if watch_events { &mut both } else { both.0 };
+    // Rows: on the --output-dt / --t-eval grid, or every N-th step and the last (a plot
+    // without a trajectory file draws every step).
+    let (mut on_grid, mut thinned, mut none);
+    let rows: &mut dyn Observer = match (grid, every.or(plot.is_some().then_some(1))) {
+        (Some(g), _) => {
+            on_grid = Resample::new(g.clone(), info.state.len(), &mut writer);
+            &mut on_grid
+        }
+        (None, Some(n)) => {
+            thinned = Every { n, inner: &mut writer };
+            &mut thinned
+        }
+        (None, None) => {
+            none = Ignore;
+            &mut none
+        }
+    };
+    // The energy is tracked at every step; a terminal event ends the run, and the rows, at
+    // the event's time and state.
+    let mut watch = EndAtEvent { events: EventLocator::new(&*model, specs), inner: (&mut energy, rows) };
+    // Without events the locator is left out: one call per step less on the fast paths.
+    let observers: &mut dyn Observer = if watch_events { &mut watch } else { &mut watch.inner };
     let start = Instant::now();
     let report = match tolerances {
         Some(tol) => {
@@ -92,21 +109,38 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => model.solve(method, values.initial_state(), spec, observers),
     };
     let wall_s = start.elapsed().as_secs_f64();
+    let EndAtEvent { events, .. } = watch;
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }
     let report = report?;
-    let energy = writer.energy.stats();
+    let energy = energy.stats();
     let rows = writer.rows;
     writer.sink.finish(out_file.as_ref())?;
+    // A run stopped by an event ends at the event, not at the end of the step past it.
+    let (t_end, final_y) = match events.stopped_at() {
+        Some(e) => (e.t, e.state.as_slice()),
+        None => (report.outcome.t(), report.state.as_slice()),
+    };
+    if let (Some(file), Some(kept)) = (&plot_file, &writer.kept) {
+        let title = format!("{} with {}", info.name, method.name);
+        let trajectory = crate::commands::plot::Trajectory::of_run(info, kept.clone(), title);
+        let bytes = crate::commands::plot::draw(
+            &trajectory.default_panels()?,
+            plot.as_deref().expect("a plot path"),
+        )?;
+        file.handle()?.write_all(&bytes)?;
+    }
     if let Some(f) = out_file {
         f.commit()?;
     }
+    if let Some(f) = plot_file {
+        f.commit()?;
+    }
 
-    let t_end = report.outcome.t();
     let mut final_state = Map::new();
     final_state.insert("t".into(), json!(t_end));
-    for (q, v) in info.state.iter().zip(&report.state) {
+    for (q, v) in info.state.iter().zip(final_y) {
         final_state.insert(q.name.into(), json!(v));
     }
     let mut initial = Map::new();
@@ -195,6 +229,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     if let Some(first) = events.found.first() {
         writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, first.t)?;
+    }
+    if let Some(e) = events.stopped_at() {
+        writeln!(err, "stopped at the event {} (t = {} s)", e.name, e.t)?;
+    }
+    if let Some(p) = plot {
+        writeln!(err, "wrote {}", p.display())?;
     }
     if let Some(p) = summary.as_deref().filter(|_| !to_stdout) {
         writeln!(err, "wrote {}", p.display())?;
