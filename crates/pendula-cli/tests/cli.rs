@@ -518,7 +518,7 @@ fn ref_stop_on_event_ends_at_the_event_time() {
     }
 }
 
-/// The fractal's flip times (ensemble engine, RK4, dt = 0.01 s) are where `simulate`'s
+/// The fractal's flip times (ensemble engine, RK4 at dt = 0.01 s, and tao-4) are where `simulate`'s
 /// flip event finds them with the same method and step (the scalar Hermite location): to
 /// 1e-9 s at pixels that flip early (the engine's sine and cosine differ from glibc's by
 /// ≤ 2 ulp, which a chaotic orbit amplifies over time). Before the flip times were
@@ -560,6 +560,36 @@ fn fractal_flip_times_agree_with_simulate_flip_events() {
         assert!(event < 2.0, "({a}, {b}) should flip early: {event}");
         assert!((fractal - event).abs() < 1e-9, "({a}, {b}): fractal {fractal} vs simulate {event}");
     }
+    // Tao's map too: the lanes' θ' = ∂H/∂p at the ends of the step, as the scalar path shows.
+    pendula(dir.path())
+        .args(["fractal", "--method", "tao-4", "--dt", "0.004", "--t-max", "5", "--out", "t.npy"])
+        .args(["--grid", "theta1=-3.01:-2.99:1", "--grid", "theta2=-3.01:-2.99:1"])
+        .assert()
+        .success();
+    let image: ndarray::Array2<f64> = ndarray_npy::read_npy(dir.path().join("t.npy")).unwrap();
+    let s = summary_of(
+        dir.path(),
+        &[
+            "simulate",
+            "double",
+            "--set",
+            "theta1=-3",
+            "--set",
+            "theta2=-3",
+            "--method",
+            "tao-4",
+            "--dt",
+            "0.004",
+            "--t-end",
+            "5",
+            "--event",
+            "flip",
+            "--every",
+            "0",
+        ],
+    );
+    let event = s["events"][0]["t"].as_f64().unwrap();
+    assert!((image[[0, 0]] - event).abs() < 1e-9, "tao-4: fractal {} vs simulate {event}", image[[0, 0]]);
 }
 
 /// `--output-dt`: an adaptive run's rows at t = 0, H, 2H, … and t_end exactly, from the
