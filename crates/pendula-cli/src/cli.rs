@@ -63,6 +63,9 @@ pub enum Command {
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.
     Merge(Box<crate::commands::merge::MergeArgs>),
+    /// Plot a pendula CSV or .npy file: time series, a phase portrait, the energy error, or
+    /// a heat map of a sweep or fractal grid.
+    Plot(Box<crate::commands::plot::PlotArgs>),
     /// The paper's whole numerical study as one self-contained HTML page.
     Report(Box<crate::commands::report::ReportArgs>),
     /// List the systems, the methods or the presets, with parameters, units, defaults,
@@ -163,6 +166,18 @@ pub struct SimulateArgs {
     /// Write every N-th step (and the last); 0 writes no trajectory [default: 1].
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub every: Option<String>,
+    /// Adaptive methods: write rows at t = 0, H, 2H, … and the last state, from the method's
+    /// dense output, instead of at the irregular steps.
+    #[arg(long, allow_hyphen_values = true, value_name = "H", conflicts_with_all = ["every", "t_eval"])]
+    pub output_dt: Option<String>,
+    /// Adaptive methods: write rows at these increasing times, s (comma-separated), and the
+    /// last state, from the dense output; without --t-end the run ends at the last of them.
+    #[arg(long, allow_hyphen_values = true, value_name = "T1,T2,...", conflicts_with = "every")]
+    pub t_eval: Option<String>,
+    /// Also draw the run: time series of the positions, a phase portrait of the first one
+    /// and the energy error, as FILE.png or FILE.svg (`pendula plot` draws a saved run).
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
     /// Trajectory output: FILE.csv, FILE.npy, or `-` for CSV on stdout
     /// [default: trajectory.csv].
     #[arg(long, value_name = "FILE")]

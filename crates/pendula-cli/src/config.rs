@@ -46,6 +46,10 @@ pub struct SimulateConfig {
     pub every: Option<u64>,
     pub out: Option<Output>,
     pub summary: Option<PathBuf>,
+    /// Rows on this grid from the dense output (`--output-dt`, `--t-eval`; adaptive only).
+    pub grid: Option<pendula::observe::Grid>,
+    /// Draw the run into this PNG or SVG (`--plot`).
+    pub plot: Option<PathBuf>,
 }
 
 /// A scenario file: the same names as the flags.
@@ -279,12 +283,15 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         None => scenario.dt,
     };
     let h = given_dt.unwrap_or(DEFAULT_DT);
+    let t_eval = args.t_eval.as_deref().map(parse_times).transpose()?;
     let end = match (&args.t_end, &args.steps) {
         (Some(t), _) => End::Time(parse_number("--t-end", t, "an end time in seconds")?),
         (None, Some(n)) => End::Steps(parse_number("--steps", n, "a whole number of steps >= 1")?),
         (None, None) => match (scenario.t_end, scenario.steps) {
             (_, Some(n)) => End::Steps(n),
-            (t, None) => End::Time(t.unwrap_or(DEFAULT_T_END)),
+            (t, None) => End::Time(
+                t.or_else(|| t_eval.as_ref().and_then(|v| v.last().copied())).unwrap_or(DEFAULT_T_END),
+            ),
         },
     };
     let spec = RunSpec { t0: 0.0, h, end };
@@ -327,6 +334,31 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         None
     };
 
+    let adaptive = tolerances.is_some();
+    let grid = match (&args.output_dt, t_eval) {
+        (Some(text), _) => {
+            let dt: f64 = parse_number("--output-dt", text, "a time step in seconds")?;
+            if !(dt.is_finite() && dt > 0.0) {
+                bail!("invalid --output-dt {dt}: must be finite and > 0 (s)");
+            }
+            Some(pendula::observe::Grid::Spacing(dt))
+        }
+        (None, Some(times)) => {
+            if let End::Time(t_end) = end
+                && let Some(&late) = times.iter().find(|&&t| t > t_end)
+            {
+                bail!("invalid --t-eval: {late} is after --t-end {t_end}");
+            }
+            Some(pendula::observe::Grid::Times(times))
+        }
+        (None, None) => None,
+    };
+    if grid.is_some() && !adaptive {
+        bail!(
+            "--output-dt and --t-eval apply to adaptive methods (dopri5, dop853), which have dense output; {} takes fixed steps: thin its rows with --every N",
+            method.name
+        );
+    }
     let every = match &args.every {
         Some(text) => parse_number("--every", text, "a whole number >= 0")?,
         None => scenario.every.unwrap_or(1),
@@ -340,7 +372,37 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     if matches!(out, Some(Output::Stdout)) && summary.as_deref() == Some(Path::new("-")) {
         bail!("--out - and --summary - would both write to stdout: give one of them a file");
     }
-    Ok(SimulateConfig { values, method, spec, tolerances, first_step: given_dt, every, out, summary })
+    let plot = args.plot.clone();
+    if let Some(p) = &plot {
+        crate::commands::plot::check_image_path(p, "--plot")?;
+    }
+    Ok(SimulateConfig {
+        values,
+        method,
+        spec,
+        tolerances,
+        first_step: given_dt,
+        every,
+        out,
+        summary,
+        grid,
+        plot,
+    })
+}
+
+/// `--t-eval T1,T2,...`: finite, non-negative, strictly increasing times in seconds.
+fn parse_times(text: &str) -> Result<Vec<f64>> {
+    let times: Vec<f64> = text
+        .split(',')
+        .map(|t| parse_number("--t-eval", t, "comma-separated times in seconds, e.g. 0,0.5,1"))
+        .collect::<Result<_>>()?;
+    if let Some(bad) = times.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
+        bail!("invalid --t-eval: {bad} is not a time >= 0 s");
+    }
+    if let Some(w) = times.windows(2).find(|w| w[1] <= w[0]) {
+        bail!("invalid --t-eval: the times must increase ({} then {})", w[0], w[1]);
+    }
+    Ok(times)
 }
 
 fn output(path: PathBuf) -> Result<Output> {

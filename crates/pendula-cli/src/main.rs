@@ -58,6 +58,7 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Bifurcation(args) => commands::bifurcation::run(args),
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
+        Command::Plot(args) => commands::plot::run(args),
         Command::List { what } => list::run(*what),
         Command::Completions { shell } => generate::completions(*shell),
         Command::Man { out_dir } => generate::man(out_dir.as_deref()),

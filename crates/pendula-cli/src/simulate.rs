@@ -8,8 +8,8 @@ use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
 use pendula::error::Short;
-use pendula::events::{EventLocator, EventSpec};
-use pendula::observe::{Observer, Sample};
+use pendula::events::{EndAtEvent, EventLocator, EventSpec};
+use pendula::observe::{Every, Ignore, Observer, Resample, Sample};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
@@ -17,15 +17,30 @@ use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, Sink};
 use crate::study::Summary;
 
-/// Tracks the energy error (or balance) at every step, writes the kept steps and moves the
-/// progress bar.
+/// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
 struct Writer<'a> {
-    energy: EnergyBalance<'a>,
-    every: u64,
+    model: &'a dyn pendula::system::DynModel,
     sink: Sink,
     rows: u64,
+    /// The rows, flat, when the run is to be drawn.
+    kept: Option<Vec<f64>>,
     failure: Option<anyhow::Error>,
-    progress: Progress,
+}
+
+impl Observer for Writer<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        let e = s.energy.unwrap_or_else(|| self.model.energy(s.t, s.y));
+        let row = || std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
+        if let Err(err) = self.sink.row(row()) {
+            self.failure = Some(err);
+            return ControlFlow::Break(());
+        }
+        if let Some(kept) = &mut self.kept {
+            kept.extend(row());
+        }
+        self.rows += 1;
+        ControlFlow::Continue(())
+    }
 }
 
 /// A progress bar over simulated time (stderr, drawn only on a terminal) for runs longer
@@ -74,28 +89,17 @@ impl Progress {
     }
 }
 
-impl Observer for Writer<'_> {
+impl Observer for Progress {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        self.progress.at(s.step, s.t);
-        self.energy.track(s.t, s.y, s.energy);
-        let (e, work) = (self.energy.last, self.energy.work);
-        if self.every > 0 && (s.step.is_multiple_of(self.every) || s.last) {
-            // Forced runs add the work W(t) of damping and drive, so E − E(0) − W is the balance.
-            let forced = self.energy.forced.then_some(work);
-            let row = std::iter::once(s.t).chain(s.y.iter().copied()).chain([e]).chain(forced);
-            if let Err(err) = self.sink.row(row) {
-                self.failure = Some(err);
-                return ControlFlow::Break(());
-            }
-            self.rows += 1;
-        }
+        self.at(s.step, s.t);
         ControlFlow::Continue(())
     }
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary } = &config;
+    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary, grid, plot } =
+        &config;
     let info = values.info();
     // Open the outputs first: a path that cannot be written fails before the work.
     let out_file = match out {
@@ -104,22 +108,22 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     };
     // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
     let summary_out = Summary::open(summary.as_deref())?;
+    let plot_file = plot.as_deref().map(|p| AtomicFile::create(p, "--plot")).transpose()?;
 
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
     columns.push("energy");
     let model = values.build();
-    let balance = EnergyBalance::new(&*model, values.initial_state());
-    if balance.forced {
-        columns.push("work");
-    }
+    // The energy error relative to the system's scale, or for damped and driven runs the
+    // energy balance E − E(0) − W.
+    let mut energy = EnergyBalance::new(&*model, values.initial_state());
+    let mut progress = Progress::new(spec.t0, spec.schedule()?.t_end);
     let mut writer = Writer {
-        energy: balance,
-        every: every.unwrap_or(0),
+        model: &*model,
         sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
         rows: 0,
+        kept: plot.is_some().then(Vec::new),
         failure: None,
-        progress: Progress::new(spec.t0, spec.schedule()?.t_end),
     };
     let specs = args
         .events
@@ -127,10 +131,29 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         .map(|e| EventSpec::parse(e, &*model, args.stop_on_event))
         .collect::<Result<Vec<_>, _>>()?;
     let watch_events = !specs.is_empty();
-    let mut events = EventLocator::new(&*model, specs);
-    let mut both = (&mut writer, &mut events);
-    // Without events the writer alone watches: one call per step less on the fast paths.
-    let observers: &mut dyn Observer = if watch_events { &mut both } else { both.0 };
+    // Rows: on the --output-dt / --t-eval grid, or every N-th step and the last (a plot
+    // without a trajectory file draws every step).
+    let (mut on_grid, mut thinned, mut none);
+    let rows: &mut dyn Observer = match (grid, every.or(plot.is_some().then_some(1))) {
+        (Some(g), _) => {
+            on_grid = Resample::new(g.clone(), info.state.len(), &mut writer);
+            &mut on_grid
+        }
+        (None, Some(n)) => {
+            thinned = Every { n, inner: &mut writer };
+            &mut thinned
+        }
+        (None, None) => {
+            none = Ignore;
+            &mut none
+        }
+    };
+    // The energy is tracked at every step; a terminal event ends the run, and the rows, at
+    // the event's time and state.
+    let mut watch =
+        EndAtEvent { events: EventLocator::new(&*model, specs), inner: (&mut energy, (rows, &mut progress)) };
+    // Without events the locator is left out: one call per step less on the fast paths.
+    let observers: &mut dyn Observer = if watch_events { &mut watch } else { &mut watch.inner };
     let start = Instant::now();
     let report = match tolerances {
         Some(tol) => {
@@ -145,23 +168,39 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         None => model.solve(method, values.initial_state(), spec, observers),
     };
     let wall_s = start.elapsed().as_secs_f64();
-    writer.progress.finish();
+    let EndAtEvent { events, .. } = watch;
+    progress.finish();
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }
     let report = report?;
-    let energy = &writer.energy;
     let energy_unit = info.energy_unit();
     let rows = writer.rows;
     writer.sink.finish()?;
+    // A run stopped by an event ends at the event, not at the end of the step past it.
+    let (t_end, final_y) = match events.stopped_at() {
+        Some(e) => (e.t, e.state.as_slice()),
+        None => (report.outcome.t(), report.state.as_slice()),
+    };
+    if let (Some(file), Some(kept)) = (&plot_file, &writer.kept) {
+        let title = format!("{} with {}", info.name, method.name);
+        let trajectory = crate::commands::plot::Trajectory::of_run(info, kept.clone(), title);
+        let bytes = crate::commands::plot::draw(
+            &trajectory.default_panels()?,
+            plot.as_deref().expect("a plot path"),
+        )?;
+        file.handle()?.write_all(&bytes)?;
+    }
     if let Some(f) = out_file {
         f.commit()?;
     }
+    if let Some(f) = plot_file {
+        f.commit()?;
+    }
 
-    let t_end = report.outcome.t();
     let mut final_state = Map::new();
     final_state.insert("t".into(), json!(t_end));
-    for (q, v) in info.state.iter().zip(&report.state) {
+    for (q, v) in info.state.iter().zip(final_y) {
         final_state.insert(q.name.into(), json!(v));
     }
     let mut initial = Map::new();
@@ -243,6 +282,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     if let Some(first) = events.found.first() {
         writeln!(err, "events: {} (first: {} at t = {} s)", events.found.len(), first.name, Short(first.t))?;
+    }
+    if let Some(e) = events.stopped_at() {
+        writeln!(err, "stopped at the event {} (t = {} s)", e.name, Short(e.t))?;
+    }
+    if let Some(p) = plot {
+        writeln!(err, "wrote {}", p.display())?;
     }
     if let Some(p) = summary_path {
         writeln!(err, "wrote {}", p.display())?;

@@ -739,4 +739,249 @@ fn man_pages_are_roff_for_every_command() {
     assert_eq!(pages.len(), commands + 1, "{pages:?}");
     let simulate = std::fs::read_to_string(dir.path().join("man1/pendula-simulate.1")).unwrap();
     assert!(simulate.contains(".TH pendula-simulate 1") && simulate.contains("\\-\\-method"), "{simulate}");
+
+/// Runs `pendula` in `dir` with `args`, expecting success, and returns the JSON summary it
+/// printed on stdout (`--summary -`).
+fn summary_of(dir: &Path, args: &[&str]) -> serde_json::Value {
+    let out = pendula(dir).args(args).args(["--summary", "-"]).assert().success();
+    serde_json::from_slice(&out.get_output().stdout).unwrap()
+}
+
+/// The last data row of a CSV file, as numbers.
+fn last_row(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect()
+}
+
+/// `--stop-on-event` ends the run at the event itself: the pendulum released at rest from
+/// 170° first passes θ = 0 at a quarter period, √(l/g) K(sin 85°) = 1.2233810685263715 s
+/// (mpmath's period 4.893524274105486164 s over 4, as in the library's event tests). Both
+/// an adaptive run (dop853 at 1e-13, located on its dense output) and a fixed-step one
+/// (rk4, dt = 0.5 ms, on the cubic Hermite interpolant) end there to 1e-12 s: the summary's
+/// t_end is the event's time (not the end of the step past it, up to a step later), its
+/// `final` the event's state (θ ≈ 0), and so is the trajectory's last row.
+#[test]
+fn ref_stop_on_event_ends_at_the_event_time() {
+    let quarter = 4.893524274105486164 / 4.0;
+    for method in [
+        &["--method", "dop853", "--rtol", "1e-13", "--atol", "1e-13"][..],
+        &["--method", "rk4", "--dt", "5e-4"],
+    ] {
+        let dir = TempDir::new().unwrap();
+        let mut args = vec!["simulate", "pendulum", "--set", "theta=170deg", "--t-end", "5"];
+        args.extend_from_slice(method);
+        args.extend_from_slice(&["--event", "zero:theta", "--stop-on-event", "--out", "t.csv"]);
+        let s = summary_of(dir.path(), &args);
+        let t_end = s["t_end"].as_f64().unwrap();
+        assert!((t_end - quarter).abs() < 1e-12, "{method:?}: t_end {t_end} vs {quarter}");
+        assert_eq!(s["events"][0]["t"].as_f64(), Some(t_end), "{method:?}");
+        assert_eq!(s["final"]["t"].as_f64(), Some(t_end));
+        let theta = s["final"]["theta"].as_f64().unwrap();
+        assert!(theta.abs() < 1e-11, "{method:?}: final theta {theta}");
+        let row = last_row(&dir.path().join("t.csv"));
+        assert_eq!((row[0], row[1]), (t_end, theta), "{method:?}: the last row is the event");
+    }
+}
+
+/// The fractal's flip times (ensemble engine, RK4 at dt = 0.01 s, and tao-4) are where `simulate`'s
+/// flip event finds them with the same method and step (the scalar Hermite location): to
+/// 1e-9 s at pixels that flip early (the engine's sine and cosine differ from glibc's by
+/// ≤ 2 ulp, which a chaotic orbit amplifies over time). Before the flip times were
+/// interpolated on the Hermite cubic they were off by up to ~5e-5 s.
+#[test]
+fn fractal_flip_times_agree_with_simulate_flip_events() {
+    let dir = TempDir::new().unwrap();
+    for (a, b) in [(-3.0_f64, -3.0_f64), (3.0, 0.5), (-2.5, 3.0)] {
+        let axis = |name: &str, c: f64| format!("{name}={}:{}:1", c - 0.01, c + 0.01);
+        pendula(dir.path())
+            .args(["fractal", "--grid", &axis("theta1", a), "--grid", &axis("theta2", b), "--t-max", "5"])
+            .args(["--out", "f.npy"])
+            .assert()
+            .success();
+        let image: ndarray::Array2<f64> = ndarray_npy::read_npy(dir.path().join("f.npy")).unwrap();
+        let fractal = image[[0, 0]];
+        let s = summary_of(
+            dir.path(),
+            &[
+                "simulate",
+                "double",
+                "--set",
+                &format!("theta1={a}"),
+                "--set",
+                &format!("theta2={b}"),
+                "--method",
+                "rk4",
+                "--dt",
+                "0.01",
+                "--t-end",
+                "5",
+                "--event",
+                "flip",
+                "--every",
+                "0",
+            ],
+        );
+        let event = s["events"][0]["t"].as_f64().unwrap();
+        assert!(event < 2.0, "({a}, {b}) should flip early: {event}");
+        assert!((fractal - event).abs() < 1e-9, "({a}, {b}): fractal {fractal} vs simulate {event}");
+    }
+    // Tao's map too: the lanes' θ' = ∂H/∂p at the ends of the step, as the scalar path shows.
+    pendula(dir.path())
+        .args(["fractal", "--method", "tao-4", "--dt", "0.004", "--t-max", "5", "--out", "t.npy"])
+        .args(["--grid", "theta1=-3.01:-2.99:1", "--grid", "theta2=-3.01:-2.99:1"])
+        .assert()
+        .success();
+    let image: ndarray::Array2<f64> = ndarray_npy::read_npy(dir.path().join("t.npy")).unwrap();
+    let s = summary_of(
+        dir.path(),
+        &[
+            "simulate",
+            "double",
+            "--set",
+            "theta1=-3",
+            "--set",
+            "theta2=-3",
+            "--method",
+            "tao-4",
+            "--dt",
+            "0.004",
+            "--t-end",
+            "5",
+            "--event",
+            "flip",
+            "--every",
+            "0",
+        ],
+    );
+    let event = s["events"][0]["t"].as_f64().unwrap();
+    assert!((image[[0, 0]] - event).abs() < 1e-9, "tao-4: fractal {} vs simulate {event}", image[[0, 0]]);
+}
+
+/// `--output-dt`: an adaptive run's rows at t = 0, H, 2H, … and t_end exactly, from the
+/// dense output; dopri5's (rtol 1e-6) agree with dop853's at 1e-12 on the same grid
+/// (`--t-eval`) to the tolerance; and the run's statistics do not change.
+#[test]
+fn output_dt_writes_rows_on_the_grid_from_dense_output() {
+    let dir = TempDir::new().unwrap();
+    let run = |args: &[&str], out: &str| {
+        pendula(dir.path())
+            .args(["simulate", "pendulum", "--set", "theta=2", "--t-end", "2.1"])
+            .args(args)
+            .args(["--out", out])
+            .assert()
+            .success();
+        let text = std::fs::read_to_string(dir.path().join(out)).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect::<Vec<Vec<f64>>>()
+    };
+    let coarse = run(&["--method", "dopri5", "--output-dt", "0.25"], "a.csv");
+    let times: Vec<f64> = coarse.iter().map(|r| r[0]).collect();
+    let mut expected: Vec<f64> = (0..9).map(|k| k as f64 * 0.25).collect();
+    expected.push(2.1);
+    assert_eq!(times, expected);
+    let fine = run(
+        &[
+            "--method",
+            "dop853",
+            "--rtol",
+            "1e-12",
+            "--atol",
+            "1e-12",
+            "--t-eval",
+            "0,0.25,0.5,0.75,1,1.25,1.5,1.75,2,2.1",
+        ],
+        "b.csv",
+    );
+    assert_eq!(fine.iter().map(|r| r[0]).collect::<Vec<_>>(), expected);
+    for (a, b) in coarse.iter().zip(&fine) {
+        assert!((a[1] - b[1]).abs() < 1e-4 && (a[2] - b[2]).abs() < 1e-4, "{a:?} vs {b:?}");
+    }
+    // The grid is not the steps: dopri5 at rtol 1e-6 takes more than 10 steps here.
+    let steps = run(&["--method", "dopri5"], "c.csv").len();
+    assert!(steps > 10, "{steps}");
+}
+
+#[test]
+fn output_grid_flags_are_checked() {
+    rejects(
+        &["simulate", "--method", "rk4", "--output-dt", "0.1"],
+        &["--output-dt", "adaptive", "rk4", "--every"],
+    );
+    rejects(&["simulate", "--method", "verlet", "--t-eval", "0,1"], &["adaptive", "verlet"]);
+    rejects(&["simulate", "--method", "dopri5", "--output-dt", "0"], &["--output-dt 0", "> 0"]);
+    rejects(&["simulate", "--method", "dopri5", "--output-dt", "-0.5"], &["--output-dt -0.5", "> 0"]);
+    rejects(&["simulate", "--method", "dopri5", "--output-dt", "abc"], &["`abc`", "--output-dt"]);
+    rejects(&["simulate", "--method", "dopri5", "--t-eval", "1,0.5"], &["--t-eval", "increase"]);
+    rejects(
+        &["simulate", "--method", "dopri5", "--t-eval", "0,20", "--t-end", "10"],
+        &["--t-eval", "20", "after"],
+    );
+    rejects(&["simulate", "--method", "dopri5", "--output-dt", "0.1", "--every", "2"], &["--every"]);
+    rejects(&["simulate", "--plot", "p.jpg"], &["--plot", "p.jpg", ".png or .svg"]);
+}
+
+/// `simulate --plot` draws three stacked panels (time series, phase portrait, energy error)
+/// from the run's rows; `pendula plot` draws the saved trajectory (CSV or .npy) and a
+/// fractal's grid.
+#[test]
+fn simulate_plot_and_pendula_plot_write_pictures() {
+    let dir = TempDir::new().unwrap();
+    let size = |name: &str| {
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.path().join(name)).unwrap()));
+        let info = decoder.read_info().unwrap();
+        (info.info().width, info.info().height)
+    };
+    pendula(dir.path())
+        .args(["simulate", "double", "--t-end", "3", "--out", "t.csv", "--plot", "run.png"])
+        .assert()
+        .success();
+    assert_eq!(size("run.png"), (960, 3 * 480));
+    pendula(dir.path()).args(["plot", "t.csv", "--phase", "--energy", "--out", "two.png"]).assert().success();
+    assert_eq!(size("two.png"), (960, 2 * 480));
+    pendula(dir.path()).args(["plot", "t.csv", "--y", "omega1", "--out", "one.svg"]).assert().success();
+    let svg = std::fs::read_to_string(dir.path().join("one.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("omega1"));
+    pendula(dir.path()).args(["simulate", "double", "--t-end", "1", "--out", "t.npy"]).assert().success();
+    pendula(dir.path()).args(["plot", "t.npy", "--phase"]).assert().success();
+    assert_eq!(size("t-plot.png"), (960, 600));
+    pendula(dir.path())
+        .args([
+            "fractal",
+            "--grid",
+            "theta1=-pi:pi:8",
+            "--grid",
+            "theta2=-pi:pi:8",
+            "--t-max",
+            "2",
+            "--out",
+            "f.npy",
+        ])
+        .assert()
+        .success();
+    pendula(dir.path()).args(["plot", "f.npy"]).assert().success();
+    assert_eq!(size("f-plot.png"), (900, 760));
+}
+
+#[test]
+fn plot_bad_input_exits_2_and_writes_nothing() {
+    let csv = "t,theta,omega,energy\n0,1,0,-4.9\n0.1,0.9,-1,-4.9\n";
+    let setup = [("t.csv", csv)];
+    rejects_with(
+        &["plot", "t.csv", "--y", "phi"],
+        &["unknown column `phi`", "t, theta, omega, energy"],
+        2,
+        &setup,
+    );
+    rejects_with(&["plot", "t.csv", "--x", "time"], &["unknown column `time`", "theta"], 2, &setup);
+    rejects_with(&["plot", "t.csv", "--out", "t.jpg"], &["--out", ".png or .svg"], 2, &setup);
+    rejects_with(&["plot", "t.csv", "--system", "triple"], &["triple", "double"], 2, &setup);
+    let table = [("d.csv", "t,distance\n0,1e-9\n1,2e-9\n")];
+    rejects_with(&["plot", "d.csv", "--phase"], &["--phase", "t, distance"], 2, &table);
+    rejects_with(&["plot", "d.csv", "--energy"], &["--energy", "t, distance"], 2, &table);
+    rejects_with(&["plot", "x.csv", "--y", "a"], &["x.csv"], 2, &[("x.csv", "a,b\n1,oops\n")]);
+    rejects(&["plot", "missing.csv"], &["missing.csv"]);
+    rejects_with(&["plot", "t.txt"], &["t.txt", ".csv and .npy"], 2, &[("t.txt", csv)]);
 }

@@ -163,6 +163,8 @@ pub struct EventLocator<'a> {
     f: Vec<f64>,
     /// The events found, in time order per step.
     pub found: Vec<EventRecord>,
+    /// Index in `found` of the terminal event that ended the run.
+    stopped: Option<usize>,
 }
 
 impl<'a> EventLocator<'a> {
@@ -170,7 +172,20 @@ impl<'a> EventLocator<'a> {
     pub fn new(model: &'a dyn DynModel, specs: Vec<EventSpec>) -> Self {
         let n = model.info().state.len();
         let flipped = vec![false; specs.len()];
-        EventLocator { model, specs, flipped, previous: None, f: vec![0.0; n], found: Vec::new() }
+        EventLocator {
+            model,
+            specs,
+            flipped,
+            previous: None,
+            f: vec![0.0; n],
+            found: Vec::new(),
+            stopped: None,
+        }
+    }
+
+    /// The terminal event that ended the run (its time and interpolated state), if one did.
+    pub fn stopped_at(&self) -> Option<&EventRecord> {
+        self.stopped.map(|i| &self.found[i])
     }
 
     /// The event functions of spec `k` at state y (several for `Flip`: θ − π and θ + π per
@@ -195,13 +210,47 @@ impl<'a> EventLocator<'a> {
     }
 }
 
+/// The cubic Hermite basis (h₀₀, h₁₀, h₀₁, h₁₁) at fraction s of a step.
+fn hermite_basis(s: f64) -> [f64; 4] {
+    let (s2, s3) = (s * s, s * s * s);
+    [2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2]
+}
+
 /// The cubic Hermite interpolant at fraction s of a step of size h.
 fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: &mut [f64]) {
-    let (s2, s3) = (s * s, s * s * s);
-    let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
+    let [h00, h10, h01, h11] = hermite_basis(s);
     for (i, o) in out.iter_mut().enumerate() {
         *o = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i];
     }
+}
+
+/// Bisection for the fraction s ∈ [0, 1] of a step of size h, ending at time t, where g
+/// changes sign; `sign` is g's sign at s = 0. It stops when the bracket is 1e-13 relative
+/// in time (absolute below t = 1 s), or at round-off in s.
+fn bisect(h: f64, t: f64, sign: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    while (hi - lo) * h.abs() > 1e-13 * t.abs().max(1.0) && hi - lo > f64::EPSILON {
+        let mid = 0.5 * (lo + hi);
+        if g(mid).signum() == sign {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The fraction s ∈ [0, 1] of a step of size h, ending at time t, where the cubic Hermite
+/// interpolant of one variable — (value, rate) `start` at the beginning of the step and
+/// `end` at its end — crosses `level`: the locator's bisection on one variable, for the
+/// ensemble engine's flip times. The end value must lie strictly beyond `level`, the start
+/// value on the other side or on it.
+pub(crate) fn hermite_crossing(h: f64, t: f64, start: [f64; 2], end: [f64; 2], level: f64) -> f64 {
+    let sign = -(end[0] - level).signum();
+    bisect(h, t, sign, |s| {
+        let [h00, h10, h01, h11] = hermite_basis(s);
+        h00 * start[0] + h10 * h * start[1] + h01 * end[0] + h11 * h * end[1] - level
+    })
 }
 
 impl EventLocator<'_> {
@@ -231,6 +280,7 @@ impl Observer for EventLocator<'_> {
             let (mut g0, mut g1, mut g) = (Vec::new(), Vec::new(), Vec::new());
             let mut at = vec![0.0; y0.len()];
             let mut hits: Vec<EventRecord> = Vec::new();
+            let mut terminal: Vec<bool> = Vec::new();
             for k in 0..self.specs.len() {
                 if self.flipped[k] {
                     continue;
@@ -248,20 +298,12 @@ impl Observer for EventLocator<'_> {
                     if !counts {
                         continue;
                     }
-                    // Bisection on the fraction s of the step: g(s) changes sign in [lo, hi].
-                    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
-                    let sign = a.signum();
-                    while (hi - lo) * h.abs() > 1e-13 * sample.t.abs().max(1.0) && hi - lo > f64::EPSILON {
-                        let mid = 0.5 * (lo + hi);
+                    // Bisection on the fraction s of the step: g(s) changes sign in [0, 1].
+                    let s = bisect(h, sample.t, a.signum(), |mid| {
                         self.interpolate(sample, mid, &mut at);
                         self.values(k, &at, &mut g);
-                        if g[m].signum() == sign {
-                            lo = mid;
-                        } else {
-                            hi = mid;
-                        }
-                    }
-                    let s = 0.5 * (lo + hi);
+                        g[m]
+                    });
                     if let EventKind::Section { index, value, periodic: true } = self.specs[k].kind {
                         self.interpolate(sample, s, &mut at);
                         if (at[index] - value).cos() < 0.0 {
@@ -280,11 +322,21 @@ impl Observer for EventLocator<'_> {
                     if matches!(self.specs[k].kind, EventKind::Flip) {
                         self.flipped[k] = true;
                     }
-                    stop |= self.specs[k].terminal;
+                    terminal.push(self.specs[k].terminal);
                 }
             }
-            hits.sort_by(|a, b| a.t.total_cmp(&b.t));
-            self.found.extend(hits);
+            // In time order; the run ends at the first terminal event, so later ones in the
+            // same step did not happen.
+            let mut order: Vec<usize> = (0..hits.len()).collect();
+            order.sort_by(|&a, &b| hits[a].t.total_cmp(&hits[b].t));
+            for i in order {
+                self.found.push(hits[i].clone());
+                if terminal[i] {
+                    self.stopped = Some(self.found.len() - 1);
+                    stop = true;
+                    break;
+                }
+            }
         }
         match &mut self.previous {
             Some((t, y, f)) => {
@@ -299,5 +351,35 @@ impl Observer for EventLocator<'_> {
 
     fn wants_dense(&self) -> bool {
         !self.specs.is_empty()
+    }
+}
+
+/// Shows `inner` every state of a run, except that when a terminal event of `events` ends
+/// the run, `inner` sees the event instead of the end of the step that contains it: the
+/// event's time and interpolated state, marked `last`, with the step's dense output (which
+/// covers it). A recorder's last row and an energy tracker's last energy are then the
+/// event's, and the run ends where the event happens rather than up to a step later.
+pub struct EndAtEvent<'a, O> {
+    /// The events; a terminal one ends the run.
+    pub events: EventLocator<'a>,
+    /// Who sees the states.
+    pub inner: O,
+}
+
+impl<O: Observer> Observer for EndAtEvent<'_, O> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        // The locator breaks only at a terminal event, which it then reports.
+        if self.events.observe(sample).is_break() {
+            if let Some(e) = self.events.stopped_at() {
+                let at = Sample { t: e.t, y: &e.state, last: true, energy: None, ..*sample };
+                let _ = self.inner.observe(&at);
+            }
+            return ControlFlow::Break(());
+        }
+        self.inner.observe(sample)
+    }
+
+    fn wants_dense(&self) -> bool {
+        self.events.wants_dense() || self.inner.wants_dense()
     }
 }

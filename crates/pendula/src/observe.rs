@@ -234,3 +234,88 @@ impl<F: FnMut(&Sample<'_>) -> bool> Observer for StopWhen<F> {
         if (self.0)(sample) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
     }
 }
+
+/// The times a [`Resample`] passes on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Grid {
+    /// t₀, t₀ + h, t₀ + 2h, … from the run's first time t₀ (h > 0, s).
+    Spacing(f64),
+    /// These times, increasing, s.
+    Times(Vec<f64>),
+}
+
+/// Passes on the states at the times of a [`Grid`] instead of at the ends of the steps,
+/// from each step's dense output ([`Sample::dense`]), and the run's last state (its end, or
+/// the event that stopped it) as the last. For `Grid::Spacing` the first state is passed on
+/// as t₀; grid times within 1e-12 (relative) of the last state's time merge with it.
+///
+/// Only steps with dense output (the adaptive pairs' `dopri5` and `dop853`) have states
+/// between their ends: in a step without it, grid times are skipped.
+#[derive(Debug, Clone)]
+pub struct Resample<O> {
+    grid: Grid,
+    /// Index of the next grid time to pass on.
+    next: u64,
+    /// The run's first time, once seen.
+    origin: Option<f64>,
+    y: Vec<f64>,
+    /// Who sees the grid's states.
+    pub inner: O,
+}
+
+impl<O> Resample<O> {
+    /// Resamples a run of a system of `dim` state variables onto `grid`.
+    pub fn new(grid: Grid, dim: usize, inner: O) -> Self {
+        Resample { grid, next: 0, origin: None, y: vec![0.0; dim], inner }
+    }
+
+    /// Grid time k, if there is one.
+    fn time(&self, k: u64) -> Option<f64> {
+        match &self.grid {
+            // k h, not a running sum: no drift over many points.
+            Grid::Spacing(h) => Some(self.origin.unwrap_or(0.0) + k as f64 * h),
+            Grid::Times(times) => usize::try_from(k).ok().and_then(|k| times.get(k).copied()),
+        }
+    }
+}
+
+impl<O: Observer> Observer for Resample<O> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        let t = sample.t;
+        let merge = 1e-12 * t.abs().max(1.0);
+        let Some(_) = self.origin else {
+            self.origin = Some(t);
+            // Times before the start are not in the run.
+            while self.time(self.next).is_some_and(|tk| tk < t - merge) {
+                self.next += 1;
+            }
+            if sample.last || self.time(self.next).is_some_and(|tk| tk <= t + merge) {
+                self.next += 1;
+                return self.inner.observe(&Sample { dense: None, ..*sample });
+            }
+            return ControlFlow::Continue(());
+        };
+        // Grid times inside the step; at the run's last state, not those that merge with it.
+        let bound = if sample.last { t - merge } else { t };
+        while let Some(tk) = self.time(self.next).filter(|tk| *tk <= bound) {
+            self.next += 1;
+            let Some(dense) = &sample.dense else { continue };
+            dense.at(tk, &mut self.y);
+            let at = Sample { t: tk, y: &self.y, last: false, dense: None, energy: None, ..*sample };
+            if self.inner.observe(&at).is_break() {
+                return ControlFlow::Break(());
+            }
+        }
+        if sample.last {
+            while self.time(self.next).is_some_and(|tk| tk <= t + merge) {
+                self.next += 1;
+            }
+            return self.inner.observe(&Sample { dense: None, ..*sample });
+        }
+        ControlFlow::Continue(())
+    }
+
+    fn wants_dense(&self) -> bool {
+        true
+    }
+}

@@ -9,6 +9,7 @@ pub mod fractal;
 pub mod lyapunov;
 pub mod merge;
 pub mod period;
+pub mod plot;
 pub mod poincare;
 pub mod regimes;
 pub mod report;

@@ -69,8 +69,9 @@ pub struct BatchSpec {
 pub struct MemberResult {
     /// State at the end (or where the member retired).
     pub state: [f64; 4],
-    /// Time of the first flip, s (linear interpolation of the angle within the step), or NaN
-    /// if it did not flip.
+    /// Time of the first flip, s, or NaN if it did not flip: where the cubic Hermite
+    /// interpolant of the crossing angle over the step (its values and rates at both ends)
+    /// passes ±π, as [`crate::events`] locates a `flip` on a fixed-step run.
     pub flip_time: f64,
 }
 
@@ -165,7 +166,8 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
                 })
             }),
             state: std::array::from_fn(|k| std::array::from_fn(|i| pick(i).state[k])),
-            flip_time: [f64::NAN; LANES],
+            flip_step: [-1.0; LANES],
+            flip_ends: [[[0.0; LANES]; 4]; 2],
             failed_at: [f64::NAN; LANES],
         };
         match spec.method {
@@ -184,7 +186,7 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
         for (i, r) in results.iter_mut().enumerate() {
             *r = MemberResult {
                 state: std::array::from_fn(|k| lanes.state[k][i]),
-                flip_time: lanes.flip_time[i],
+                flip_time: flip_time(&lanes, i, spec.h),
             };
             if !lanes.failed_at[i].is_nan() && first_failure.is_none() {
                 first_failure = Some(NonFiniteMember { member: g * LANES + i, t: lanes.failed_at[i] });
@@ -200,12 +202,43 @@ struct Lanes {
     /// m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g, l1, l2, g.
     params: [[f64; LANES]; 7],
     state: [[f64; LANES]; 4],
-    flip_time: [f64; LANES],
+    /// The step in which the lane first flipped (−1: none), as a float.
+    flip_step: [f64; LANES],
+    /// (θ₁, θ₂, θ₁', θ₂') at the start and the end of that step: what the cubic Hermite
+    /// interpolant of the angles needs. The RK4 kernel stores (θ, ω); the Tao kernel (q, p),
+    /// which `tao_lanes` turns into (q, ∂H/∂p) for the flipped lanes.
+    flip_ends: [[V; 4]; 2],
     /// Time at which the lane's state became non-finite (NaN: never).
     failed_at: [f64; LANES],
 }
 
 type V = [f64; LANES];
+
+/// Lane i's flip time, s (NaN: no flip): the first time, within the step of the flip, at
+/// which the cubic Hermite interpolant of an angle that crossed passes ±π.
+fn flip_time(lanes: &Lanes, i: usize, h: f64) -> f64 {
+    use std::f64::consts::PI;
+    let step = lanes.flip_step[i];
+    if step < 0.0 {
+        return f64::NAN;
+    }
+    let [before, after] = &lanes.flip_ends;
+    let mut first = f64::INFINITY;
+    for k in 0..2 {
+        let (a, b) = (before[k][i], after[k][i]);
+        if a.abs() <= PI && b.abs() > PI {
+            let (da, db) = (before[k + 2][i], after[k + 2][i]);
+            first = first.min(crate::events::hermite_crossing(
+                h,
+                (step + 1.0) * h,
+                [a, da],
+                [b, db],
+                PI.copysign(b),
+            ));
+        }
+    }
+    step * h + first * h
+}
 
 /// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
 /// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC), with the branch-free sine and
@@ -288,10 +321,10 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
     let (mut u1, mut u2) = ([z; 4], [z; 4]);
     let (mut t1, mut t2, mut v1, mut v2) = (z, z, z, z);
     let mut active = [true; LANES];
-    // Per lane: the step of the first flip (−1: none) and |θ| before and after it, of the
-    // angle that crossed first; the step of the first non-finite state.
+    // Per lane: the step of the first flip (−1: none) and the state at both ends of it; the
+    // step of the first non-finite state.
     let mut flip_step = [-1.0; LANES];
-    let (mut flip_old, mut flip_new) = (z, z);
+    let [mut before, mut after] = [[z; 4]; 2];
     let mut failed_step = [-1.0; LANES];
     for step in 0..steps {
         u1[0] = w1;
@@ -324,12 +357,13 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
                 let (o1, n1, o2, n2) = (th1[i].abs(), next[0].abs(), th2[i].abs(), next[1].abs());
                 let (cross1, cross2) = ((o1 <= PI) & (n1 > PI), (o2 <= PI) & (n2 > PI));
                 flips = active[i] & finite & (cross1 | cross2) & (flip_step[i] < 0.0);
-                // Of two angles crossing in one step, the one crossing first: fractions
-                // (π − old)/(new − old) compared by cross-multiplication (no division per step).
-                let use1 = cross1 & (!cross2 | ((PI - o1) * (n2 - o2) <= (PI - o2) * (n1 - o1)));
                 flip_step[i] = if flips { step_f } else { flip_step[i] };
-                flip_old[i] = if flips { if use1 { o1 } else { o2 } } else { flip_old[i] };
-                flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
+                // Selects, not branches: the crossing itself is located once, after the loop.
+                let old = [th1[i], th2[i], w1[i], w2[i]];
+                for k in 0..4 {
+                    before[k][i] = if flips { old[k] } else { before[k][i] };
+                    after[k][i] = if flips { next[k] } else { after[k][i] };
+                }
             }
             failed_step[i] = if active[i] & !finite { step_f } else { failed_step[i] };
             if TRACK {
@@ -350,15 +384,13 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
             break;
         }
     }
-    for i in 0..LANES {
-        if flip_step[i] >= 0.0 {
-            let fraction = (PI - flip_old[i]) / (flip_new[i] - flip_old[i]);
-            lanes.flip_time[i] = flip_step[i] * h + fraction * h;
-        }
-        if failed_step[i] >= 0.0 {
-            lanes.failed_at[i] = (failed_step[i] + 1.0) * h;
+    for (at, step) in lanes.failed_at.iter_mut().zip(failed_step) {
+        if step >= 0.0 {
+            *at = (step + 1.0) * h;
         }
     }
+    lanes.flip_step = flip_step;
+    lanes.flip_ends = [before, after];
     lanes.state = [th1, th2, w1, w2];
 }
 
@@ -414,6 +446,22 @@ fn tao_lanes(
     } else {
         tao_kernel::<false>(lanes, &raw, &mut z, scheme, h, steps, stop_at_flip);
     }
+    // The flipped lanes' rates θ' = ∂H/∂p at both ends of the flip's step, for the Hermite
+    // interpolant (scalar, once per flipped member: the loop above stays branch-free).
+    for (i, d) in pendulums.iter().enumerate().filter(|(i, _)| lanes.flip_step[*i] >= 0.0) {
+        for end in &mut lanes.flip_ends {
+            let mut w = [0.0; 2];
+            crate::system::Hamiltonian::dh_dp(
+                &d.form(),
+                0.0,
+                &[end[0][i], end[1][i]],
+                &[end[2][i], end[3][i]],
+                &mut w,
+            );
+            end[2][i] = w[0];
+            end[3][i] = w[1];
+        }
+    }
     for (i, d) in pendulums.iter().enumerate() {
         let mut w = [0.0; 2];
         crate::system::Hamiltonian::dh_dp(&d.form(), 0.0, &[z[0][i], z[1][i]], &[z[2][i], z[3][i]], &mut w);
@@ -448,7 +496,7 @@ fn tao_kernel<const FMA: bool>(
     let mut grad = [[0.0; LANES]; 4];
     let mut active = [true; LANES];
     let mut flip_step = [-1.0; LANES];
-    let (mut flip_old, mut flip_new) = ([0.0; LANES], [0.0; LANES]);
+    let [mut before, mut after] = [[[0.0; LANES]; 4]; 2];
     let mut failed_step = [-1.0; LANES];
     for step in 0..steps {
         let old = [q1, q2, p1, p2];
@@ -501,10 +549,12 @@ fn tao_kernel<const FMA: bool>(
             let (o1, n1, o2, n2) = (old[0][i].abs(), q1[i].abs(), old[1][i].abs(), q2[i].abs());
             let (cross1, cross2) = ((o1 <= PI) & (n1 > PI), (o2 <= PI) & (n2 > PI));
             let flips = active[i] & finite & (cross1 | cross2) & (flip_step[i] < 0.0);
-            let use1 = cross1 & (!cross2 | ((PI - o1) * (n2 - o2) <= (PI - o2) * (n1 - o1)));
             flip_step[i] = if flips { step_f } else { flip_step[i] };
-            flip_old[i] = if flips { if use1 { o1 } else { o2 } } else { flip_old[i] };
-            flip_new[i] = if flips { if use1 { n1 } else { n2 } } else { flip_new[i] };
+            let new = [q1[i], q2[i], p1[i], p2[i]];
+            for k in 0..4 {
+                before[k][i] = if flips { old[k][i] } else { before[k][i] };
+                after[k][i] = if flips { new[k] } else { after[k][i] };
+            }
             failed_step[i] = if active[i] & !finite { step_f } else { failed_step[i] };
             let keep = active[i] & finite;
             // A lane that stopped keeps its state (and copy) from before this step.
@@ -527,15 +577,13 @@ fn tao_kernel<const FMA: bool>(
             break;
         }
     }
-    for i in 0..LANES {
-        if flip_step[i] >= 0.0 {
-            let fraction = (PI - flip_old[i]) / (flip_new[i] - flip_old[i]);
-            lanes.flip_time[i] = flip_step[i] * h + fraction * h;
-        }
-        if failed_step[i] >= 0.0 {
-            lanes.failed_at[i] = (failed_step[i] + 1.0) * h;
+    for (at, step) in lanes.failed_at.iter_mut().zip(failed_step) {
+        if step >= 0.0 {
+            *at = (step + 1.0) * h;
         }
     }
+    lanes.flip_step = flip_step;
+    lanes.flip_ends = [before, after];
     *z = [q1, q2, p1, p2];
 }
 
