@@ -217,7 +217,8 @@ impl Axis {
 
     /// The label of tick value `v`.
     pub fn label(&self, v: f64) -> String {
-        let step = step_of(&self.ticks.major);
+        // On a log axis each label keeps its own digits (0.005, 0.01, 0.02).
+        let step = if self.log { v } else { step_of(&self.ticks.major) };
         // Within a billionth of the span of zero is zero (0.1 + 0.2 − 0.3 ≠ 0).
         if !self.log && v.abs() <= 1e-9 * (self.hi - self.lo) {
             return "0".into();

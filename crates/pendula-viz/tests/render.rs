@@ -85,7 +85,7 @@ fn method_styles_are_distinct() {
 fn log_axes_label_every_decade() {
     for (lo, hi) in [(1e-12, 1e-2), (3e-7, 2e-3), (0.8e-5, 2.0), (1e-3, 1.1e-1), (5e-16, 3e-4)] {
         let t = log_ticks(lo, hi);
-        let (a, b) = ((lo as f64).log10().ceil() as i32, (hi as f64).log10().floor() as i32);
+        let (a, b) = (lo.log10().ceil() as i32, hi.log10().floor() as i32);
         for k in a..=b {
             let v = 10f64.powi(k);
             assert!(

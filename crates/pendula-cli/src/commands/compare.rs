@@ -8,7 +8,7 @@ use clap::Args;
 use pendula::analysis::{EnergySeries, drift_rate, envelope};
 use pendula::observe::{Every, Recorder};
 use pendula::{End, RunSpec};
-use pendula_viz::{Figure, Kind, Scale, method_color};
+use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_unit};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -163,38 +163,49 @@ pub fn figures(values: &pendula::system::Values, runs: &[Run], h: f64, t_end: f6
     let system = info.name;
     let (q, v) = (&info.state[0], &info.state[n]);
     let angle = q.is_angle();
+    let tu = info.time_unit();
+    let step = with_unit(h, tu);
     // |error| crosses zero every oscillation; on a log axis its envelope reads better.
     let mut energy = Figure::new(
-        format!("{system}: energy error (envelope over {t_end} s / 300), h = {h} s"),
-        "time t (s)",
-        "max |E(t) - E(0)| / |E(0)|",
+        format!(
+            "{system}: relative energy error (envelope over windows of {}), h = {step}",
+            with_unit(pendula_viz::number(t_end / 300.0), tu)
+        ),
+        axis_label("t", tu),
+        "max |E(t) − E(0)| / energy scale",
     )
     .scales(Scale::Linear, Scale::Log);
     let t_show = t_end.min(20.0);
     let mut trajectory = Figure::new(
-        format!("{system}: {} against time, h = {h} s", q.name),
-        "time t (s)",
-        format!("{} ({})", q.name, q.unit),
+        format!("{system}: {} against time, h = {step}", pretty(q.name)),
+        axis_label("t", tu),
+        axis_label(q.name, q.unit),
     );
     let mut figures = Vec::new();
     for r in runs {
-        let color = method_color(r.method);
+        let style = method_style(r.method);
         let (t, e): (Vec<f64>, Vec<f64>) = r.energy.iter().copied().unzip();
-        energy = energy.with(r.method, color, Kind::Line, envelope(&t, &e, 300));
+        energy = energy.with_style(r.method, style, Kind::Line, envelope(&t, &e, 300));
         let rows = r.trajectory.chunks(dim + 1);
-        trajectory = trajectory.with(
+        trajectory = trajectory.with_style(
             r.method,
-            color,
+            style,
             Kind::Line,
             rows.clone().take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
         );
         let wrap = |x: f64| if angle { pendula::system::wrap_angle(x) } else { x };
+        let q_label = axis_label(q.name, q.unit);
         let phase = Figure::new(
-            format!("{system}: phase portrait with {}, h = {h} s, t <= {t_end} s", r.method),
-            format!("{} ({}{})", q.name, q.unit, if angle { ", wrapped to [-pi, pi)" } else { "" }),
-            format!("{} ({})", v.name, v.unit),
+            format!("{system}: phase portrait with {}, h = {step}, t ≤ {}", r.method, with_unit(t_end, tu)),
+            if angle { format!("{q_label}, wrapped to [−π, π)") } else { q_label },
+            axis_label(v.name, v.unit),
         )
-        .with(r.method, color, Kind::Dots, rows.map(|row| (wrap(row[1]), row[1 + n])).collect());
+        .with(
+            r.method,
+            style.color,
+            Kind::Dots,
+            rows.map(|row| (wrap(row[1]), row[1 + n])).collect(),
+        );
         figures.push((format!("phase_{}", r.method), phase));
     }
     figures.insert(0, ("trajectory".to_owned(), trajectory));

@@ -4,7 +4,7 @@
 use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{self, fit_order};
-use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
+use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
 use serde_json::json;
 
 use crate::study::{self, Common, OutDir, StepRange, num};
@@ -111,28 +111,32 @@ pub fn study_orders(
 
 /// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
+    let tu = pendula::system::find(system).map_or("s", |i| i.time_unit());
     let mut fig = Figure::new(
-        format!("{system}: global error at t = {t_end} s, against the {reference}"),
-        "step size h (s)",
-        "max |y(t) - y_ref(t)|",
+        format!("{system}: global error at t = {}, against the {reference}", with_unit(t_end, tu)),
+        format!("step size {}", axis_label("h", tu)),
+        "max |y(t) − y_ref(t)|",
     )
-    .scales(Scale::Log, Scale::Log)
-    .legend(Legend::LowerRight);
+    .scales(Scale::Log, Scale::Log);
     for r in results {
         let label = match r.order {
             Some(o) => format!("{} (order {o:.2})", r.method),
             None => r.method.to_owned(),
         };
-        fig = fig.with(
+        fig = fig.with_style(
             label,
-            method_color(r.method),
+            method_style(r.method),
             Kind::LineMarkers,
             r.hs.iter().copied().zip(r.errors.iter().copied()).collect(),
         );
     }
     if let Some(first) = results.first() {
         let (h0, h1) = (first.hs[0], first.hs[first.hs.len() - 1]);
-        let anchor = results.iter().map(|r| r.errors[0]).fold(f64::INFINITY, f64::min);
+        // Near the median error at the first step, so that the guides sit among the data.
+        let mut firsts: Vec<f64> = results.iter().map(|r| r.errors[0]).filter(|e| *e > 0.0).collect();
+        firsts.sort_by(f64::total_cmp);
+        // A factor 30 below it, so that no guide hides a method lying on it.
+        let anchor = firsts.get(firsts.len() / 2).copied().unwrap_or(1.0) / 30.0;
         // Dense points: a dashed line is interpolated in data coordinates, which bends on log axes.
         for p in [1, 2, 4] {
             let c = anchor / h0.powi(p);
