@@ -40,9 +40,9 @@ pub enum Kind {
 /// Where the legend goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Legend {
-    /// Chosen from the data: the first corner (upper right, upper left, lower right, lower
-    /// left) where the legend covers no point or line of any series; if every corner
-    /// would, [`Legend::Outside`].
+    /// Chosen from the data: the first place (upper right, upper left, lower right, lower
+    /// left, halfway down the right side, the left side) where the legend covers no point
+    /// or line of any series; if every one would, [`Legend::Outside`].
     #[default]
     Auto,
     /// In a column to the right of the plot; the canvas is widened by that column.
@@ -164,7 +164,11 @@ impl From<crate::Bars> for Figure {
 /// Where the legend was put.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Placement {
-    Corner { right: bool, top: bool },
+    /// `top`: Some(true) top, Some(false) bottom, None halfway.
+    Corner {
+        right: bool,
+        top: Option<bool>,
+    },
     Outside,
 }
 
@@ -312,7 +316,7 @@ impl Figure {
         let mut scratch = vec![255u8; (w * h * 3) as usize];
         let root = BitMapBackend::with_buffer(&mut scratch, (w, h)).into_drawing_area();
         let (lw, lh) = self.legend_size(&root)?;
-        let corner = |right, top| Ok((Placement::Corner { right, top }, 0));
+        let corner = |right, top: bool| Ok((Placement::Corner { right, top: Some(top) }, 0));
         match self.legend {
             _ if self.labelled().next().is_none() => return corner(true, true),
             Legend::UpperRight => return corner(true, true),
@@ -347,14 +351,22 @@ impl Figure {
                 last = Some(q);
             }
         }
-        for (right, top) in [(true, true), (false, true), (true, false), (false, false)] {
+        let spots = [
+            (true, Some(true)),
+            (false, Some(true)),
+            (true, Some(false)),
+            (false, Some(false)),
+            (true, None),
+            (false, None),
+        ];
+        for (right, top) in spots {
             let (x0, y0) = legend_origin(&xr, &yr, (lw, lh), right, top);
             let m = 6;
             let covered = pixels
                 .iter()
                 .any(|p| p.0 >= x0 - m && p.0 <= x0 + lw + m && p.1 >= y0 - m && p.1 <= y0 + lh + m);
             if !covered {
-                return corner(right, top);
+                return Ok((Placement::Corner { right, top }, 0));
             }
         }
         Ok((Placement::Outside, (lw + 16) as u32))
@@ -482,17 +494,22 @@ impl Figure {
     }
 }
 
-/// The top-left pixel of a legend of `size` in a corner of the plot area.
+/// The top-left pixel of a legend of `size` in a corner of the plot area, or halfway
+/// down one side (`top` None).
 fn legend_origin(
     xr: &std::ops::Range<i32>,
     yr: &std::ops::Range<i32>,
     size: (i32, i32),
     right: bool,
-    top: bool,
+    top: Option<bool>,
 ) -> (i32, i32) {
     let inset = 10;
     let x = if right { xr.end - inset - size.0 } else { xr.start + inset };
-    let y = if top { yr.start + inset } else { yr.end - inset - size.1 };
+    let y = match top {
+        Some(true) => yr.start + inset,
+        Some(false) => yr.end - inset - size.1,
+        None => (yr.start + yr.end - size.1) / 2,
+    };
     (x, y)
 }
 
