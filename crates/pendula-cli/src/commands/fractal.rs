@@ -203,7 +203,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         ],
         ..map(
             format!("converged pixels: flip time within {tolerance} s at dt = {h} s and {} s", h / 2.0),
-            "pixel",
+            "at dt and dt/2",
             flag_values,
             false,
             pendula_viz::BLACK,
