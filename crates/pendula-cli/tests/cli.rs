@@ -739,6 +739,7 @@ fn man_pages_are_roff_for_every_command() {
     assert_eq!(pages.len(), commands + 1, "{pages:?}");
     let simulate = std::fs::read_to_string(dir.path().join("man1/pendula-simulate.1")).unwrap();
     assert!(simulate.contains(".TH pendula-simulate 1") && simulate.contains("\\-\\-method"), "{simulate}");
+}
 
 /// Runs `pendula` in `dir` with `args`, expecting success, and returns the JSON summary it
 /// printed on stdout (`--summary -`).

@@ -18,6 +18,18 @@ fn header(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap().lines().next().unwrap().to_owned()
 }
 
+/// A chart is 600 pixels high and 960 wide, plus the legend's column when the legend goes
+/// outside the plot.
+macro_rules! assert_chart_size {
+    ($size:expr) => {
+        assert_chart_size!($size, "chart")
+    };
+    ($size:expr, $($msg:tt)+) => {{
+        let (w, h): (u32, u32) = $size;
+        assert!(h == 600 && (960..1400).contains(&w), "{}: {w}x{h}", format!($($msg)+));
+    }};
+}
+
 fn png_size(path: &Path) -> (u32, u32) {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
     let reader = decoder.read_info().unwrap();
@@ -36,7 +48,7 @@ fn ref_convergence_orders_of_the_oscillator() {
     }
     assert_eq!(s["reference"], "exact solution");
     assert_eq!(header(&dir.path().join("c/convergence.csv")), "method,dt,error");
-    assert_eq!(png_size(&dir.path().join("c/convergence.png")), (960, 600));
+    assert_chart_size!(png_size(&dir.path().join("c/convergence.png")));
     assert!(std::fs::read_to_string(dir.path().join("c/convergence.svg")).unwrap().starts_with("<svg"));
 }
 
@@ -51,7 +63,7 @@ fn ref_period_at_170_degrees_matches_the_exact_period() {
     assert!((exact - 4.893_524_274_105_486).abs() < 1e-12, "mpmath's 4 sqrt(l/g) K(sin 85°)");
     assert!(row["small_angle"].as_f64().unwrap() < 0.5 * exact);
     assert_eq!(header(&dir.path().join("p/period.csv")), "amplitude_deg,simulated,exact,small_angle");
-    assert_eq!(png_size(&dir.path().join("p/period.png")), (960, 600));
+    assert_chart_size!(png_size(&dir.path().join("p/period.png")));
 }
 
 #[test]
@@ -79,7 +91,7 @@ fn compare_writes_its_summary_and_figures() {
     assert_eq!(field("euler", 9), "growing");
     for name in ["energy", "trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"]
     {
-        assert_eq!(png_size(&dir.path().join(format!("c/{name}.png"))), (960, 600), "{name}");
+        assert_chart_size!(png_size(&dir.path().join(format!("c/{name}.png"))), "{name}");
     }
 }
 
@@ -146,7 +158,7 @@ fn stability_and_regimes_write_their_tables() {
         "zeta,drive_ratio,amplitude_exact,amplitude_simulated,phase_exact,phase_simulated"
     );
     for name in ["regimes", "resonance_amplitude", "resonance_phase"] {
-        assert_eq!(png_size(&dir.path().join(format!("r/{name}.png"))), (960, 600));
+        assert_chart_size!(png_size(&dir.path().join(format!("r/{name}.png"))));
     }
 }
 
@@ -163,7 +175,7 @@ fn animate_writes_a_gif_with_one_frame_per_sample() {
             "--fps",
             "10",
             "--size",
-            "160x120",
+            "240x200",
             "--compare",
             "1e-3",
             "--out",
@@ -174,7 +186,7 @@ fn animate_writes_a_gif_with_one_frame_per_sample() {
     let mut options = gif::DecodeOptions::new();
     options.set_color_output(gif::ColorOutput::RGBA);
     let mut decoder = options.read_info(std::fs::File::open(dir.path().join("a.gif")).unwrap()).unwrap();
-    assert_eq!((decoder.width(), decoder.height()), (160, 120));
+    assert_eq!((decoder.width(), decoder.height()), (240, 200));
     let mut frames = 0;
     while decoder.read_next_frame().unwrap().is_some() {
         frames += 1;
@@ -196,8 +208,17 @@ fn report_is_one_self_contained_page() {
     }
     for entry in std::fs::read_dir(dir.path().join("r")).unwrap() {
         let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "png") {
-            assert_eq!(png_size(&path), (960, 600), "{}", path.display());
+        if path.extension().is_none_or(|e| e != "png") {
+            continue;
+        }
+        let bar_chart = path.file_stem().is_some_and(|s| s == "stability");
+        if !bar_chart {
+            assert_chart_size!(png_size(&path), "{}", path.display());
+        }
+        if bar_chart {
+            // One 34-pixel row per method under the title and the axis.
+            let (w, h) = png_size(&path);
+            assert!(w == 960 && h >= 130 + 34, "{}: {w}x{h}", path.display());
         }
     }
 }
@@ -235,7 +256,7 @@ fn work_precision_writes_error_and_cost() {
         assert!(w[1].0 < w[0].0 / 10.0, "{rk4:?}");
     }
     for name in ["work_precision_evals", "work_precision_time"] {
-        assert_eq!(png_size(&dir.path().join(format!("w/{name}.png"))), (960, 600));
+        assert_chart_size!(png_size(&dir.path().join(format!("w/{name}.png"))));
     }
 }
 
@@ -337,7 +358,7 @@ fn ref_divergence_rates() {
     let rate = chaotic["growth_rate"].as_f64().unwrap();
     assert!((0.6..1.5).contains(&rate), "{rate}");
     assert_eq!(header(&dir.path().join("d/divergence.csv")), "t,distance");
-    assert_eq!(png_size(&dir.path().join("d/divergence.png")), (960, 600));
+    assert_chart_size!(png_size(&dir.path().join("d/divergence.png")));
     pendula(dir.path(), &["divergence", "--delta", "0"]).code(2);
     pendula(dir.path(), &["divergence", "--variable", "phi"]).code(2);
 }

@@ -3,7 +3,7 @@
 //!
 //! Each frame shows the rods and bobs of one or two pendulums (the second for comparing
 //! nearby initial conditions), a fading trail of each last bob, the time, and a gauge of
-//! the relative energy error on a log scale.
+//! the relative energy error on a log scale, each in its own part of the frame ([`Layout`]).
 
 use std::borrow::Cow;
 
@@ -48,15 +48,86 @@ fn color(i: usize) -> Rgb {
     palette(if i == 0 { 1 } else { 0 })
 }
 
+/// Where things go in a frame, in pixels (y down): a band at the top for the title and the
+/// time, a band at the bottom for the energy gauges, and between them a square around the
+/// pivot that holds the pendulum's whole reach — the sum of the rod lengths, plus a bob's
+/// radius — so that no rod, bob or trail (a path of the last bob, inside the reach) ever
+/// covers the text or the gauges.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Layout {
+    /// The pivot.
+    pub pivot: (f64, f64),
+    /// Pixels per metre.
+    pub scale: f64,
+    /// The first pixel row below the title band.
+    pub drawing_top: u32,
+    /// The first pixel row of the gauge band.
+    pub gauge_top: u32,
+}
+
+/// Radius of a bob, pixels.
+const BOB: f64 = 9.0;
+/// Height of the title band, pixels.
+const TOP_BAND: u32 = 52;
+/// Height of one gauge row, pixels.
+const GAUGE_ROW: u32 = 22;
+
+/// The GIF frame delays, in centiseconds (GIF's unit), for `frames` frames at `fps`: whole
+/// centiseconds alternating (3, 3, 4, … for 30 fps) so that frame k ends at round(100 k / fps)
+/// cs and the mean rate is exactly `fps`. Rates from 1 to 50 frames per second: a faster
+/// one would need delays under 2 cs, which browsers replace by 10 cs.
+pub fn gif_delays(fps: u32, frames: usize) -> Result<Vec<u16>, Error> {
+    if !(1..=50).contains(&fps) {
+        return Err(Error::Unsupported(format!(
+            "a GIF cannot play {fps} frames per second: GIF delays are whole centiseconds and browsers slow delays under 2 cs down to 10 cs; use 1 to 50 (or MP4)"
+        )));
+    }
+    // End of frame k in cs, rounded half up: (200 k + fps) / (2 fps).
+    let end = |k: u64| (200 * k + fps as u64) / (2 * fps as u64);
+    Ok((0..frames as u64).map(|k| (end(k + 1) - end(k)) as u16).collect())
+}
+
 impl Animation {
+    /// The frame's layout (see [`Layout`]); an error if the frame is too small to hold the
+    /// bands and a pendulum.
+    pub fn layout(&self) -> Result<Layout, Error> {
+        let (w, h) = self.size;
+        let rows = self.frames.first().map_or(1, |f| f.energy_error.len()).max(1) as u32;
+        let gauge_band = 20 + GAUGE_ROW * rows + 6;
+        let drawing_top = TOP_BAND;
+        let gauge_top = h.saturating_sub(gauge_band);
+        let room = gauge_top.saturating_sub(drawing_top).min(w) as f64;
+        let reach: f64 = self.lengths.iter().sum();
+        let radius = room / 2.0 - BOB - 3.0;
+        if radius < 12.0 || !(reach > 0.0 && reach.is_finite()) {
+            return Err(Error::Unsupported(format!(
+                "a {w}x{h} frame is too small for the title, {rows} energy gauge(s) and a pendulum: make it at least {}x{} pixels",
+                w.max(2 * (12 + BOB as u32 + 3)),
+                drawing_top + gauge_band + 2 * (12 + BOB as u32 + 3)
+            )));
+        }
+        Ok(Layout {
+            pivot: (w as f64 / 2.0, drawing_top as f64 + (gauge_top - drawing_top) as f64 / 2.0),
+            scale: radius / reach,
+            drawing_top,
+            gauge_top,
+        })
+    }
+
     /// Frame `k` as RGB bytes (width × height × 3).
     pub fn frame_rgb(&self, k: usize) -> Result<Vec<u8>, Error> {
+        let mut rgb = self.pendulums_rgb(k)?;
+        self.text(&mut rgb, k)?;
+        Ok(rgb)
+    }
+
+    /// The rods, bobs and trails of frame `k` alone, on white, as RGB bytes.
+    pub fn pendulums_rgb(&self, k: usize) -> Result<Vec<u8>, Error> {
         let (w, h) = self.size;
+        let layout = self.layout()?;
         let mut pixmap = Pixmap::new(w, h).ok_or_else(|| Error::Draw(format!("bad frame size {w}x{h}")))?;
         pixmap.fill(tiny_skia::Color::WHITE);
-        let reach: f64 = self.lengths.iter().sum();
-        let scale = 0.42 * w.min(h) as f64 / reach;
-        let pivot = (w as f64 / 2.0, h as f64 * 0.47);
+        let (scale, pivot) = (layout.scale, layout.pivot);
         // Screen coordinates of the joints of pendulum i at frame j (y down on screen).
         let joints = |i: usize, j: usize| {
             let mut p = pivot;
@@ -103,7 +174,7 @@ impl Animation {
             let mut bob = Paint::default();
             bob.set_color_rgba8(c.0, c.1, c.2, 255);
             for p in &pts[1..] {
-                if let Some(circle) = PathBuilder::from_circle(p.0 as f32, p.1 as f32, 9.0) {
+                if let Some(circle) = PathBuilder::from_circle(p.0 as f32, p.1 as f32, BOB as f32) {
                     pixmap.fill_path(&circle, &bob, FillRule::Winding, Transform::identity(), None);
                 }
             }
@@ -114,43 +185,43 @@ impl Animation {
             pixmap.fill_path(&dot, &pivot_paint, FillRule::Winding, Transform::identity(), None);
         }
         // Drop alpha: the background is opaque white, so the pixels are already composited.
-        let mut rgb: Vec<u8> = pixmap.data().chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-        self.text(&mut rgb, k)?;
-        Ok(rgb)
+        Ok(pixmap.data().chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect())
     }
 
-    /// Time, title, labels and the energy gauge, drawn over the frame.
+    /// Title and time in the top band, and in the bottom band one gauge per pendulum — its
+    /// colour, its relative energy error on a log scale, its label.
     fn text(&self, rgb: &mut [u8], k: usize) -> Result<(), Error> {
         crate::figure::ensure_font();
         let (w, h) = self.size;
+        let layout = self.layout()?;
         let frame = &self.frames[k];
         let root = BitMapBackend::with_buffer(rgb, (w, h)).into_drawing_area();
         let draw = |e: Result<(), DrawingAreaErrorKind<_>>| e.map_err(|e| Error::Draw(e.to_string()));
         let style = ("sans-serif", 16).into_font().color(&BLACK);
         draw(root.draw_text(&self.title, &style, (10, 8)))?;
-        draw(root.draw_text(&format!("t = {:6.2} s", frame.t), &style, (10, 30)))?;
-        // Gauge: log10 of the relative energy error from 1e-12 (empty) to 1 (full).
-        let (gx, gw) = (10, (w as i32 / 3).max(60));
+        draw(root.draw_text(&format!("t = {:.2} s", frame.t), &style, (10, 30)))?;
+        // Gauge: log₁₀ of the relative energy error from 10⁻¹² (empty) to 1 (full).
+        let small = ("sans-serif", 13).into_font().color(&RGBColor(60, 60, 60));
+        let top = layout.gauge_top as i32;
+        draw(root.draw(&PathElement::new(vec![(0, top), (w as i32, top)], RGBColor(220, 220, 220))))?;
+        draw(root.draw_text("relative energy error, 10⁻¹² … 1 (log scale)", &small, (10, top + 4)))?;
+        let (gx, gw) = (10, (w as i32 / 4).clamp(40, 160));
         for (i, err) in frame.energy_error.iter().enumerate() {
-            let y = h as i32 - 26 - 22 * i as i32;
+            let y = top + 22 + GAUGE_ROW as i32 * i as i32;
             let fill = ((err.max(1e-16).log10() + 12.0) / 12.0).clamp(0.0, 1.0);
             draw(root.draw(&Rectangle::new([(gx, y), (gx + gw, y + 12)], RGBColor(120, 120, 120))))?;
             let end = gx + (fill * gw as f64).round() as i32;
             draw(root.draw(&Rectangle::new([(gx, y), (end, y + 12)], color(i).filled())))?;
             let label = self.labels.get(i).map_or("", String::as_str);
-            let text = format!("|dE/E0| = {err:.1e}  {label}");
-            draw(root.draw_text(&text, &("sans-serif", 14).into_font().color(&BLACK), (gx + gw + 8, y - 1)))?;
+            let text = format!("{}   {label}", crate::ticks::label(*err, err / 10.0, false));
+            draw(root.draw_text(&text, &("sans-serif", 14).into_font().color(&BLACK), (gx + gw + 8, y - 2)))?;
         }
-        draw(root.draw_text(
-            "energy error, 1e-12 .. 1",
-            &("sans-serif", 12).into_font().color(&BLACK),
-            (gx, h as i32 - 26 - 22 * frame.energy_error.len() as i32),
-        ))?;
         root.present().map_err(|e| Error::Draw(e.to_string()))?;
         Ok(())
     }
 
-    /// The animation as a looping GIF. Colours map to a fixed palette (a 6×6×6 colour cube
+    /// The animation as a looping GIF, its frame delays from [`gif_delays`] (an error for a
+    /// frame rate outside 1 to 50 per second). Colours map to a fixed palette (a 6×6×6 colour cube
     /// and a 40-step grey ramp), so encoding is fast and deterministic.
     pub fn gif(&self) -> Result<Vec<u8>, Error> {
         let (w, h) = self.size;
@@ -160,8 +231,9 @@ impl Animation {
             let encode = |e: gif::EncodingError| Error::Encode(e.to_string());
             let mut encoder = gif::Encoder::new(&mut out, w as u16, h as u16, &palette).map_err(encode)?;
             encoder.set_repeat(gif::Repeat::Infinite).map_err(encode)?;
-            let delay = (100.0 / self.fps.max(1) as f64).round() as u16;
-            for k in 0..self.frames.len() {
+            let delays = gif_delays(self.fps, self.frames.len())?;
+            self.layout()?;
+            for (k, &delay) in delays.iter().enumerate() {
                 let rgb = self.frame_rgb(k)?;
                 let indices: Vec<u8> = rgb.chunks(3).map(|p| palette_index(p[0], p[1], p[2])).collect();
                 let frame = gif::Frame {

@@ -1,12 +1,13 @@
 //! Line and scatter figures as data, rendered with plotters.
 
-use std::ops::Range;
 use std::sync::Once;
 
-use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
+use crate::ticks::Axis;
 use crate::{Error, Rgb};
 
 /// Axis scale.
@@ -15,21 +16,22 @@ pub enum Scale {
     /// Linear.
     #[default]
     Linear,
-    /// Base-10 logarithmic; non-positive values are left out.
+    /// Base-10 logarithmic, labelled at every power of ten; non-positive values are left out.
     Log,
 }
 
 /// How a series is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Kind {
-    /// A solid line.
+    /// A line in the series' pattern; a styled series (see [`Figure::with_style`]) also
+    /// carries a few of its markers along it, so that it can be told apart in grey.
     #[default]
     Line,
     /// A dashed line.
     Dashed,
     /// Markers only.
     Markers,
-    /// A solid line with markers.
+    /// A line with a marker at every point.
     LineMarkers,
     /// Small dots, for clouds of many points.
     Dots,
@@ -38,8 +40,14 @@ pub enum Kind {
 /// Where the legend goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Legend {
-    /// Top right corner.
+    /// Chosen from the data: the first place (upper right, upper left, lower right, lower
+    /// left, halfway down the right side, the left side) where the legend covers no point
+    /// or line of any series; if every one would, [`Legend::Outside`].
     #[default]
+    Auto,
+    /// In a column to the right of the plot; the canvas is widened by that column.
+    Outside,
+    /// Top right corner.
     UpperRight,
     /// Bottom right corner.
     LowerRight,
@@ -49,10 +57,64 @@ pub enum Legend {
     LowerLeft,
 }
 
+/// A line pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Dash {
+    /// Solid.
+    #[default]
+    Solid,
+    /// Dashes of 10 pixels.
+    Dashed,
+    /// Dots.
+    Dotted,
+}
+
+/// A marker shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Marker {
+    /// Filled circle.
+    #[default]
+    Circle,
+    /// Filled square.
+    Square,
+    /// Filled triangle, point up.
+    TriangleUp,
+    /// Filled diamond.
+    Diamond,
+    /// Filled triangle, point down.
+    TriangleDown,
+    /// Plus sign.
+    Plus,
+    /// Diagonal cross.
+    Cross,
+}
+
+/// The marker shapes, in the order styles take them.
+pub const MARKERS: [Marker; 7] = [
+    Marker::Circle,
+    Marker::Square,
+    Marker::TriangleUp,
+    Marker::Diamond,
+    Marker::TriangleDown,
+    Marker::Plus,
+    Marker::Cross,
+];
+
+/// Colour, marker and line pattern of a series.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Style {
+    /// Colour.
+    pub color: Rgb,
+    /// Marker shape.
+    pub marker: Marker,
+    /// Line pattern.
+    pub dash: Dash,
+}
+
 /// One labelled series of (x, y) points.
 #[derive(Debug, Clone)]
 pub struct Series {
-    /// Legend label.
+    /// Legend label; empty for none.
     pub label: String,
     /// Colour.
     pub color: Rgb,
@@ -60,6 +122,10 @@ pub struct Series {
     pub kind: Kind,
     /// The points; non-finite ones are left out.
     pub points: Vec<(f64, f64)>,
+    /// Marker shape (for markers, and along lines of styled series).
+    pub marker: Option<Marker>,
+    /// Line pattern.
+    pub dash: Dash,
 }
 
 /// A figure: one chart with a title, labelled axes and a legend.
@@ -77,11 +143,38 @@ pub struct Figure {
     pub y_scale: Scale,
     /// The series, drawn in order.
     pub series: Vec<Series>,
-    /// Size in pixels (PNG) or user units (SVG).
+    /// Size in pixels (PNG) or user units (SVG) of the chart; a legend outside widens it.
     pub size: (u32, u32),
     /// Legend position.
     pub legend: Legend,
+    /// A bar chart drawn instead of the series (see `From<Bars>`), so that every figure
+    /// goes through the same writers.
+    pub bars: Option<Box<crate::Bars>>,
 }
+
+impl From<crate::Bars> for Figure {
+    /// The bar chart as a figure.
+    fn from(bars: crate::Bars) -> Self {
+        let mut f = Figure::new(bars.title.clone(), "", bars.value_label.clone());
+        f.bars = Some(Box::new(bars));
+        f
+    }
+}
+
+/// Where the legend was put.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Placement {
+    /// `top`: Some(true) top, Some(false) bottom, None halfway.
+    Corner {
+        right: bool,
+        top: Option<bool>,
+    },
+    Outside,
+}
+
+const LEGEND_FONT: u32 = 15;
+const ROW: i32 = 22;
+const SAMPLE: i32 = 36;
 
 impl Figure {
     /// An empty figure of 960 × 600 pixels.
@@ -94,7 +187,8 @@ impl Figure {
             y_scale: Scale::Linear,
             series: Vec::new(),
             size: (960, 600),
-            legend: Legend::UpperRight,
+            legend: Legend::Auto,
+            bars: None,
         }
     }
 
@@ -110,19 +204,47 @@ impl Figure {
         self
     }
 
-    /// Adds a series.
+    /// Adds a series in one colour: solid (or, for [`Kind::Dashed`], dashed) lines, round
+    /// markers.
     pub fn with(mut self, label: impl Into<String>, color: Rgb, kind: Kind, points: Vec<(f64, f64)>) -> Self {
-        self.series.push(Series { label: label.into(), color, kind, points });
+        let marker = matches!(kind, Kind::Markers | Kind::LineMarkers).then_some(Marker::Circle);
+        let dash = if kind == Kind::Dashed { Dash::Dashed } else { Dash::Solid };
+        self.series.push(Series { label: label.into(), color, kind, points, marker, dash });
+        self
+    }
+
+    /// Adds a series in a full style (a method's, from [`crate::method_style`]): its colour,
+    /// its line pattern, and its marker — at every point, or a few along a [`Kind::Line`].
+    pub fn with_style(
+        mut self,
+        label: impl Into<String>,
+        style: Style,
+        kind: Kind,
+        points: Vec<(f64, f64)>,
+    ) -> Self {
+        let dash = if kind == Kind::Dashed && style.dash == Dash::Solid { Dash::Dashed } else { style.dash };
+        self.series.push(Series {
+            label: label.into(),
+            color: style.color,
+            kind,
+            points,
+            marker: Some(style.marker),
+            dash,
+        });
         self
     }
 
     /// The figure as PNG bytes.
     pub fn png(&self) -> Result<Vec<u8>, Error> {
-        let (w, h) = self.size;
+        if let Some(bars) = &self.bars {
+            return bars.png();
+        }
+        let (placement, extra) = self.placement()?;
+        let (w, h) = (self.size.0 + extra, self.size.1);
         let mut rgb = vec![255u8; (w * h * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            self.draw(&root)?;
+            self.draw(&root, placement)?;
             root.present().map_err(|e| Error::Draw(e.to_string()))?;
         }
         encode_png(&rgb, w, h)
@@ -130,10 +252,15 @@ impl Figure {
 
     /// The figure as an SVG document.
     pub fn svg(&self) -> Result<String, Error> {
+        if let Some(bars) = &self.bars {
+            return bars.svg();
+        }
+        let (placement, extra) = self.placement()?;
         let mut out = String::new();
         {
-            let root = SVGBackend::with_string(&mut out, self.size).into_drawing_area();
-            self.draw(&root)?;
+            let root =
+                SVGBackend::with_string(&mut out, (self.size.0 + extra, self.size.1)).into_drawing_area();
+            self.draw(&root, placement)?;
             root.present().map_err(|e| Error::Draw(e.to_string()))?;
         }
         Ok(out)
@@ -148,7 +275,7 @@ impl Figure {
             .filter(move |(x, y)| x.is_finite() && y.is_finite() && (!xl || *x > 0.0) && (!yl || *y > 0.0))
     }
 
-    fn ranges(&self) -> Result<(Range<f64>, Range<f64>), Error> {
+    fn axes(&self) -> Result<(Axis, Axis), Error> {
         let mut xs = (f64::INFINITY, f64::NEG_INFINITY);
         let mut ys = xs;
         for s in &self.series {
@@ -160,105 +287,309 @@ impl Figure {
         if !xs.0.is_finite() {
             return Err(Error::Empty(self.title.clone()));
         }
-        Ok((pad(xs, self.x_scale), pad(ys, self.y_scale)))
+        let (x, y) = (pad(xs, self.x_scale), pad(ys, self.y_scale));
+        Ok((Axis::new(x, self.x_scale == Scale::Log), Axis::new(y, self.y_scale == Scale::Log)))
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<(), Error> {
+    fn labelled(&self) -> impl Iterator<Item = &Series> {
+        self.series.iter().filter(|s| !s.label.is_empty())
+    }
+
+    /// The legend's size in pixels.
+    fn legend_size<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(i32, i32), Error> {
+        let font = ("sans-serif", LEGEND_FONT).into_font();
+        let mut width = 0;
+        let mut rows = 0;
+        for s in self.labelled() {
+            width = width
+                .max(area.estimate_text_size(&s.label, &font.clone().into()).map_err(draw_error)?.0 as i32);
+            rows += 1;
+        }
+        Ok((8 + SAMPLE + 8 + width + 10, 6 + rows * ROW + 4))
+    }
+
+    /// Where the legend goes, and how much wider than `size` the canvas must be for it.
+    /// [`Legend::Auto`] lays the chart out on a scratch canvas to see where the data fall.
+    fn placement(&self) -> Result<(Placement, u32), Error> {
         ensure_font();
-        root.fill(&WHITE).map_err(draw_error)?;
-        let (xr, yr) = self.ranges()?;
-        match (self.x_scale, self.y_scale) {
-            (Scale::Linear, Scale::Linear) => self.chart(root, (xr.clone(), yr.clone()), xr, yr),
-            (Scale::Linear, Scale::Log) => self.chart(root, (xr.clone(), yr.clone()), xr, yr.log_scale()),
-            (Scale::Log, Scale::Linear) => self.chart(root, (xr.clone(), yr.clone()), xr.log_scale(), yr),
-            (Scale::Log, Scale::Log) => {
-                self.chart(root, (xr.clone(), yr.clone()), xr.log_scale(), yr.log_scale())
+        let (w, h) = self.size;
+        let mut scratch = vec![255u8; (w * h * 3) as usize];
+        let root = BitMapBackend::with_buffer(&mut scratch, (w, h)).into_drawing_area();
+        let (lw, lh) = self.legend_size(&root)?;
+        let corner = |right, top: bool| Ok((Placement::Corner { right, top: Some(top) }, 0));
+        match self.legend {
+            _ if self.labelled().next().is_none() => return corner(true, true),
+            Legend::UpperRight => return corner(true, true),
+            Legend::UpperLeft => return corner(false, true),
+            Legend::LowerRight => return corner(true, false),
+            Legend::LowerLeft => return corner(false, false),
+            Legend::Outside => return Ok((Placement::Outside, (lw + 16) as u32)),
+            Legend::Auto => {}
+        }
+        let (xa, ya) = self.axes()?;
+        let inner = root.titled(&self.title, ("sans-serif", 24)).map_err(draw_error)?;
+        let chart = self.chart(&inner, xa, ya)?;
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        // Every series as pixels, lines sampled every few pixels between their points.
+        let mut pixels = Vec::new();
+        for s in &self.series {
+            let mut last: Option<(i32, i32)> = None;
+            let line = !matches!(s.kind, Kind::Markers | Kind::Dots);
+            for p in self.visible(s) {
+                let q = chart.backend_coord(&p);
+                if let (true, Some(a)) = (line, last) {
+                    let n = ((q.0 - a.0).abs().max((q.1 - a.1).abs()) / 3).min(400);
+                    for k in 1..n {
+                        let f = k as f64 / n as f64;
+                        pixels.push((
+                            a.0 + ((q.0 - a.0) as f64 * f) as i32,
+                            a.1 + ((q.1 - a.1) as f64 * f) as i32,
+                        ));
+                    }
+                }
+                pixels.push(q);
+                last = Some(q);
             }
         }
+        let spots = [
+            (true, Some(true)),
+            (false, Some(true)),
+            (true, Some(false)),
+            (false, Some(false)),
+            (true, None),
+            (false, None),
+        ];
+        for (right, top) in spots {
+            let (x0, y0) = legend_origin(&xr, &yr, (lw, lh), right, top);
+            let m = 6;
+            let covered = pixels
+                .iter()
+                .any(|p| p.0 >= x0 - m && p.0 <= x0 + lw + m && p.1 >= y0 - m && p.1 <= y0 + lh + m);
+            if !covered {
+                return Ok((Placement::Corner { right, top }, 0));
+            }
+        }
+        Ok((Placement::Outside, (lw + 16) as u32))
     }
 
-    fn chart<DB, X, Y>(
+    /// The chart on `area`: margins, label areas and the coordinates.
+    fn chart<'a, DB: DrawingBackend>(
         &self,
-        root: &DrawingArea<DB, plotters::coord::Shift>,
-        spans: (Range<f64>, Range<f64>),
-        x: X,
-        y: Y,
-    ) -> Result<(), Error>
-    where
-        DB: DrawingBackend,
-        X: AsRangedCoord<Value = f64>,
-        Y: AsRangedCoord<Value = f64>,
-        X::CoordDescType: ValueFormatter<f64>,
-        Y::CoordDescType: ValueFormatter<f64>,
-    {
-        // On a linear axis, tick values within a billionth of the span of zero are zero.
-        let zero = |scale: Scale, r: &Range<f64>| {
-            if scale == Scale::Linear { 1e-9 * (r.end - r.start) } else { 0.0 }
-        };
-        let (x_zero, y_zero) = (zero(self.x_scale, &spans.0), zero(self.y_scale, &spans.1));
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 24))
+        area: &'a DrawingArea<DB, Shift>,
+        xa: Axis,
+        ya: Axis,
+    ) -> Result<ChartContext<'a, DB, Cartesian2d<Axis, Axis>>, Error> {
+        ChartBuilder::on(area)
             .margin(16)
             .x_label_area_size(52)
-            .y_label_area_size(84)
-            .build_cartesian_2d(x, y)
-            .map_err(draw_error)?;
+            .y_label_area_size(92)
+            .build_cartesian_2d(xa, ya)
+            .map_err(draw_error)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        placement: Placement,
+    ) -> Result<(), Error> {
+        ensure_font();
+        root.fill(&WHITE).map_err(draw_error)?;
+        let (xa, ya) = self.axes()?;
+        let inner = root.titled(&self.title, ("sans-serif", 24)).map_err(draw_error)?;
+        let (plot, side) = match placement {
+            Placement::Outside => {
+                let (a, b) = inner.split_horizontally(self.size.0);
+                (a, Some(b))
+            }
+            Placement::Corner { .. } => (inner, None),
+        };
+        let (xf, yf) = (xa.clone(), ya.clone());
+        let mut chart = self.chart(&plot, xa, ya)?;
         chart
             .configure_mesh()
-            .x_labels(8)
-            .y_labels(10)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 17))
-            .light_line_style(RGBColor(235, 235, 235))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .x_label_formatter(&|v| tick(*v, x_zero))
-            .y_label_formatter(&|v| tick(*v, y_zero))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(212, 212, 212))
+            .x_label_formatter(&|v| xf.label(*v))
+            .y_label_formatter(&|v| yf.label(*v))
             .draw()
             .map_err(draw_error)?;
-        for s in &self.series {
-            let color = s.color;
-            let line = ShapeStyle { color: color.to_rgba(), filled: false, stroke_width: 2 };
+        for (index, s) in self.series.iter().enumerate() {
             let points: Vec<(f64, f64)> = self.visible(s).collect();
-            let anno = match s.kind {
-                Kind::Line => chart.draw_series(LineSeries::new(points, line)),
-                Kind::Dashed => chart.draw_series(DashedLineSeries::new(points, 10, 6, line)),
-                Kind::Markers => {
-                    chart.draw_series(points.into_iter().map(move |p| Circle::new(p, 4, color.filled())))
-                }
-                Kind::Dots => {
-                    chart.draw_series(points.into_iter().map(move |p| Circle::new(p, 1, color.filled())))
-                }
-                Kind::LineMarkers => {
-                    chart.draw_series(LineSeries::new(points.clone(), line)).map_err(draw_error)?;
-                    chart.draw_series(points.into_iter().map(move |p| Circle::new(p, 4, color.filled())))
-                }
+            let line = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: 2 };
+            if matches!(s.kind, Kind::Line | Kind::Dashed | Kind::LineMarkers) {
+                draw_line(&mut chart, points.clone(), s.dash, line)?;
             }
-            .map_err(draw_error)?;
-            if !s.label.is_empty() {
-                anno.label(&s.label).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], ShapeStyle { stroke_width: 3, ..line })
-                });
+            let pixel = |p: &(f64, f64)| chart.backend_coord(p);
+            match (s.kind, s.marker) {
+                (Kind::Dots, _) => chart
+                    .draw_series(points.iter().map(|p| Circle::new(*p, 1, s.color.filled())))
+                    .map(|_| ())
+                    .map_err(draw_error)?,
+                (Kind::Markers | Kind::LineMarkers, m) => {
+                    for p in &points {
+                        draw_marker(root, pixel(p), m.unwrap_or_default(), 5, s.color)?;
+                    }
+                }
+                (Kind::Line | Kind::Dashed, Some(m)) => {
+                    // A few markers along the line, staggered between series so that they
+                    // do not sit on top of each other.
+                    let n = points.len();
+                    if n > 1 {
+                        let every = (n / 8).max(1);
+                        let offset = (index * every / 5) % every;
+                        for p in points.iter().skip(offset).step_by(every) {
+                            draw_marker(root, pixel(p), m, 5, s.color)?;
+                        }
+                    }
+                }
+                (Kind::Line | Kind::Dashed, None) => {}
             }
         }
-        if self.series.iter().any(|s| !s.label.is_empty()) {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(RGBColor(180, 180, 180))
-                .label_font(("sans-serif", 15))
-                .position(match self.legend {
-                    Legend::UpperRight => SeriesLabelPosition::UpperRight,
-                    Legend::LowerRight => SeriesLabelPosition::LowerRight,
-                    Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
-                    Legend::LowerLeft => SeriesLabelPosition::LowerLeft,
-                })
-                .draw()
+        if self.labelled().next().is_none() {
+            return Ok(());
+        }
+        let (lw, lh) = self.legend_size(root)?;
+        let (x0, y0) = match placement {
+            Placement::Corner { right, top } => {
+                let (xr, yr) = chart.plotting_area().get_pixel_range();
+                legend_origin(&xr, &yr, (lw, lh), right, top)
+            }
+            Placement::Outside => {
+                let (xr, _) = side.as_ref().map(|s| s.get_pixel_range()).unwrap_or((0..0, 0..0));
+                let (_, yr) = chart.plotting_area().get_pixel_range();
+                (xr.start + 4, yr.start)
+            }
+        };
+        root.draw(&Rectangle::new([(x0, y0), (x0 + lw, y0 + lh)], WHITE.mix(0.92).filled()))
+            .map_err(draw_error)?;
+        root.draw(&Rectangle::new([(x0, y0), (x0 + lw, y0 + lh)], RGBColor(180, 180, 180)))
+            .map_err(draw_error)?;
+        let font = ("sans-serif", LEGEND_FONT).into_font().color(&BLACK);
+        for (k, s) in self.labelled().enumerate() {
+            let y = y0 + 6 + k as i32 * ROW + ROW / 2;
+            let (a, b) = (x0 + 8, x0 + 8 + SAMPLE);
+            let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: 3 };
+            if matches!(s.kind, Kind::Line | Kind::Dashed | Kind::LineMarkers) {
+                match s.dash {
+                    Dash::Solid => root.draw(&PathElement::new(vec![(a, y), (b, y)], style)),
+                    Dash::Dashed => root.draw(&DashedPathElement::new(vec![(a, y), (b, y)], 9, 5, style)),
+                    Dash::Dotted => root.draw(&DashedPathElement::new(vec![(a, y), (b, y)], 3, 4, style)),
+                }
                 .map_err(draw_error)?;
+            }
+            match (s.kind, s.marker) {
+                (Kind::Dots, _) => {
+                    root.draw(&Circle::new(((a + b) / 2, y), 3, s.color.filled())).map_err(draw_error)?
+                }
+                (_, Some(m)) => draw_marker(root, ((a + b) / 2, y), m, 5, s.color)?,
+                _ => {}
+            }
+            root.draw(&Text::new(s.label.as_str(), (b + 8, y - 9), font.clone())).map_err(draw_error)?;
         }
         Ok(())
     }
+}
+
+/// The top-left pixel of a legend of `size` in a corner of the plot area, or halfway
+/// down one side (`top` None).
+fn legend_origin(
+    xr: &std::ops::Range<i32>,
+    yr: &std::ops::Range<i32>,
+    size: (i32, i32),
+    right: bool,
+    top: Option<bool>,
+) -> (i32, i32) {
+    let inset = 10;
+    let x = if right { xr.end - inset - size.0 } else { xr.start + inset };
+    let y = match top {
+        Some(true) => yr.start + inset,
+        Some(false) => yr.end - inset - size.1,
+        None => (yr.start + yr.end - size.1) / 2,
+    };
+    (x, y)
+}
+
+/// A line in data coordinates, in a pattern measured in pixels.
+fn draw_line<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<Axis, Axis>>,
+    points: Vec<(f64, f64)>,
+    dash: Dash,
+    style: ShapeStyle,
+) -> Result<(), Error> {
+    match dash {
+        Dash::Solid => chart.draw_series(LineSeries::new(points, style)).map(|_| ()),
+        Dash::Dashed => chart.draw_series(DashedLineSeries::new(points, 10, 6, style)).map(|_| ()),
+        Dash::Dotted => chart.draw_series(DashedLineSeries::new(points, 3, 4, style)).map(|_| ()),
+    }
+    .map_err(draw_error)
+}
+
+/// A marker of radius `r` pixels centred on pixel `c`.
+pub(crate) fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    c: (i32, i32),
+    marker: Marker,
+    r: i32,
+    color: Rgb,
+) -> Result<(), Error> {
+    let fill = color.filled();
+    let poly = |pts: &[(f64, f64)]| {
+        Polygon::new(
+            pts.iter()
+                .map(|(x, y)| (c.0 + (x * r as f64).round() as i32, c.1 + (y * r as f64).round() as i32))
+                .collect::<Vec<_>>(),
+            fill,
+        )
+    };
+    let bar = 0.38;
+    match marker {
+        Marker::Circle => area.draw(&Circle::new(c, r, fill)),
+        Marker::Square => area.draw(&poly(&[(-0.85, -0.85), (0.85, -0.85), (0.85, 0.85), (-0.85, 0.85)])),
+        Marker::TriangleUp => area.draw(&poly(&[(0.0, -1.2), (1.05, 0.75), (-1.05, 0.75)])),
+        Marker::TriangleDown => area.draw(&poly(&[(0.0, 1.2), (1.05, -0.75), (-1.05, -0.75)])),
+        Marker::Diamond => area.draw(&poly(&[(0.0, -1.25), (1.0, 0.0), (0.0, 1.25), (-1.0, 0.0)])),
+        Marker::Plus => area.draw(&poly(&[
+            (-bar, -1.2),
+            (bar, -1.2),
+            (bar, -bar),
+            (1.2, -bar),
+            (1.2, bar),
+            (bar, bar),
+            (bar, 1.2),
+            (-bar, 1.2),
+            (-bar, bar),
+            (-1.2, bar),
+            (-1.2, -bar),
+            (-bar, -bar),
+        ])),
+        Marker::Cross => {
+            let s = std::f64::consts::FRAC_1_SQRT_2;
+            let rot = |(x, y): (f64, f64)| (s * (x - y), s * (x + y));
+            let pts: Vec<(f64, f64)> = [
+                (-bar, -1.35),
+                (bar, -1.35),
+                (bar, -bar),
+                (1.35, -bar),
+                (1.35, bar),
+                (bar, bar),
+                (bar, 1.35),
+                (-bar, 1.35),
+                (-bar, bar),
+                (-1.35, bar),
+                (-1.35, -bar),
+                (-bar, -bar),
+            ]
+            .into_iter()
+            .map(rot)
+            .collect();
+            area.draw(&poly(&pts))
+        }
+    }
+    .map_err(draw_error)
 }
 
 pub(crate) fn draw_error<E: std::fmt::Display>(e: E) -> Error {
@@ -266,7 +597,7 @@ pub(crate) fn draw_error<E: std::fmt::Display>(e: E) -> Error {
 }
 
 /// Widens a data range by 5% (a decade fraction on log axes) so nothing sits on the frame.
-fn pad((lo, hi): (f64, f64), scale: Scale) -> Range<f64> {
+pub(crate) fn pad((lo, hi): (f64, f64), scale: Scale) -> std::ops::Range<f64> {
     match scale {
         Scale::Linear => {
             let span = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
@@ -277,20 +608,6 @@ fn pad((lo, hi): (f64, f64), scale: Scale) -> Range<f64> {
             let span = if b > a { b - a } else { 1.0 };
             10f64.powf(a - 0.05 * span)..10f64.powf(b + 0.05 * span)
         }
-    }
-}
-
-/// Tick labels: plain numbers in a moderate range, scientific notation outside it; values
-/// within `zero` of 0 are 0.
-pub(crate) fn tick(v: f64, zero: f64) -> String {
-    let a = v.abs();
-    if a <= zero {
-        "0".into()
-    } else if !(1e-3..1e5).contains(&a) {
-        format!("{v:.0e}")
-    } else {
-        let s = format!("{v:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
     }
 }
 

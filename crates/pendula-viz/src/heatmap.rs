@@ -1,10 +1,12 @@
-//! Heat maps of values on a regular grid (the flip fractal), with a colour bar, rendered
-//! with plotters and the perceptually uniform viridis colour map.
+//! Heat maps of values on a regular grid (the flip fractal), rendered with plotters: the
+//! perceptually uniform viridis colour map with a colour bar ticked at round values, or a
+//! few discrete categories with a legend.
 
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 
-use crate::figure::{draw_error, encode_png, ensure_font, tick};
+use crate::figure::{draw_error, encode_png, ensure_font};
+use crate::ticks::Axis;
 use crate::{Error, Rgb};
 
 /// A grid of values as an image: `values` holds `ny` rows of `nx` cells, the first row at
@@ -33,11 +35,17 @@ pub struct Heatmap {
     pub log: bool,
     /// Colour of NaN cells.
     pub nan_color: Rgb,
+    /// Empty for a continuous colour map with a colour bar; otherwise the values are
+    /// category indices (0, 1, …) drawn in these colours, with a legend of these names.
+    pub categories: Vec<(String, Rgb)>,
 }
 
 impl Heatmap {
     /// The finite (positive on a log scale) range of the values.
     fn range(&self) -> Result<(f64, f64), Error> {
+        if !self.categories.is_empty() {
+            return Ok((0.0, self.categories.len() as f64));
+        }
         let mut r = (f64::INFINITY, f64::NEG_INFINITY);
         for &v in self.values.iter().filter(|v| v.is_finite() && (!self.log || **v > 0.0)) {
             r = (r.0.min(v), r.1.max(v));
@@ -69,6 +77,14 @@ impl Heatmap {
         root.fill(&WHITE).map_err(draw_error)?;
         let (lo, hi) = self.range()?;
         let colour = |v: f64| -> RGBColor {
+            if !self.categories.is_empty() {
+                let i = v as usize;
+                return if v.is_finite() && v >= 0.0 && i < self.categories.len() {
+                    self.categories[i].1
+                } else {
+                    self.nan_color
+                };
+            }
             if !v.is_finite() || (self.log && v <= 0.0) {
                 return self.nan_color;
             }
@@ -76,15 +92,16 @@ impl Heatmap {
             ViridisRGB.get_color_normalized(s as f32, lo as f32, hi as f32)
         };
         let root = root.titled(&self.title, ("sans-serif", 24)).map_err(draw_error)?;
-        let (main, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
+        let side = if self.categories.is_empty() { 150 } else { 190 };
+        let (main, bar) = root.split_horizontally(root.dim_in_pixel().0 - side);
+        let (xa, ya) = (Axis::new(self.x.0..self.x.1, false), Axis::new(self.y.0..self.y.1, false));
+        let (xf, yf) = (xa.clone(), ya.clone());
         let mut chart = ChartBuilder::on(&main)
             .margin(12)
             .x_label_area_size(52)
             .y_label_area_size(70)
-            .build_cartesian_2d(self.x.0..self.x.1, self.y.0..self.y.1)
+            .build_cartesian_2d(xa, ya)
             .map_err(draw_error)?;
-        let span = |r: (f64, f64)| 1e-9 * (r.1 - r.0);
-        let (zx, zy) = (span(self.x), span(self.y));
         chart
             .configure_mesh()
             .disable_mesh()
@@ -94,8 +111,8 @@ impl Heatmap {
             .y_desc(&self.y_label)
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 17))
-            .x_label_formatter(&|v| tick(*v, zx))
-            .y_label_formatter(&|v| tick(*v, zy))
+            .x_label_formatter(&|v| xf.label(*v))
+            .y_label_formatter(&|v| yf.label(*v))
             .draw()
             .map_err(draw_error)?;
         let (dx, dy) = ((self.x.1 - self.x.0) / self.nx as f64, (self.y.1 - self.y.0) / self.ny as f64);
@@ -107,27 +124,50 @@ impl Heatmap {
             }))
             .map_err(draw_error)?;
 
-        // The colour bar: a column of 256 bands over the value range, labelled in values.
+        if !self.categories.is_empty() {
+            // A legend of swatches, one per category.
+            // Drawing-area coordinates are relative to the column.
+            let (x0, y0) = (8, 40);
+            let font = ("sans-serif", 15).into_font().color(&BLACK);
+            bar.draw(&Text::new(self.bar_label.as_str(), (x0, y0 - 20), font.clone())).map_err(draw_error)?;
+            let mut rows: Vec<(String, Rgb)> = self.categories.clone();
+            if self.values.iter().any(|v| !v.is_finite()) {
+                rows.push(("no value".into(), self.nan_color));
+            }
+            for (k, (name, c)) in rows.iter().enumerate() {
+                let (x, y) = (x0, y0 + 8 + 28 * k as i32);
+                bar.draw(&Rectangle::new([(x, y), (x + 22, y + 18)], c.filled())).map_err(draw_error)?;
+                bar.draw(&Rectangle::new([(x, y), (x + 22, y + 18)], RGBColor(120, 120, 120)))
+                    .map_err(draw_error)?;
+                bar.draw(&Text::new(name.as_str(), (x + 30, y + 1), font.clone())).map_err(draw_error)?;
+            }
+            return Ok(());
+        }
+
+        // The colour bar: a column of 256 bands over the value range, ticked at round values
+        // (1, 2, 5 × 10ᵏ on a log scale, nice numbers on a linear one).
+        let bar_axis =
+            if self.log { Axis::new(10f64.powf(lo)..10f64.powf(hi), true) } else { Axis::new(lo..hi, false) };
+        let bar_format = bar_axis.clone();
         let mut bar_chart = ChartBuilder::on(&bar)
             .margin_top(12)
             .margin_bottom(64)
             .margin_right(12)
             .y_label_area_size(80)
-            .build_cartesian_2d(0.0..1.0, lo..hi)
+            .build_cartesian_2d(0.0..1.0, bar_axis)
             .map_err(draw_error)?;
-        let log = self.log;
         bar_chart
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_labels(8)
             .y_desc(&self.bar_label)
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
-            .y_label_formatter(&|v| if log { tick(10f64.powf(*v), 0.0) } else { tick(*v, 0.0) })
+            .y_label_formatter(&|v| bar_format.label(*v))
             .draw()
             .map_err(draw_error)?;
         let bands = 256;
+        let value = |s: f64| if self.log { 10f64.powf(s) } else { s };
         bar_chart
             .draw_series((0..bands).map(|b| {
                 let (s0, s1) = (
@@ -135,7 +175,7 @@ impl Heatmap {
                     lo + (hi - lo) * (b + 1) as f64 / bands as f64,
                 );
                 let c = ViridisRGB.get_color_normalized((0.5 * (s0 + s1)) as f32, lo as f32, hi as f32);
-                Rectangle::new([(0.0, s0), (1.0, s1)], c.filled())
+                Rectangle::new([(0.0, value(s0)), (1.0, value(s1))], c.filled())
             }))
             .map_err(draw_error)?;
         Ok(())

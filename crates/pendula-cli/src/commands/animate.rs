@@ -41,7 +41,8 @@ pub struct AnimateArgs {
     /// Add a second pendulum whose first angle starts DELTA radians (or `1e-3deg`) away.
     #[arg(long, value_name = "DELTA", allow_hyphen_values = true)]
     pub compare: Option<String>,
-    /// Frames per second of simulated time [default: 30].
+    /// Frames per second of simulated time [default: 30]. A GIF plays 1 to 50 exactly (its
+    /// delays are whole centiseconds, alternated, e.g. 3, 3, 4 cs for 30 fps); MP4 up to 240.
     #[arg(long, value_name = "N")]
     pub fps: Option<u32>,
     /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
@@ -59,7 +60,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "a time in seconds")?;
     let fps = args.fps.unwrap_or(30);
     if fps == 0 || fps > 240 {
-        bail!("invalid --fps {fps}: must be 1 to 240");
+        bail!("invalid --fps {fps}: must be 1 to 240 (1 to 50 for a GIF)");
     }
     let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
@@ -68,6 +69,11 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         Some("mp4") => true,
         _ => bail!("invalid --out `{}`: use FILE.gif or FILE.mp4", out.display()),
     };
+    if !mp4 && fps > 50 {
+        bail!(
+            "invalid --fps {fps} for a GIF: GIF delays are whole centiseconds, and browsers slow delays under 2 cs to 10 cs; use 1 to 50, or write an .mp4"
+        );
+    }
     if mp4 && !ffmpeg_available() {
         bail!(
             "MP4 output needs an `ffmpeg` binary on the PATH, and none was found; install ffmpeg or write a .gif"
@@ -88,14 +94,37 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     }
     let file = AtomicFile::create(&out, "--out")?;
 
+    // A frame too small for the text, the gauges and a pendulum is refused before the run.
+    Animation {
+        title: String::new(),
+        lengths: vec![1.0],
+        frames: vec![Snapshot {
+            t: 0.0,
+            angles: vec![],
+            energy_error: vec![0.0; 1 + delta.is_some() as usize],
+        }],
+        size,
+        fps,
+        trail: 0,
+        labels: vec![],
+    }
+    .layout()
+    .map_err(|e| anyhow::anyhow!("invalid --size {}x{}: {e}", size.0, size.1))?;
     let frames = snapshots(&values, method, &spec, fps, delta)?;
     let lengths: Vec<f64> = match system {
         "pendulum" => vec![values.get("l")],
         _ => vec![values.get("l1"), values.get("l2")],
     };
-    let mut labels = vec![format!("{}", method.name)];
+    // Each pendulum is named by its start, and the second by what differs from the first.
+    let start = format!(
+        "{} = {}°",
+        pendula_viz::pretty(first.name),
+        pendula_viz::number(values.initial_state()[0].to_degrees())
+    );
+    let mut labels = vec![start.clone()];
     if let Some(d) = delta {
-        labels.push(format!("started {d:e} rad away"));
+        let sign = if d < 0.0 { "−" } else { "+" };
+        labels.push(format!("{start} {sign} {} rad", pendula_viz::number(d.abs())));
     }
     let animation = Animation {
         title: format!("{system} pendulum, {}, h = {h} s", method.name),

@@ -13,7 +13,7 @@ use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
 use pendula::integrator::explicit_rk::RK4;
 use pendula::system::Model;
 use pendula::system::driven::DrivenPendulum;
-use pendula_viz::{Figure, Kind, Scale, palette};
+use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_unit};
 use rayon::prelude::*;
 use serde_json::json;
 
@@ -191,23 +191,31 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         }
     }
     out.csv("bifurcation.csv", &header, &rows)?;
+    let tu = info.time_unit();
+    let v_unit = unit(state[variable].unit);
     let fig = Figure::new(
         format!(
-            "{system}: stroboscopic samples after {transient} s ({samples} per value, RK4, {m} steps/period)"
+            "{system}: stroboscopic samples after {} ({samples} per value, RK4, {m} steps/period)",
+            with_unit(transient, tu)
         ),
-        format!("{} ({})", axis.name, info.quantity(&axis.name)?.unit),
-        format!("{} at drive phase 0 ({})", state[variable].name, state[variable].unit),
+        axis_label(&axis.name, info.quantity(&axis.name)?.unit),
+        format!(
+            "{} at drive phase 0 ({})",
+            pretty(state[variable].name),
+            if v_unit.is_empty() { "dimensionless".to_owned() } else { v_unit }
+        ),
     )
     .scales(Scale::Linear, Scale::Linear)
     .with("", palette(1), Kind::Dots, points);
     out.figure("bifurcation", &fig)?;
     sayln!(
         summary,
-        "{system}: {} values of {} in [{}, {}], {samples} samples each after {transient} s; {} [{wall:.2} s, {threads} threads]",
+        "{system}: {} values of {} in [{}, {}], {samples} samples each after {}; {} [{wall:.2} s, {threads} threads]",
         axis.n,
         axis.name,
         pendula::error::Short(axis.lo),
         pendula::error::Short(axis.hi),
+        with_unit(transient, tu),
         if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
     );
     summary.write(&json!({

@@ -17,7 +17,7 @@ use pendula::integrator::Method;
 use pendula::observe::{Every, Observer, Recorder, Sample};
 use pendula::system::Values;
 use pendula::{End, RunSpec};
-use pendula_viz::{Figure, Kind, Scale, method_color};
+use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_unit};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -429,44 +429,65 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
     let system = info.name;
     let (q, v) = (&info.state[0], &info.state[n]);
     let angle = q.is_angle();
+    let tu = info.time_unit();
     let scale = values.build().energy_scale(values.initial_state());
     let how = match steps {
-        Steps::Equal(h) => format!("h = {h} s"),
-        Steps::EqualCost(n) => format!("equal cost, {n} evaluations/s"),
+        Steps::Equal(h) => format!("h = {}", with_unit(h, tu)),
+        Steps::EqualCost(n) => format!("equal cost, {} evaluations per unit time", pendula_viz::number(n)),
     };
     // |error| crosses zero every oscillation; on a log axis its envelope reads better.
     let mut energy = Figure::new(
-        format!("{system}: relative energy error (envelope over {t_end} s / {WINDOWS}), {how}"),
-        "time t (s)",
-        format!("max |E(t) - E(0)| / E_scale (E_scale = {} J)", short(scale)),
+        format!(
+            "{system}: relative energy error (envelope over windows of {}), {how}",
+            with_unit(pendula_viz::number(t_end / WINDOWS as f64), tu)
+        ),
+        axis_label("t", tu),
+        format!(
+            "max |E(t) − E(0)| / energy scale ({})",
+            with_unit(pendula_viz::number(scale), info.energy_unit())
+        ),
     )
     .scales(Scale::Linear, Scale::Log);
     let t_show = t_end.min(20.0);
     let mut trajectory = Figure::new(
-        format!("{system}: {} against time, {how}", q.name),
-        "time t (s)",
-        format!("{} ({})", q.name, q.unit),
+        format!("{system}: {} against time, {how}", pretty(q.name)),
+        axis_label("t", tu),
+        axis_label(q.name, q.unit),
     );
     let mut figures = Vec::new();
-    for r in runs.iter().filter(|r| r.failure.is_none() || !r.energy.is_empty()) {
-        let color = method_color(r.method);
-        let label = format!("{} (h = {})", r.method, short(r.h));
+    for r in runs.iter().filter(|r| !r.energy.is_empty()) {
+        let style = method_style(r.method);
+        let label = match steps {
+            Steps::Equal(_) => r.method.to_owned(),
+            Steps::EqualCost(_) => format!("{} (h = {})", r.method, with_unit(pendula_viz::number(r.h), tu)),
+        };
         let (t, e): (Vec<f64>, Vec<f64>) = r.energy.iter().copied().unzip();
-        energy = energy.with(label.clone(), color, Kind::Line, envelope(&t, &e, WINDOWS));
+        energy = energy.with_style(label.clone(), style, Kind::Line, envelope(&t, &e, WINDOWS));
         let rows = r.trajectory.chunks(dim + 1);
-        trajectory = trajectory.with(
+        trajectory = trajectory.with_style(
             label,
-            color,
+            style,
             Kind::Line,
             rows.clone().take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
         );
         let wrap = |x: f64| if angle { pendula::system::wrap_angle(x) } else { x };
+        let q_label = axis_label(q.name, q.unit);
         let phase = Figure::new(
-            format!("{system}: phase portrait with {}, h = {} s, t <= {t_end} s", r.method, short(r.h)),
-            format!("{} ({}{})", q.name, q.unit, if angle { ", wrapped to [-pi, pi)" } else { "" }),
-            format!("{} ({})", v.name, v.unit),
+            format!(
+                "{system}: phase portrait with {}, h = {}, t ≤ {}",
+                r.method,
+                with_unit(pendula_viz::number(r.h), tu),
+                with_unit(t_end, tu)
+            ),
+            if angle { format!("{q_label}, wrapped to [−π, π)") } else { q_label },
+            axis_label(v.name, v.unit),
         )
-        .with(r.method, color, Kind::Dots, rows.map(|row| (wrap(row[1]), row[1 + n])).collect());
+        .with(
+            r.method,
+            style.color,
+            Kind::Dots,
+            rows.map(|row| (wrap(row[1]), row[1 + n])).collect(),
+        );
         figures.push((format!("phase_{}", r.method), phase));
     }
     // Every method may have failed before its first step (all refused): no curves to draw.

@@ -13,7 +13,7 @@ use clap::Args;
 use pendula::analysis::{self, OrderEstimate, default_ladder, estimate_order};
 use pendula::integrator::Method;
 use pendula::system::Values;
-use pendula_viz::{Figure, GUIDE, Kind, Legend, Scale, method_color};
+use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
 use serde_json::json;
 
 use crate::commands::compare::refusal;
@@ -181,21 +181,24 @@ pub fn study_orders(
 
 /// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
+    let tu = pendula::system::find(system).map_or("s", |i| i.time_unit());
     let mut fig = Figure::new(
-        format!("{system}: global error at t = {} s, against the {reference}", short(t_end)),
-        "step size h (s)",
-        "max |y(t) - y_ref(t)|",
+        format!(
+            "{system}: global error at t = {}, against the {reference}",
+            with_unit(pendula_viz::number(t_end), tu)
+        ),
+        format!("step size {}", axis_label("h", tu)),
+        "max |y(t) − y_ref(t)|",
     )
-    .scales(Scale::Log, Scale::Log)
-    .legend(Legend::LowerRight);
+    .scales(Scale::Log, Scale::Log);
     for r in results.iter().filter(|r| !r.hs.is_empty()) {
         let label = match r.order() {
             Some(o) => format!("{} (order {o:.2})", r.method),
             None => format!("{} (no order)", r.method),
         };
-        fig = fig.with(
+        fig = fig.with_style(
             label,
-            method_color(r.method),
+            method_style(r.method),
             Kind::LineMarkers,
             r.hs.iter().copied().zip(r.errors.iter().copied()).collect(),
         );
@@ -203,7 +206,12 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
     let all_h = results.iter().flat_map(|r| r.hs.iter().copied());
     let (h0, h1) = all_h.fold((f64::NEG_INFINITY, f64::INFINITY), |(a, b), h| (a.max(h), b.min(h)));
     if h0.is_finite() && h1 < h0 {
-        let anchor = results.iter().filter_map(|r| r.errors.first()).fold(f64::INFINITY, |m, e| m.min(*e));
+        // Near the median error at each method's first step, so that the guides sit among the
+        // data, and a factor 30 below it, so that no guide hides a method lying on it.
+        let mut firsts: Vec<f64> =
+            results.iter().filter_map(|r| r.errors.first().copied()).filter(|e| *e > 0.0).collect();
+        firsts.sort_by(f64::total_cmp);
+        let anchor = firsts.get(firsts.len() / 2).copied().unwrap_or(1.0) / 30.0;
         // Dense points: a dashed line is interpolated in data coordinates, which bends on log axes.
         for p in [1, 2, 4] {
             let c = anchor / h0.powi(p);

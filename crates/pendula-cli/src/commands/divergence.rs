@@ -6,7 +6,7 @@ use clap::Args;
 use pendula::analysis::{divergence, growth_rate};
 use pendula::integrator;
 use pendula::{End, RunSpec};
-use pendula_viz::{Figure, Kind, Legend, Scale, palette};
+use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -72,13 +72,14 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let rows: Vec<Vec<String>> = d.t.iter().zip(&d.distance).map(|(t, x)| vec![num(*t), num(*x)]).collect();
     out.csv("divergence.csv", &["t", "distance"], &rows)?;
     let variable = info.state[index].name;
+    let (tu, ru) = (info.time_unit(), info.rate_unit());
     match fit {
         Some(f) => sayln!(
             summary,
-            "{system}: separation {delta:e} in {variable}; growth rate {:.4} 1/s fitted over t = {:.2} … {:.2} s",
-            f.rate,
+            "{system}: separation {delta:e} in {variable}; growth rate {} fitted over t = {:.2} … {}",
+            with_unit(format!("{:.4}", f.rate), ru),
             f.t_start,
-            f.t_end
+            with_unit(format!("{:.2}", f.t_end), tu)
         ),
         None => sayln!(
             summary,
@@ -86,12 +87,16 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         ),
     }
     let mut fig = Figure::new(
-        format!("{system}: divergence of trajectories {delta:e} apart in {variable} ({})", method.name),
-        "t (s)",
+        format!(
+            "{system}: divergence of trajectories {} apart in {} ({})",
+            number(delta),
+            pretty(variable),
+            method.name
+        ),
+        axis_label("t", tu),
         "distance in state space",
     )
-    .scales(Scale::Linear, Scale::Log)
-    .legend(Legend::LowerRight);
+    .scales(Scale::Linear, Scale::Log);
     let positive: Vec<(f64, f64)> =
         d.t.iter().zip(&d.distance).filter(|(_, x)| **x > 0.0).map(|(t, x)| (*t, *x)).collect();
     fig = fig.with("distance", palette(1), Kind::Line, positive);
@@ -110,7 +115,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         let tm = 0.5 * (t0 + t1);
         let line = |t: f64| (mean_log + f.rate * (t - tm)).exp();
         fig = fig.with(
-            format!("fit: rate {:.3} 1/s", f.rate),
+            format!("fit: rate {}", with_unit(format!("{:.3}", f.rate), ru)),
             palette(0),
             Kind::Dashed,
             (0..=50).map(|k| t0 + (t1 - t0) * k as f64 / 50.0).map(|t| (t, line(t))).collect(),

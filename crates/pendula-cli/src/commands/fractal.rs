@@ -176,8 +176,8 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     write_npy(&flags_npy, &[n2, n1], &flags)?;
     let map = |title: String, bar: &str, values: Vec<f64>, log: bool, nan: Rgb| Heatmap {
         title,
-        x_label: "theta1 (rad)".into(),
-        y_label: "theta2 (rad)".into(),
+        x_label: pendula_viz::axis_label("theta1", "rad"),
+        y_label: pendula_viz::axis_label("theta2", "rad"),
         bar_label: bar.into(),
         x: (theta1.lo, theta1.hi),
         y: (theta2.lo, theta2.hi),
@@ -186,6 +186,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         values,
         log,
         nan_color: nan,
+        categories: Vec::new(),
     };
     let picture = map(
         format!(
@@ -210,20 +211,22 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         Ok(())
     };
     write_png(&png, &picture)?;
-    let flag_values: Vec<f64> = fractal.converged.iter().map(|c| if *c { 1.0 } else { 0.0 }).collect();
-    write_png(
-        &flags_png,
-        &map(
-            format!(
-                "converged pixels: flip time within {tolerance} s at dt = {h} s and {} s (yellow)",
-                h / 2.0
-            ),
-            "converged (1) or not (0)",
+    // Two categories, two colours and a two-entry legend: a yes/no map has no scale.
+    let flag_values: Vec<f64> = fractal.converged.iter().map(|c| if *c { 0.0 } else { 1.0 }).collect();
+    let flags_map = Heatmap {
+        categories: vec![
+            ("converged".into(), pendula_viz::rgb(253, 231, 37)),
+            ("not converged".into(), pendula_viz::rgb(68, 1, 84)),
+        ],
+        ..map(
+            format!("converged pixels: flip time within {tolerance} s at dt = {h} s and {} s", h / 2.0),
+            "at dt and dt/2",
             flag_values,
             false,
             pendula_viz::BLACK,
-        ),
-    )?;
+        )
+    };
+    flags_png.handle()?.write_all(&flags_map.png()?)?;
     let doc = json!({
         "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
         "tolerance": tolerance,

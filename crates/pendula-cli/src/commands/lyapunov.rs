@@ -7,7 +7,7 @@ use clap::Args;
 use pendula::analysis::{LyapunovSpec, lyapunov};
 use pendula::integrator;
 use pendula::system::AsSystem;
-use pendula_viz::{Figure, Kind, Legend, Scale, palette};
+use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -74,33 +74,44 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     out.csv("lyapunov.csv", &header, &rows)?;
 
     let (lambda, err) = (result.exponents[0], result.uncertainty[0]);
-    sayln!(summary, "{system} ({}, dt = {h} s, {t_end} s after a {transient} s transient):", method.name);
+    let (tu, ru) = (info.time_unit(), info.rate_unit());
+    sayln!(
+        summary,
+        "{system} ({}, dt = {}, {} after a {} transient):",
+        method.name,
+        with_unit(h, tu),
+        with_unit(t_end, tu),
+        with_unit(transient, tu)
+    );
     for (j, (l, e)) in result.exponents.iter().zip(&result.uncertainty).enumerate() {
-        sayln!(summary, "  lambda{} = {l:.5} ± {e:.5} 1/s", j + 1);
+        sayln!(summary, "  lambda{} = {}", j + 1, with_unit(format!("{l:.5} ± {e:.5}"), ru));
     }
     if args.spectrum {
-        sayln!(summary, "  sum = {:.3e} 1/s", result.exponents.iter().sum::<f64>());
+        sayln!(summary, "  sum = {}", with_unit(format!("{:.3e}", result.exponents.iter().sum::<f64>()), ru));
     }
 
     let mut fig = Figure::new(
-        format!("{system}: running Lyapunov estimate ({}, dt = {h} s)", method.name),
-        "t after the transient (s)",
-        "exponent (1/s)",
+        format!("{system}: running Lyapunov estimate ({}, dt = {})", method.name, with_unit(h, tu)),
+        format!("time after the transient, {}", axis_label("t", tu)),
+        format!("exponent, {}", axis_label("lambda", ru)),
     )
-    .scales(Scale::Linear, Scale::Linear)
-    .legend(Legend::UpperRight);
+    .scales(Scale::Linear, Scale::Linear);
     for j in 0..count {
         let series: Vec<(f64, f64)> =
             result.running.chunks_exact(count + 1).map(|r| (r[0], r[1 + j])).collect();
         fig = fig.with(
-            format!("lambda{} = {:.4} ± {:.4}", j + 1, result.exponents[j], result.uncertainty[j]),
+            format!(
+                "{} = {}",
+                pretty(&format!("lambda{}", j + 1)),
+                with_unit(format!("{:.4} ± {:.4}", result.exponents[j], result.uncertainty[j]), ru)
+            ),
             palette(j),
             Kind::Line,
             series,
         );
     }
     let band = |v: f64| vec![(0.0, v), (t_end, v)];
-    fig = fig.with("lambda1 ± uncertainty", palette(0), Kind::Dashed, band(lambda + err)).with(
+    fig = fig.with("λ₁ ± uncertainty", palette(0), Kind::Dashed, band(lambda + err)).with(
         "",
         palette(0),
         Kind::Dashed,

@@ -8,7 +8,7 @@ use pendula::analysis::measure_period;
 use pendula::integrator;
 use pendula::system::Model;
 use pendula::system::pendulum::Pendulum;
-use pendula_viz::{Figure, Kind, Legend, REFERENCE, Scale, method_color, palette};
+use pendula_viz::{Figure, Kind, REFERENCE, Scale, method_style, palette};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -135,20 +135,23 @@ pub fn figures(rows: &[PeriodRow], method: &str) -> Vec<(&'static str, Figure)> 
     let pts = |f: fn(&PeriodRow) -> f64| rows.iter().map(|r| (r.amplitude_deg, f(r))).collect::<Vec<_>>();
     let period =
         Figure::new("Simple pendulum: period against amplitude", "amplitude θ₀ (degrees)", "period T (s)")
-            .legend(Legend::UpperLeft)
             .with("exact 4√(l/g) K(sin(θ₀/2))", REFERENCE, Kind::Line, pts(|r| r.exact))
-            .with(format!("simulated ({method})"), method_color(method), Kind::Markers, pts(|r| r.simulated))
+            .with_style(
+                format!("simulated ({method})"),
+                method_style(method),
+                Kind::Markers,
+                pts(|r| r.simulated),
+            )
             .with("small-angle 2π√(l/g)", palette(4), Kind::Dashed, pts(|r| r.small_angle));
     let error = Figure::new(
         "Simple pendulum: deviation from the exact period",
         "amplitude θ₀ (degrees)",
-        "|T / T_exact - 1|",
+        "|T / T(exact) − 1|",
     )
-    .legend(Legend::LowerRight)
     .scales(Scale::Linear, Scale::Log)
-    .with(
+    .with_style(
         format!("simulated ({method})"),
-        method_color(method),
+        method_style(method),
         Kind::LineMarkers,
         pts(|r| (r.simulated / r.exact - 1.0).abs()),
     )

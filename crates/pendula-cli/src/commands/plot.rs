@@ -411,8 +411,8 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
     // Positive values over two decades or more (flip times) are coloured by their logarithm.
     let log = grid.flip_times || (lo > 0.0 && hi / lo >= 100.0);
     let label = |name: &str| match system::find("double").ok().and_then(|i| i.quantity(name).ok()) {
-        Some(q) if !q.unit.is_empty() => format!("{name} ({})", q.unit),
-        _ => name.to_owned(),
+        Some(q) => pendula_viz::axis_label(name, q.unit),
+        None => pendula_viz::pretty(name),
     };
     Ok(Heatmap {
         title,
@@ -426,6 +426,7 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
         values,
         log,
         nan_color: pendula_viz::BLACK,
+        categories: Vec::new(),
     })
 }
 

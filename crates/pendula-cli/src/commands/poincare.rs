@@ -9,7 +9,7 @@ use pendula::analysis::poincare::{PoincareSpec, Stepping, poincare};
 use pendula::control::Tolerances;
 use pendula::error::{did_you_mean, suggestions};
 use pendula::integrator::{self, Scheme};
-use pendula_viz::{Figure, Kind, Scale, palette};
+use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
 use crate::config::{f64_arg, parse_number, parse_value};
@@ -112,11 +112,14 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let mut worst_energy: f64 = 0.0;
     let mut fig = Figure::new(
         format!(
-            "{system}: Poincare section {name} = {value:.3} rad (rising), E = {energy} J, {count} orbits ({})",
+            "{system}: Poincaré section {} = {} rad (rising), E = {}, {count} orbits ({})",
+            pretty(name),
+            number(value),
+            with_unit(number(energy), info.energy_unit()),
             method.name
         ),
-        format!("{q_name} (rad)"),
-        format!("{p_name} (kg m^2/s)"),
+        axis_label(q_name, "rad"),
+        axis_label(&p_name, if info.dimensionless { "1" } else { "kg m^2/s" }),
     )
     .scales(Scale::Linear, Scale::Linear);
     let mut total = 0;
@@ -144,7 +147,10 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     out.figure("poincare", &fig)?;
     sayln!(
         summary,
-        "{system}: {count} orbits at E = {energy} J, {total} crossings of {name} = {value} (rising) in {t_end} s; max |H - E| at crossings {worst_energy:.2e} J"
+        "{system}: {count} orbits at E = {}, {total} crossings of {name} = {value} (rising) in {}; max |H - E| at crossings {}",
+        with_unit(energy, info.energy_unit()),
+        with_unit(t_end, info.time_unit()),
+        with_unit(format!("{worst_energy:.2e}"), info.energy_unit())
     );
     summary.write(&json!({
         "system": system, "method": method.name, "energy": energy, "count": count,

@@ -8,7 +8,7 @@ use pendula::observe::Recorder;
 use pendula::system::Model;
 use pendula::system::oscillator::Oscillator;
 use pendula::{End, RunSpec};
-use pendula_viz::{Figure, Kind, Legend, palette};
+use pendula_viz::{Figure, Kind, palette};
 use serde_json::json;
 
 use crate::study::{self, Common, OutDir, Summary, num};
@@ -227,8 +227,7 @@ pub fn resonance_figures(points: &[ResonancePoint]) -> Vec<(&'static str, Figure
         "Forced damped oscillator: phase lag (π/2 at resonance)",
         "drive frequency Ω / ω₀",
         "phase lag φ (rad)",
-    )
-    .legend(Legend::LowerRight);
+    );
     for (i, &zeta) in RESONANCE.iter().enumerate() {
         let curve = |f: &dyn Fn(f64) -> f64| {
             (0..=280).map(|k| 0.2 + k as f64 * 0.01).map(|r| (r, f(r))).collect::<Vec<_>>()

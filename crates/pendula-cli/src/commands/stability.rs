@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{StabilityCriterion, largest_stable_step};
-use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
+use pendula_viz::{Bar, Bars, Figure, Scale, axis_label, method_color, with_unit};
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -113,24 +113,56 @@ pub fn stable_steps(
     Ok(results)
 }
 
-/// Largest stable step per method, on a log axis.
+/// Largest stable step per method: a bar per method on a log axis over the search range,
+/// every method listed, one that is stable at no step tried marked so in words.
 pub fn figure(
     system: &str,
     criterion: &StabilityCriterion,
     results: &[(&'static str, Option<f64>)],
 ) -> Figure {
+    let (h_min, h_max) = H_RANGE;
+    let rows: Vec<(&str, Option<f64>, Option<String>)> = results
+        .iter()
+        .map(|(m, h)| {
+            let limit = pendula::integrator::find(m).ok().and_then(pendula::analysis::accepted_step_limit);
+            let note = match h {
+                // A refusal is not a stability result: say which it is.
+                Some(h) if limit.is_some_and(|l| *h >= l / 1.01) => {
+                    Some(format!("refused above {} (binding · h ≤ 1)", num(limit.unwrap_or_default())))
+                }
+                None => Some(format!("unstable at every step tried (down to {})", num(h_min))),
+                Some(h) if *h >= h_max => Some(format!("≥ {} (the search limit)", num(h_max))),
+                Some(_) => None,
+            };
+            (*m, *h, note)
+        })
+        .collect();
+    bars_figure(system, criterion, &rows)
+}
+
+/// The bar chart of [`figure`] from (method, largest stable step, note) rows: a note, when
+/// given, is printed beside the bar (or in place of a missing one) instead of the value.
+pub fn bars_figure(
+    system: &str,
+    criterion: &StabilityCriterion,
+    rows: &[(&str, Option<f64>, Option<String>)],
+) -> Figure {
     let (bound, t_end) = (criterion.max_rel_energy_error, criterion.t_end);
-    let mut fig = Figure::new(
-        format!("{system}: largest stable step (|dE/E0| <= {bound} over {t_end} s)"),
-        "method (position in the table)",
-        "largest stable step h (s)",
-    )
-    .scales(Scale::Linear, Scale::Log)
-    .legend(Legend::LowerRight);
-    for (i, (m, h)) in results.iter().enumerate() {
-        if let Some(h) = h {
-            fig = fig.with(*m, method_color(m), Kind::Markers, vec![(i as f64 + 1.0, *h)]);
-        }
+    let info = pendula::system::find(system).ok();
+    let tu = info.map_or("s", |i| i.time_unit());
+    let mut bars = Bars::new(
+        format!(
+            "{system}: largest stable step (relative energy error ≤ {} over {})",
+            pendula_viz::number(bound),
+            with_unit(t_end, tu)
+        ),
+        format!("largest stable step {}", axis_label("h", tu)),
+        Scale::Log,
+    );
+    bars.limits = Some(H_RANGE);
+    for (m, h, note) in rows {
+        let note = note.clone().or_else(|| h.map(|h| with_unit(pendula_viz::number(h), tu)));
+        bars.bars.push(Bar { label: (*m).to_owned(), value: *h, color: method_color(m), note });
     }
-    fig
+    Figure::from(bars)
 }

@@ -5,7 +5,7 @@
 use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::{self, WorkPoint};
-use pendula_viz::{Figure, Kind, Legend, Scale, method_color};
+use pendula_viz::{Figure, Kind, Scale, method_style, with_unit};
 use serde_json::json;
 
 use crate::commands::compare::refusal;
@@ -155,16 +155,19 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         ("work_precision_time", "wall time (s)", |p: &WorkPoint| p.wall_s),
     ] {
         let mut fig = Figure::new(
-            format!("{system}: work-precision at t = {t_end} s, against the {}", reference.source),
+            format!(
+                "{system}: work-precision at t = {}, against the {}",
+                with_unit(t_end, values.info().time_unit()),
+                reference.source
+            ),
             x_label,
-            "max |y(t) - y_ref(t)|",
+            "max |y(t) − y_ref(t)|",
         )
-        .scales(Scale::Log, Scale::Log)
-        .legend(Legend::LowerLeft);
+        .scales(Scale::Log, Scale::Log);
         for (m, points) in &results {
-            fig = fig.with(
+            fig = fig.with_style(
                 *m,
-                method_color(m),
+                method_style(m),
                 Kind::LineMarkers,
                 points.iter().map(|p| (cost(p), p.error)).collect(),
             );
