@@ -228,7 +228,20 @@ fn work_precision_writes_error_and_cost() {
     let dir = TempDir::new().unwrap();
     pendula(
         dir.path(),
-        &["work-precision", "pendulum", "--methods", "rk4,gauss-legendre-4,dop853", "--out-dir", "w"],
+        &[
+            "work-precision",
+            "pendulum",
+            "--methods",
+            "rk4,gauss-legendre-4,dop853",
+            "--dt-max",
+            "0.1",
+            "--levels",
+            "7",
+            "--t-end",
+            "10",
+            "--out-dir",
+            "w",
+        ],
     )
     .success();
     let csv = std::fs::read_to_string(dir.path().join("w/work_precision.csv")).unwrap();

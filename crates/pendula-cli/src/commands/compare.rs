@@ -433,14 +433,15 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
     let scale = values.build().energy_scale(values.initial_state());
     let how = match steps {
         Steps::Equal(h) => format!("h = {}", with_unit(h, tu)),
-        Steps::EqualCost(n) => format!("equal cost, {} evaluations per unit time", pendula_viz::number(n)),
+        Steps::EqualCost(n) => format!(
+            "equal cost, {} evaluations/{}",
+            pendula_viz::number(n),
+            if tu.is_empty() { "unit time" } else { tu }
+        ),
     };
     // |error| crosses zero every oscillation; on a log axis its envelope reads better.
     let mut energy = Figure::new(
-        format!(
-            "{system}: relative energy error (envelope over windows of {}), {how}",
-            with_unit(pendula_viz::number(t_end / WINDOWS as f64), tu)
-        ),
+        format!("{system}: relative energy error (envelope), {how}"),
         axis_label("t", tu),
         format!(
             "max |E(t) − E(0)| / energy scale ({})",

@@ -213,10 +213,19 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
         firsts.sort_by(f64::total_cmp);
         let anchor = firsts.get(firsts.len() / 2).copied().unwrap_or(1.0) / 30.0;
         // Dense points: a dashed line is interpolated in data coordinates, which bends on log axes.
+        // Guides end where the data does: below the smallest error they would only stretch the axis.
+        let floor = results
+            .iter()
+            .flat_map(|r| r.errors.iter().copied())
+            .filter(|e| *e > 0.0)
+            .fold(f64::INFINITY, f64::min);
         for p in [1, 2, 4] {
             let c = anchor / h0.powi(p);
-            let line =
-                (0..=24).map(|k| h0 * (h1 / h0).powf(k as f64 / 24.0)).map(|h| (h, c * h.powi(p))).collect();
+            let line = (0..=24)
+                .map(|k| h0 * (h1 / h0).powf(k as f64 / 24.0))
+                .map(|h| (h, c * h.powi(p)))
+                .filter(|(_, e)| *e >= floor)
+                .collect();
             let label = if p == 1 { "guides: slopes 1, 2, 4" } else { "" };
             fig = fig.with(label, GUIDE, Kind::Dashed, line);
         }
