@@ -257,17 +257,23 @@ impl Crossover {
                 self.growing,
                 self.bounded,
                 short(self.bound),
-                short(t)
+                round_time(t)
             ),
             None => format!(
                 "crossover: {}'s growing error stays below {}'s bounded error ({}) up to t = {} {time_unit}",
                 self.growing,
                 self.bounded,
                 short(self.bound),
-                short(self.t_end)
+                round_time(self.t_end)
             ),
         }
     }
+}
+
+/// A time read off the envelope's windows, to the second above 10 s: the windows are wider
+/// than that, so more digits would claim a precision the estimate does not have.
+pub fn round_time(t: f64) -> String {
+    if t >= 10.0 { format!("{t:.0}") } else { short(t) }
 }
 
 /// Windows of the energy-error envelope in figures and crossovers.
@@ -478,7 +484,7 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
                 "{system}: phase portrait with {}, h = {}, t ≤ {}",
                 r.method,
                 with_unit(pendula_viz::number(r.h), tu),
-                with_unit(t_end, tu)
+                with_unit(pendula_viz::number(t_end), tu)
             ),
             if angle { format!("{q_label}, wrapped to [−π, π)") } else { q_label },
             axis_label(v.name, v.unit),

@@ -307,7 +307,7 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
                 " RK4's drifting error passes {}'s bounded error ({}) at t ≈ {} s.",
                 c["bounded"].as_str().unwrap_or(""),
                 short(f(&c["bound"])),
-                short(t)
+                super::compare::round_time(t)
             ),
             None => write!(
                 text,

@@ -157,7 +157,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         let mut fig = Figure::new(
             format!(
                 "{system}: work-precision at t = {}, against the {}",
-                with_unit(t_end, values.info().time_unit()),
+                with_unit(pendula_viz::number(t_end), values.info().time_unit()),
                 reference.source
             ),
             x_label,
