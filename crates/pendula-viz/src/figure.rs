@@ -552,40 +552,11 @@ pub(crate) fn draw_marker<DB: DrawingBackend>(
         Marker::TriangleUp => area.draw(&poly(&[(0.0, -1.2), (1.05, 0.75), (-1.05, 0.75)])),
         Marker::TriangleDown => area.draw(&poly(&[(0.0, 1.2), (1.05, -0.75), (-1.05, -0.75)])),
         Marker::Diamond => area.draw(&poly(&[(0.0, -1.25), (1.0, 0.0), (0.0, 1.25), (-1.0, 0.0)])),
-        Marker::Plus => area.draw(&poly(&[
-            (-bar, -1.2),
-            (bar, -1.2),
-            (bar, -bar),
-            (1.2, -bar),
-            (1.2, bar),
-            (bar, bar),
-            (bar, 1.2),
-            (-bar, 1.2),
-            (-bar, bar),
-            (-1.2, bar),
-            (-1.2, -bar),
-            (-bar, -bar),
-        ])),
+        Marker::Plus => area.draw(&poly(&plus_outline(bar, 1.2))),
         Marker::Cross => {
             let s = std::f64::consts::FRAC_1_SQRT_2;
             let rot = |(x, y): (f64, f64)| (s * (x - y), s * (x + y));
-            let pts: Vec<(f64, f64)> = [
-                (-bar, -1.35),
-                (bar, -1.35),
-                (bar, -bar),
-                (1.35, -bar),
-                (1.35, bar),
-                (bar, bar),
-                (bar, 1.35),
-                (-bar, 1.35),
-                (-bar, bar),
-                (-1.35, bar),
-                (-1.35, -bar),
-                (-bar, -bar),
-            ]
-            .into_iter()
-            .map(rot)
-            .collect();
+            let pts: Vec<(f64, f64)> = plus_outline(bar, 1.35).into_iter().map(rot).collect();
             area.draw(&poly(&pts))
         }
     }
@@ -632,4 +603,23 @@ pub(crate) fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, Error> {
     writer.write_image_data(rgb).map_err(|e| Error::Encode(e.to_string()))?;
     writer.finish().map_err(|e| Error::Encode(e.to_string()))?;
     Ok(out)
+}
+
+/// The outline of a plus sign of half-width `bar` and arm length `arm` (in marker radii),
+/// corner by corner; the cross marker is the same outline turned by 45°.
+fn plus_outline(bar: f64, arm: f64) -> [(f64, f64); 12] {
+    [
+        (-bar, -arm),
+        (bar, -arm),
+        (bar, -bar),
+        (arm, -bar),
+        (arm, bar),
+        (bar, bar),
+        (bar, arm),
+        (-bar, arm),
+        (-bar, bar),
+        (-arm, bar),
+        (-arm, -bar),
+        (-bar, -bar),
+    ]
 }

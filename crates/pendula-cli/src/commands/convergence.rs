@@ -55,7 +55,6 @@ impl MethodConvergence {
             (OrderEstimate::Fitted { points, h_min, h_max, .. }, _) => {
                 format!("fitted over {points} steps, {} .. {}", short(*h_min), short(*h_max))
             }
-            (e, None) if self.hs.is_empty() => e.reason().unwrap_or_default().to_owned(),
             (e, None) => e.reason().unwrap_or_default().to_owned(),
             (_, Some(f)) if self.hs.is_empty() => f.clone(),
             (e, Some(f)) => format!("{}; {f}", e.reason().unwrap_or_default()),
