@@ -78,6 +78,14 @@ fn growth_tells_a_drift_from_a_bounded_oscillation() {
     assert_eq!(growth(&t, &bounded), Some(Growth::Bounded));
     assert_eq!(growth(&t, &random_walk_free), Some(Growth::Bounded));
     assert_eq!(growth(&t[..5], &drift[..5]), None);
+    // A random walk's √t growth is growth too.
+    let diffusing: Vec<f64> = t.iter().map(|t| 1e-6 * t.sqrt() * (1.0 + 0.1 * (7.0 * t).sin())).collect();
+    assert_eq!(growth(&t, &diffusing), Some(Growth::Growing));
+    // A bounded error that sets a new record late in the run (the orbit reaching a faster
+    // region for the first time), once, is not a drift.
+    let late_record: Vec<f64> =
+        t.iter().map(|&t| (1e-4 + if t > 80.0 { 1.5e-4 } else { 0.0 }) * (2.0 * t).sin()).collect();
+    assert_eq!(growth(&t, &late_record), Some(Growth::Bounded));
 }
 
 #[test]

@@ -184,10 +184,13 @@ pub fn envelope(t: &[f64], error: &[f64], windows: usize) -> Vec<(f64, f64)> {
 /// Whether an energy error stays bounded or grows, judged from its series.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Growth {
-    /// The largest |error| of the last fifth of the run is under twice that of the first
-    /// fifth: the error oscillates about a level it reached early (symplectic methods).
+    /// The largest |error| so far stopped growing in at least one of the run's last two
+    /// doublings of time: the error oscillates about levels the orbit had already visited
+    /// (symplectic methods).
     Bounded,
-    /// It is at least twice as large: the error grows (a secular drift, or worse).
+    /// The largest |error| so far grew by [`GROWTH_FACTOR`] or more over each of the last
+    /// two doublings of time, T/4 → T/2 → T: a secular drift (which doubles it each time),
+    /// a random walk (√2 each time), or worse.
     Growing,
 }
 
@@ -201,27 +204,36 @@ impl Growth {
     }
 }
 
+/// How much the largest error so far must grow over each of two doublings of time for
+/// [`growth`] to call it growing: below a random walk's √2 and a drift's 2, above the 1 of a
+/// bounded error.
+pub const GROWTH_FACTOR: f64 = 1.3;
+
 /// Judges a series of |error| (any scale) sampled at times `t` (see [`Growth`]); `None`
-/// with fewer than ten samples or an error that is zero throughout the first fifth.
+/// with fewer than ten samples or an error that is zero throughout the first quarter.
 ///
-/// A linear drift from zero gives a ratio of about 9 (the last fifth's maximum against the
-/// first's), a bounded oscillating error about 1; the threshold 2 sits between them with a
-/// margin on both sides, and is independent of the method.
+/// Why the largest error so far, at T/4, T/2 and T: on a chaotic orbit even a symplectic
+/// method's error, h^p times a function of the state, rises and falls as the orbit wanders
+/// into faster or slower regions, so the error of one stretch of the run against another's
+/// says more about the orbit than about the method. A secular drift keeps raising the
+/// largest error at every doubling of time; a bounded error stops raising it once the orbit
+/// has been explored, and a new record late in the run (one doubling) is not enough to call
+/// it growing.
 pub fn growth(t: &[f64], error: &[f64]) -> Option<Growth> {
     if t.len() < 10 || t.len() != error.len() {
         return None;
     }
     let (t0, t1) = (t[0], t[t.len() - 1]);
-    let fifth = 0.2 * (t1 - t0);
-    let max_where = |keep: &dyn Fn(f64) -> bool| {
-        t.iter().zip(error).filter(|(ti, _)| keep(**ti)).map(|(_, e)| e.abs()).fold(0.0, f64::max)
+    let largest_until = |fraction: f64| {
+        let end = t0 + fraction * (t1 - t0);
+        t.iter().zip(error).filter(|(ti, _)| **ti <= end).map(|(_, e)| e.abs()).fold(0.0, f64::max)
     };
-    let first = max_where(&|ti| ti <= t0 + fifth);
-    let last = max_where(&|ti| ti >= t1 - fifth);
-    if first.is_nan() || first <= 0.0 {
+    let (quarter, half, whole) = (largest_until(0.25), largest_until(0.5), largest_until(1.0));
+    if quarter.is_nan() || quarter <= 0.0 {
         return None;
     }
-    Some(if last < 2.0 * first { Growth::Bounded } else { Growth::Growing })
+    let grows = half >= GROWTH_FACTOR * quarter && whole >= GROWTH_FACTOR * half;
+    Some(if grows { Growth::Growing } else { Growth::Bounded })
 }
 
 /// The first time at which an envelope (window centre, max |error|) exceeds `level`.

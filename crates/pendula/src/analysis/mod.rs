@@ -17,7 +17,9 @@ pub use convergence::{
     work_precision_adaptive,
 };
 pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
-pub use energy::{EnergyBalance, EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
+pub use energy::{
+    EnergyBalance, EnergySeries, GROWTH_FACTOR, Growth, drift_rate, envelope, first_exceeding, growth,
+};
 pub use lyapunov::{Lyapunov, LyapunovSpec, Tangent, lyapunov};
 pub use period::measure_period;
 pub use stability::{StabilityCriterion, accepted_step_limit, is_stable, largest_stable_step};
