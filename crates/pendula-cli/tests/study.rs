@@ -135,7 +135,23 @@ fn compare_at_equal_cost_spends_the_same_evaluations_and_times_the_crossover() {
         assert!((bound - m[bounded]["max_rel_energy_error"].as_f64().unwrap()).abs() <= 1e-12 * bound);
         let line = stdout.lines().find(|l| l.starts_with("crossover:") && l.contains(bounded)).unwrap();
         assert_eq!(line.contains("passes"), c["t"].is_number(), "{line}");
+        // A crossover beyond the run is printed as an extrapolation, from the drift recorded.
+        assert_eq!(line.contains("(extrapolated)"), c["t_extrapolated"].is_number(), "{line}");
+        if let Some(t) = c["t_extrapolated"].as_f64() {
+            let rate = m["rk4"]["drift_rate"].as_f64().unwrap();
+            assert!((t - bound / rate.abs()).abs() <= 1e-9 * t, "{t} from {bound} and {rate}");
+            assert!(t > s["t_end"].as_f64().unwrap());
+        }
     }
+    // The trajectory figure draws each method's first seconds as a curve, not the one
+    // sample of a 3000 s run's thinned record that falls in them.
+    let svg = std::fs::read_to_string(dir.path().join("c/trajectory.svg")).unwrap();
+    let curves = svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.split("points=\"").nth(1).is_some_and(|pts| pts.split(' ').count() > 100))
+        .count();
+    assert!(curves >= 3, "{curves} curves in the trajectory figure");
 }
 
 #[test]
@@ -261,12 +277,26 @@ fn report_is_one_self_contained_page() {
             let said: Vec<&str> = said.split(", ").filter(|m| *m != "none").collect();
             assert_eq!(said, listed, "{verdict}: sentence {sentence:?}");
         }
+        // Each crossover sentence quotes the bounded method's largest error from the table.
+        for part in sentence.split("bounded error (").skip(1) {
+            let bound = part.split(')').next().unwrap();
+            let before = sentence.split(&format!("bounded error ({bound})")).next().unwrap();
+            let method = before.rsplit(' ').nth(1).unwrap().trim_end_matches("'s");
+            let row =
+                rows.iter().find(|r| r[0] == method).unwrap_or_else(|| panic!("{method} in {sentence:?}"));
+            assert_eq!(row[3], bound, "{method}: {sentence:?}");
+            assert_eq!(row[5], "bounded", "{method}");
+        }
     }
     // The double pendulum at equal cost: the symplectic methods bounded, RK4 and Euler growing.
     let double = energy_tables[1].split("</table>").next().unwrap();
-    for (method, verdict) in
-        [("euler", "growing"), ("rk4", "growing"), ("symplectic-euler", "bounded"), ("verlet", "bounded")]
-    {
+    for (method, verdict) in [
+        ("euler", "growing"),
+        ("rk4", "growing"),
+        ("symplectic-euler", "bounded"),
+        ("verlet", "bounded"),
+        ("gauss-legendre-4", "bounded"),
+    ] {
         assert!(double.contains(&format!("<td>{method}</td>")), "{method}");
         let row = double.split(&format!("<td>{method}</td>")).nth(1).unwrap().split("</tr>").next().unwrap();
         assert!(row.contains(&format!("<td>{verdict}</td>")), "{method}: {row}");

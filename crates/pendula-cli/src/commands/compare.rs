@@ -18,6 +18,7 @@ use pendula::observe::{Every, Observer, Recorder, Sample};
 use pendula::system::Values;
 use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_unit};
+use rayon::prelude::*;
 use serde_json::json;
 
 use crate::config::f64_arg;
@@ -32,7 +33,7 @@ pub struct CompareArgs {
     pub methods: Option<String>,
     /// The cost given to every method: right-hand-side evaluations per simulated second
     /// (a Jacobian counts as one evaluation per state variable); each method's step is
-    /// chosen to spend it [default: 400, i.e. RK4 at h = 0.01 s].
+    /// chosen to spend it [default: 700, i.e. RK4 at h = 1/175 s].
     #[arg(long, value_name = "N", conflicts_with = "dt", allow_hyphen_values = true)]
     pub evals_per_second: Option<String>,
     /// One step size for every method instead of equal cost, s.
@@ -77,8 +78,15 @@ pub struct Run {
     pub failure: Option<String>,
     /// (t, |relative error|) samples.
     pub energy: Vec<(f64, f64)>,
+    /// Rows (t, state…) over the whole run, thinned to about [`SAMPLES`]: the phase portrait.
     pub trajectory: Vec<f64>,
+    /// Rows over the first [`EARLY`] time units, thinned to about [`SAMPLES`]: the trajectory
+    /// figure, where the whole run's thinned samples would be too sparse to draw a curve.
+    pub early: Vec<f64>,
 }
+
+/// The span of the trajectory figure, s (or time units).
+const EARLY: f64 = 20.0;
 
 /// Samples kept per series: enough for a smooth curve, few enough for a light SVG.
 const SAMPLES: u64 = 2000;
@@ -87,12 +95,20 @@ const SAMPLES: u64 = 2000;
 /// motion has nothing to do with the system's (explicit Euler within seconds at coarse steps).
 const GIVE_UP: f64 = 1.0;
 
-/// The default cost, evaluations per simulated second (RK4 at h = 0.01 s).
-pub const DEFAULT_EVALS_PER_SECOND: f64 = 400.0;
+/// The default cost, evaluations per simulated second (RK4 at h = 1/175 s). At this cost
+/// gauss-legendre-4's step is about 0.016 s (some 12 evaluations a step), where its energy
+/// error stays bounded on the chaotic default double pendulum; at 0.0177 s it stayed bounded
+/// on every neighbouring start tried (θ₁ from 119.7° to 120.6°, max error 5–8·10⁻⁵ over
+/// 10⁵ s), while at 600 (step 0.0204 s) it creeps upwards on a quarter of them, the fast
+/// flips being too fast for that step, and at 400 (0.035 s) it wanders up to 0.15 of the
+/// scale.
+pub const DEFAULT_EVALS_PER_SECOND: f64 = 700.0;
 
 /// The default end time, s: on the double pendulum long enough, at the default cost, for
-/// RK4's secular drift to pass the bounded error of symplectic Euler and Verlet (at about
-/// 54 000 s and 84 000 s from the default state).
+/// RK4's secular drift to pass the bounded errors of the Gauss–Legendre methods (within
+/// thousands of seconds) and of Verlet (at about 83 000 s from the default state); symplectic
+/// Euler's, a first-order method's, it would pass only after some 3·10⁵ s, which is printed as
+/// an extrapolation from RK4's fitted drift.
 pub fn default_t_end(system: &str) -> f64 {
     if system == "double" { 100_000.0 } else { 500.0 }
 }
@@ -127,11 +143,15 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let summary = Summary::open(args.common.summary.as_deref())?;
 
     let bar = study::progress(methods.len() as u64, "compare");
-    let mut runs = Vec::new();
-    for method in &methods {
-        runs.push(compare_one(&values, method, steps, t_end)?);
-        bar.inc(1);
-    }
+    // The methods' runs are independent: one per core, in the order given.
+    let runs = methods
+        .par_iter()
+        .map(|method| {
+            let run = compare_one(&values, method, steps, t_end);
+            bar.inc(1);
+            run
+        })
+        .collect::<Result<Vec<_>>>()?;
     bar.finish_and_clear();
 
     let header = [
@@ -228,6 +248,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         }))).collect::<serde_json::Map<_, _>>(),
         "crossovers": crossings.iter().map(|c| json!({
             "growing": c.growing, "bounded": c.bounded, "bound": c.bound, "t": c.t,
+            "t_extrapolated": c.extrapolated(), "drift_rate": c.drift_rate,
         })).collect::<Vec<_>>(),
     });
     summary.write(&doc)?;
@@ -246,20 +267,41 @@ pub struct Crossover {
     pub t: Option<f64>,
     /// The end of the growing method's run.
     pub t_end: f64,
+    /// The growing method's fitted drift rate of the relative error, 1/time.
+    pub drift_rate: f64,
 }
 
 impl Crossover {
+    /// When the growing error would reach the bound at its fitted drift rate, for a
+    /// crossover beyond the run: bound / |drift rate| (the error grows about linearly in t).
+    pub fn extrapolated(&self) -> Option<f64> {
+        (self.t.is_none() && self.drift_rate.is_finite() && self.drift_rate != 0.0)
+            .then(|| self.bound / self.drift_rate.abs())
+            .filter(|t| *t > self.t_end)
+    }
+
     /// One sentence, checked against the numbers it is made of.
     pub fn sentence(&self, time_unit: &str) -> String {
-        match self.t {
-            Some(t) => format!(
+        let rate_unit = if time_unit.is_empty() { String::new() } else { format!(" 1/{time_unit}") };
+        match (self.t, self.extrapolated()) {
+            (Some(t), _) => format!(
                 "crossover: {}'s growing error passes {}'s bounded error ({}) at t ≈ {} {time_unit}",
                 self.growing,
                 self.bounded,
                 short(self.bound),
                 round_time(t)
             ),
-            None => format!(
+            (None, Some(t)) => format!(
+                "crossover: {}'s growing error stays below {}'s bounded error ({}) up to t = {} {time_unit}; \
+                 at its fitted drift ({}{rate_unit}) it would pass it at t ≈ {} {time_unit} (extrapolated)",
+                self.growing,
+                self.bounded,
+                short(self.bound),
+                round_time(self.t_end),
+                short(self.drift_rate),
+                round_sig(t)
+            ),
+            (None, None) => format!(
                 "crossover: {}'s growing error stays below {}'s bounded error ({}) up to t = {} {time_unit}",
                 self.growing,
                 self.bounded,
@@ -268,6 +310,15 @@ impl Crossover {
             ),
         }
     }
+}
+
+/// An extrapolated time to two significant digits: the drift rate it comes from is a fit.
+pub fn round_sig(t: f64) -> String {
+    if !(t.is_finite() && t > 0.0) {
+        return short(t);
+    }
+    let unit = 10f64.powi(t.log10().floor() as i32 - 1);
+    format!("{:.0}", (t / unit).round() * unit)
 }
 
 /// A time read off the envelope's windows, to the second above 10 s: the windows are wider
@@ -294,6 +345,7 @@ pub fn crossovers(runs: &[Run]) -> Vec<Crossover> {
             bound: r.max_rel_energy_error,
             t: first_exceeding(&env, r.max_rel_energy_error),
             t_end: t.last().copied().unwrap_or(0.0),
+            drift_rate: rk4.drift_rate,
         })
         .collect()
 }
@@ -363,6 +415,7 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         failure: Some(reason),
         energy: Vec::new(),
         trajectory: Vec::new(),
+        early: Vec::new(),
     };
     let h = match h {
         Ok(h) => h,
@@ -374,9 +427,15 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
     let every = (total / SAMPLES).max(1);
     let mut energy = EnergySeries::new(&*model, values.initial_state(), every);
     let mut traj = Every { n: every, inner: Recorder::default() };
+    let early_steps = (t_end.min(EARLY) / h).ceil() as u64;
+    let mut early = Until {
+        t_max: EARLY,
+        inner: Every { n: (early_steps / SAMPLES).max(1), inner: Recorder::default() },
+    };
     let start = Instant::now();
     let mut guard = GiveUp { series: &mut energy, stopped_at: None };
-    let result = model.solve(method, values.initial_state(), &spec, &mut (&mut guard, &mut traj));
+    let result =
+        model.solve(method, values.initial_state(), &spec, &mut (&mut guard, &mut (&mut traj, &mut early)));
     let wall_s = start.elapsed().as_secs_f64();
     let stopped_at = guard.stopped_at;
     let dim = values.initial_state().len();
@@ -410,7 +469,23 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         failure,
         energy: energy.t.iter().copied().zip(energy.error.iter().map(|e| e.abs())).collect(),
         trajectory: traj.inner.rows,
+        early: early.inner.inner.rows,
     })
+}
+
+/// Passes on the samples up to `t_max` and ignores the rest.
+struct Until<O> {
+    t_max: f64,
+    inner: O,
+}
+
+impl<O: Observer> Observer for Until<O> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        if s.t <= self.t_max {
+            let _ = self.inner.observe(s);
+        }
+        ControlFlow::Continue(())
+    }
 }
 
 /// The library's reason for a failed or refused run, or the error itself when it is not
@@ -455,7 +530,7 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
         ),
     )
     .scales(Scale::Linear, Scale::Log);
-    let t_show = t_end.min(20.0);
+    let t_show = t_end.min(EARLY);
     let mut trajectory = Figure::new(
         format!("{system}: {} against time, {how}", pretty(q.name)),
         axis_label("t", tu),
@@ -475,7 +550,7 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
             label,
             style,
             Kind::Line,
-            rows.clone().take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
+            r.early.chunks(dim + 1).take_while(|row| row[0] <= t_show).map(|row| (row[0], row[1])).collect(),
         );
         let wrap = |x: f64| if angle { pendula::system::wrap_angle(x) } else { x };
         let q_label = axis_label(q.name, q.unit);
