@@ -21,6 +21,17 @@ pub struct MergeArgs {
 }
 
 pub fn run(args: &MergeArgs) -> Result<()> {
+    if args.out == std::path::Path::new("-") {
+        bail!("invalid --out -: merge writes a .npy file, not stdout; give FILE.npy");
+    }
+    // The inputs first: an output onto one of them is refused before anything is read.
+    for path in &args.shards {
+        crate::output::claim_input(path, "input shard")?;
+        crate::output::claim_input(
+            std::path::Path::new(&format!("{}.json", path.display())),
+            "shard description",
+        )?;
+    }
     let out = AtomicFile::create(&args.out, "--out")?;
     let mut parts = Vec::new();
     for path in &args.shards {

@@ -335,6 +335,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let sweep = parse(args)?;
     let threads = crate::config::parse_threads(args.threads.as_deref())?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
+    if out_path == Path::new("-") {
+        bail!("invalid --out -: sweep writes a .npy file, not stdout; give FILE.npy");
+    }
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
     }
@@ -397,9 +400,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         write_json(&f, &description)?;
         files.push(f);
     }
-    // The array and its shard description appear together or not at all.
-    AtomicFile::commit_all(files)?;
-    summary.write(&description)?;
+    // The array, its shard description and the summary appear together or not at all.
+    summary.write_with(&description, files)?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
         sweep.info.name,
@@ -555,7 +557,11 @@ pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
     let array =
         ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
     let mut w = std::io::BufWriter::new(file.handle()?);
-    array.write_npy(&mut w)?;
+    array.write_npy(&mut w).map_err(|e| match e {
+        // The file's own error, which names it.
+        ndarray_npy::WriteNpyError::Io(io) => anyhow::Error::new(io),
+        other => anyhow::Error::new(other),
+    })?;
     w.flush()?;
     Ok(())
 }
