@@ -351,7 +351,7 @@ enum Held {
     /// A file the run reads and must not overwrite.
     Input(Place),
     /// A study directory and the names its command writes there (`*` stands for any text).
-    Dir { dir: (u64, u64), names: &'static [&'static str], id: u64, command: String },
+    Dir { dir: (u64, u64), names: Vec<String>, id: u64, command: String },
     /// Standard output.
     Stdout,
 }
@@ -384,13 +384,13 @@ impl Drop for Scope {
 }
 
 /// Whether `name` is one of `names` (`*` in a name stands for any text).
-pub(crate) fn matches(names: &[&str], name: &std::ffi::OsStr) -> bool {
+pub(crate) fn matches<S: AsRef<str>>(names: &[S], name: &std::ffi::OsStr) -> bool {
     let Some(name) = name.to_str() else { return false };
-    names.iter().any(|n| match n.split_once('*') {
+    names.iter().any(|n| match n.as_ref().split_once('*') {
         Some((pre, post)) => {
             name.len() >= pre.len() + post.len() && name.starts_with(pre) && name.ends_with(post)
         }
-        None => name == *n,
+        None => name == n.as_ref(),
     })
 }
 
@@ -487,7 +487,7 @@ pub fn claim_input(path: &Path, what: &str) -> Result<()> {
 /// Claims the study directory `dir` (`flag` names it) and the `names` that `command` writes
 /// there; files of the directory's own are created with the returned id
 /// ([`AtomicFile::create_in`]).
-pub fn claim_dir(dir: &Path, flag: &str, command: &str, names: &'static [&'static str]) -> Result<u64> {
+pub fn claim_dir(dir: &Path, flag: &str, command: &str, names: Vec<String>) -> Result<u64> {
     let meta = std::fs::metadata(dir).map_err(|e| WriteError::new(flag, dir, e))?;
     let id = NEXT_ID.fetch_add(1, Ordering::Relaxed);
     claim(Claim {
@@ -910,7 +910,15 @@ fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
 
 #[cfg(test)]
 mod tests {
-    use super::npy_header;
+    use super::{matches, npy_header};
+
+    #[test]
+    fn study_names_match_with_one_wildcard() {
+        let names = ["summary.csv", "phase_*.png"];
+        let m = |n: &str| matches(&names, std::ffi::OsStr::new(n));
+        assert!(m("summary.csv") && m("phase_rk4.png") && m("phase_.png"));
+        assert!(!m("summary.json") && !m("phase_rk4.svg") && !m("phase.png") && !m("xphase_rk4.png"));
+    }
 
     #[test]
     fn npy_headers_are_aligned_and_of_one_length() {

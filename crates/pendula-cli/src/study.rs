@@ -280,7 +280,7 @@ impl OutDir {
         if let Ok(entries) = std::fs::read_dir(&path) {
             for entry in entries.flatten() {
                 let name = entry.file_name();
-                if entry.path().is_dir() && names.iter().any(|n| crate::output::matches(&[n], &name)) {
+                if entry.path().is_dir() && crate::output::matches(names, &name) {
                     bail!(
                         "cannot write --out-dir {}: {} is a directory where {command} writes a file; move it or choose another directory",
                         path.display(),
@@ -289,8 +289,10 @@ impl OutDir {
                 }
             }
         }
-        let id = crate::output::claim_dir(&path, "--out-dir", command, names)?;
         let manifest = format!(".pendula-{command}.files");
+        // The manifest is one of the directory's files too.
+        let claimed = names.iter().map(|n| (*n).to_owned()).chain([manifest.clone()]).collect();
+        let id = crate::output::claim_dir(&path, "--out-dir", command, claimed)?;
         // A missing or unreadable manifest means nothing to tidy.
         let previous: Vec<String> = std::fs::read_to_string(path.join(&manifest))
             .map(|text| text.lines().filter(|n| plain_name(n)).map(str::to_owned).collect())

@@ -250,6 +250,11 @@ fn same_file_twice() -> Vec<Case> {
         )
         .setup(|d| precious(d, "s/stability.csv"))
         .says("one of the files that stability writes"),
+        Case::new(
+            "a summary onto the study's manifest",
+            &format!("{STABILITY} --out-dir s --summary s/.pendula-stability.files"),
+        )
+        .says("one of the files that stability writes"),
         Case::new("a summary onto the fractal's picture", &format!("{FRACTAL} --out f.npy --summary f.png"))
             .says("--summary f.png and --out f.png are the same file"),
         Case::new(
