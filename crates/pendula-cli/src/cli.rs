@@ -13,8 +13,10 @@ pub struct Cli {
 }
 
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
-step did not converge); 2 invalid input (arguments, values, scenario file, output path); 130, 143, \
-129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
+step did not converge) or its environment did (a full disk, quota or I/O error while writing; the \
+message names the path, and no earlier file is replaced); 2 invalid input (arguments, values, \
+scenario file, shards, an output path that cannot be written or that is another output's); 130, \
+143, 129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {

@@ -412,8 +412,10 @@ fn output(path: PathBuf) -> Result<Output> {
     match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => Ok(Output::Csv(path)),
         Some("npy") => Ok(Output::Npy(path)),
+        // A FIFO or device (/dev/null) has no extension to follow: it takes CSV, in place.
+        _ if crate::output::is_special(&path) => Ok(Output::Csv(path)),
         _ => bail!(
-            "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout",
+            "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout (a FIFO or device takes CSV)",
             path.display()
         ),
     }

@@ -104,7 +104,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     // Open the outputs first: a path that cannot be written fails before the work.
     let out_file = match out {
         Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
-        _ => None,
+        Some(Output::Stdout) => {
+            crate::output::claim_stdout("--out")?;
+            None
+        }
+        None => None,
     };
     // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
     let summary_out = Summary::open(summary.as_deref())?;
@@ -189,13 +193,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             &trajectory.default_panels()?,
             plot.as_deref().expect("a plot path"),
         )?;
-        file.handle()?.write_all(&bytes)?;
-    }
-    if let Some(f) = out_file {
-        f.commit()?;
-    }
-    if let Some(f) = plot_file {
-        f.commit()?;
+        file.write_all(&bytes)?;
     }
 
     let mut final_state = Map::new();
@@ -247,7 +245,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         }).collect::<Vec<_>>(),
     });
     let summary_path = summary_out.path().map(std::path::Path::to_path_buf);
-    summary_out.write(&doc)?;
+    // The trajectory, its picture and the summary appear together or not at all.
+    summary_out.write_with(&doc, out_file.into_iter().chain(plot_file).collect())?;
 
     // The human summary is composed first and written at once (stderr is unbuffered).
     let mut err = Vec::new();

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::integrator::{self, METHODS, Method, Requirement};
@@ -22,7 +22,7 @@ macro_rules! say {
 macro_rules! sayln {
     ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
 }
-use crate::output::AtomicFile;
+use crate::output::{AtomicFile, CreatedDirs};
 
 /// Arguments every study command takes.
 #[derive(Debug, Clone, Args)]
@@ -189,39 +189,115 @@ fn requirement_met(method: &Method, model: &dyn DynModel, values: &Values) -> Re
     }
 }
 
-/// The output directory: created if needed; files appear whole (temporary name, then
-/// rename). A hidden manifest per command (`.pendula-<command>.files`) lists the files that
-/// command wrote there; when a run finishes, the files of the previous run's manifest that
-/// this run did not write are removed, so no figure of another system or method set stays
-/// beside the new ones. Only files named in a manifest are ever removed.
+/// The files each command writes in its study directory (`*` stands for any text: compare's
+/// phase portraits are named after the methods). A `--summary` or other output of the run
+/// that would be one of them is refused before the run, and so is a directory in their place.
+pub const FILES: &[(&str, &[&str])] = &[
+    (
+        "compare",
+        &[
+            "summary.csv",
+            "energy.png",
+            "energy.svg",
+            "trajectory.png",
+            "trajectory.svg",
+            "phase_*.png",
+            "phase_*.svg",
+        ],
+    ),
+    ("convergence", &["convergence.csv", "convergence.png", "convergence.svg"]),
+    ("stability", &["stability.csv", "stability.png", "stability.svg"]),
+    (
+        "work-precision",
+        &[
+            "work_precision.csv",
+            "work_precision_evals.png",
+            "work_precision_evals.svg",
+            "work_precision_time.png",
+            "work_precision_time.svg",
+        ],
+    ),
+    ("period", &["period.csv", "period.png", "period.svg", "period_error.png", "period_error.svg"]),
+    (
+        "oscillator-regimes",
+        &[
+            "transients.csv",
+            "resonance.csv",
+            "regimes.png",
+            "regimes.svg",
+            "resonance_amplitude.png",
+            "resonance_amplitude.svg",
+            "resonance_phase.png",
+            "resonance_phase.svg",
+        ],
+    ),
+    ("divergence", &["divergence.csv", "divergence.png", "divergence.svg"]),
+    ("lyapunov", &["lyapunov.csv", "lyapunov.png", "lyapunov.svg"]),
+    ("poincare", &["poincare.csv", "poincare.png", "poincare.svg"]),
+    ("bifurcation", &["bifurcation.csv", "bifurcation.png", "bifurcation.svg"]),
+    ("fractal", &["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"]),
+    ("report", &["report.html"]),
+    ("man", &["pendula*.1"]),
+];
+
+/// The output directory: created if needed (and removed again if the run fails or is refused
+/// before writing anything into it). Its files are written under temporary names as the run
+/// goes and renamed into place together when it ends ([`OutDir::finish`]): a failed run —
+/// also for want of disk space — replaces none of an earlier run's files. A hidden manifest per
+/// command (`.pendula-<command>.files`) lists the files that command wrote there; when a run
+/// finishes, the files of the previous run's manifest that this run did not write are
+/// removed, so no figure of another system or method set stays beside the new ones. Only
+/// files named in a manifest are ever removed.
 pub struct OutDir {
     path: PathBuf,
     manifest: String,
     /// Names in the previous run's manifest.
     previous: Vec<String>,
-    /// Names the manifest on disk lists now: the previous run's, and this run's so far.
-    listed: Vec<String>,
-    /// Names this run wrote.
-    written: Vec<String>,
+    /// This run's files, written and waiting for [`OutDir::finish`], by name.
+    pending: Vec<(String, AtomicFile)>,
+    /// The directory's id in the run's list of outputs.
+    id: u64,
+    /// Directories created for it, removed again unless the run finishes.
+    created: Option<CreatedDirs>,
 }
 
 impl OutDir {
-    /// `--out-dir`, or `pendula-out/<command>`.
+    /// `--out-dir`, or `pendula-out/<command>`: created, checked writable, and claimed with
+    /// the names the command writes there ([`FILES`]).
     pub fn new(dir: Option<&Path>, command: &str) -> Result<Self> {
         let path = dir.map_or_else(|| Path::new("pendula-out").join(command), Path::to_path_buf);
+        if path == Path::new("-") {
+            bail!("invalid --out-dir -: a directory of files cannot go to stdout; give a directory");
+        }
         if path.exists() && !path.is_dir() {
             bail!("cannot write --out-dir {}: it is a file, not a directory", path.display());
         }
-        std::fs::create_dir_all(&path)
-            .with_context(|| format!("cannot create --out-dir {}", path.display()))?;
+        let created = CreatedDirs::create(&path, "--out-dir")?;
         // Fail now, not after the work, if the directory cannot be written.
-        AtomicFile::create(&path.join(".pendula-probe"), "--out-dir")?;
+        crate::output::probe(&path, "--out-dir")?;
+        let names = FILES.iter().find(|(c, _)| *c == command).map_or(&[][..], |(_, n)| *n);
+        // A directory in the place of one of the command's files is refused now too.
+        if let Ok(entries) = std::fs::read_dir(&path) {
+            for entry in entries.flatten() {
+                let name = entry.file_name();
+                if entry.path().is_dir() && crate::output::matches(names, &name) {
+                    bail!(
+                        "cannot write --out-dir {}: {} is a directory where {command} writes a file; move it or choose another directory",
+                        path.display(),
+                        entry.path().display()
+                    );
+                }
+            }
+        }
         let manifest = format!(".pendula-{command}.files");
+        // The manifest is one of the directory's files too.
+        let claimed = names.iter().map(|n| (*n).to_owned()).chain([manifest.clone()]).collect();
+        let id = crate::output::claim_dir(&path, "--out-dir", command, claimed)?;
         // A missing or unreadable manifest means nothing to tidy.
         let previous: Vec<String> = std::fs::read_to_string(path.join(&manifest))
             .map(|text| text.lines().filter(|n| plain_name(n)).map(str::to_owned).collect())
             .unwrap_or_default();
-        Ok(OutDir { path, manifest, listed: previous.clone(), previous, written: Vec::new() })
+        Ok(OutDir { path, manifest, previous, pending: Vec::new(), id, created: Some(created) })
     }
 
     /// Where the files go.
@@ -231,46 +307,26 @@ impl OutDir {
 
     /// A file `name` in the directory, to be written and then given to [`OutDir::commit`].
     pub fn file(&self, name: &str) -> Result<AtomicFile> {
-        AtomicFile::create(&self.path.join(name), "--out-dir")
+        AtomicFile::create_in(&self.path.join(name), "--out-dir", Some(self.id))
     }
 
-    /// Renames finished files of this directory into place, all at once.
+    /// Hands over finished files of this directory, to be renamed into place together by
+    /// [`OutDir::finish`].
     pub fn commit(&mut self, files: Vec<AtomicFile>) -> Result<()> {
-        let names: Vec<String> = files
-            .iter()
-            .map(|f| f.path().file_name().expect("a file in the directory").to_string_lossy().into_owned())
-            .collect();
-        // A name new to the manifest goes into it before the file appears: an interrupted
-        // run's files are still tidied by the next one.
-        if !names.iter().all(|n| self.listed.contains(n)) {
-            for n in &names {
-                if !self.listed.contains(n) {
-                    self.listed.push(n.clone());
-                }
-            }
-            self.write_manifest(&self.listed)?;
-        }
-        AtomicFile::commit_all(files)?;
-        for n in names {
-            if !self.written.contains(&n) {
-                self.written.push(n);
-            }
+        for file in files {
+            let name =
+                file.path().file_name().expect("a file in the directory").to_string_lossy().into_owned();
+            // The same name written again: the later file wins.
+            self.pending.retain(|(n, _)| *n != name);
+            self.pending.push((name, file));
         }
         Ok(())
     }
 
-    fn write_manifest(&self, names: &[String]) -> Result<()> {
-        let file = self.file(&self.manifest)?;
-        let mut text = names.join("\n");
-        text.push('\n');
-        std::io::Write::write_all(&mut file.handle()?, text.as_bytes())?;
-        file.commit()
-    }
-
-    /// Writes `bytes` to `name` in the directory.
+    /// Writes `bytes` to `name` in the directory (in place when [`OutDir::finish`] runs).
     pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf> {
         let file = self.file(name)?;
-        std::io::Write::write_all(&mut file.handle()?, bytes)?;
+        file.write_all(bytes)?;
         let path = file.path().to_owned();
         self.commit(vec![file])?;
         Ok(path)
@@ -294,24 +350,69 @@ impl OutDir {
         Ok(())
     }
 
-    /// Ends a successful run: the manifest becomes this run's files, the previous run's
-    /// files that this one did not write are removed, and stderr is told.
+    /// A manifest listing `names`, written but not yet in place.
+    fn manifest_file(&self, names: &[&str]) -> Result<AtomicFile> {
+        let file = self.file(&self.manifest)?;
+        let mut text = names.join("\n");
+        text.push('\n');
+        file.write_all(text.as_bytes())?;
+        Ok(file)
+    }
+
+    /// Ends a successful run: this run's files are renamed into place together, with a
+    /// manifest that lists them and the previous run's (so that an interrupt between the two
+    /// steps leaves nothing untidied); then the previous run's files that this one did not
+    /// write are removed, the manifest becomes this run's files, and stderr is told.
     pub fn finish(self) -> Result<()> {
-        self.write_manifest(&self.written)?;
+        self.finish_inner(None)
+    }
+
+    /// [`OutDir::finish`], with the run's summary: its file is renamed into place together
+    /// with the directory's files, and JSON for stdout is printed after them.
+    pub fn finish_with(self, summary: Summary, doc: &serde_json::Value) -> Result<()> {
+        let (file, stdout) = summary.stage(doc)?;
+        self.finish_inner(file)?;
+        print_json(stdout)
+    }
+
+    fn finish_inner(mut self, summary: Option<AtomicFile>) -> Result<()> {
+        let pending = std::mem::take(&mut self.pending);
+        let written: Vec<&str> = pending.iter().map(|(n, _)| n.as_str()).collect();
+        let mut listed = self.previous.iter().map(String::as_str).collect::<Vec<_>>();
+        listed.extend(written.iter().filter(|n| !self.previous.iter().any(|p| p == *n)));
+        // Every file is written before anything is renamed: a full disk fails here, with no
+        // earlier file replaced.
+        let during = self.manifest_file(&listed)?;
+        let after = self.manifest_file(&written)?;
+        let count = written.len();
+        let stale: Vec<String> =
+            self.previous.iter().filter(|n| !written.contains(&n.as_str())).cloned().collect();
+        let mut files = vec![during];
+        files.extend(pending.into_iter().map(|(_, f)| f));
+        files.extend(summary);
+        AtomicFile::commit_all(files)?;
+        if let Some(created) = self.created.take() {
+            created.keep();
+        }
         let mut removed = 0;
-        for name in self.previous.iter().filter(|n| !self.written.contains(n)) {
+        for name in &stale {
             let path = self.path.join(name);
-            // A file only: whatever else has taken the name is not ours.
-            if path.symlink_metadata().is_ok_and(|m| m.is_file()) && std::fs::remove_file(&path).is_ok() {
+            // A file only: whatever else has taken the name is not ours, nor is a file
+            // that another output of this run wrote.
+            if path.symlink_metadata().is_ok_and(|m| m.is_file())
+                && !crate::output::claimed_by_another(&path, self.id)
+                && std::fs::remove_file(&path).is_ok()
+            {
                 removed += 1;
             }
         }
+        after.commit()?;
         let stale = match removed {
             0 => String::new(),
             n => format!(" (removed {n} stale files of an earlier run)"),
         };
         if !QUIET.load(std::sync::atomic::Ordering::Relaxed) {
-            eprintln!("wrote {} files to {}{stale}", self.written.len(), self.path.display());
+            eprintln!("wrote {count} files to {}{stale}", self.path.display());
         }
         Ok(())
     }
@@ -345,7 +446,10 @@ impl Summary {
     pub fn open(path: Option<&Path>) -> Result<Self> {
         let target = match path {
             None => Target::None,
-            Some(p) if p == Path::new("-") => Target::Stdout,
+            Some(p) if p == Path::new("-") => {
+                crate::output::claim_stdout("--summary")?;
+                Target::Stdout
+            }
             Some(p) => Target::File(AtomicFile::create(p, "--summary")?),
         };
         Ok(Summary { target })
@@ -379,25 +483,50 @@ impl Summary {
         };
     }
 
-    /// Writes the JSON (a file is renamed into place).
-    pub fn write(self, doc: &serde_json::Value) -> Result<()> {
-        let write = |w: &mut dyn std::io::Write| -> Result<()> {
-            // Serialised through a buffer: a File takes one syscall per token.
-            let mut w = std::io::BufWriter::new(w);
-            serde_json::to_writer_pretty(&mut w, doc)?;
-            std::io::Write::write_all(&mut w, b"\n")?;
-            std::io::Write::flush(&mut w)?;
-            Ok(())
-        };
+    /// Writes the JSON, and renames it into place together with the run's `files`: all of
+    /// them appear, or none. JSON for stdout is printed once the files are in place.
+    pub fn write_with(self, doc: &serde_json::Value, mut files: Vec<AtomicFile>) -> Result<()> {
+        let (file, stdout) = self.stage(doc)?;
+        files.extend(file);
+        AtomicFile::commit_all(files)?;
+        print_json(stdout)
+    }
+
+    /// The JSON, written into the summary file (not yet in place) or kept for stdout.
+    fn stage(self, doc: &serde_json::Value) -> Result<(Option<AtomicFile>, Option<Vec<u8>>)> {
+        let mut text = serde_json::to_vec_pretty(doc)?;
+        text.push(b'\n');
         match self.target {
-            Target::None => Ok(()),
-            Target::Stdout => write(&mut std::io::stdout().lock()),
+            Target::None => Ok((None, None)),
+            Target::Stdout => Ok((None, Some(text))),
             Target::File(file) => {
-                write(&mut file.handle()?)?;
-                file.commit()
+                file.write_all(&text)?;
+                Ok((Some(file), None))
             }
         }
     }
+}
+
+/// Prints a line for people once the summary is written: on stdout, or on stderr when stdout
+/// carried the JSON (`on_stdout`, from [`Summary::on_stdout`]), as [`Summary::say`] does.
+pub fn say_after(on_stdout: bool, text: &str) {
+    use std::io::Write as _;
+    if QUIET.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    let _ = if on_stdout {
+        writeln!(std::io::stderr().lock(), "{text}")
+    } else {
+        writeln!(std::io::stdout().lock(), "{text}")
+    };
+}
+
+/// Prints a staged summary on stdout.
+fn print_json(text: Option<Vec<u8>>) -> Result<()> {
+    if let Some(text) = text {
+        std::io::Write::write_all(&mut std::io::stdout().lock(), &text)?;
+    }
+    Ok(())
 }
 
 /// A progress bar on stderr for `n` units of work; invisible when stderr is not a terminal.

@@ -3,7 +3,7 @@
 //! sensitivity to initial conditions).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result, bail};
@@ -15,7 +15,7 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
 use crate::config::{f64_arg, parse_value};
-use crate::output::{AtomicFile, WatchedChild};
+use crate::output::{AtomicFile, CreatedDirs, WatchedChild};
 use crate::study;
 
 #[derive(Debug, Clone, Args)]
@@ -64,6 +64,9 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     }
     let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
+    if out == Path::new("-") {
+        bail!("invalid --out -: animate writes a GIF or MP4 file, not stdout; give FILE.gif or FILE.mp4");
+    }
     let mp4 = match out.extension().and_then(|e| e.to_str()) {
         Some("gif") => false,
         Some("mp4") => true,
@@ -89,9 +92,13 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     }
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
     spec.schedule()?;
-    if out.parent().is_some_and(|p| !p.as_os_str().is_empty()) && args.out.is_none() {
-        std::fs::create_dir_all(out.parent().expect("checked"))?;
-    }
+    // The default's directory is made for it, and removed again if the run fails.
+    let created = match out.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && args.out.is_none() => {
+            Some(CreatedDirs::create(dir, "--out")?)
+        }
+        _ => None,
+    };
     let file = AtomicFile::create(&out, "--out")?;
 
     // A frame too small for the text, the gauges and a pendulum is refused before the run.
@@ -138,9 +145,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     if mp4 {
         encode_mp4(&animation, &file)?;
     } else {
-        std::io::Write::write_all(&mut file.handle()?, &animation.gif()?)?;
+        file.write_all(&animation.gif()?)?;
     }
     file.commit()?;
+    if let Some(created) = created {
+        created.keep();
+    }
     eprintln!("wrote {} ({} frames, {}x{})", out.display(), animation.frames.len(), size.0, size.1);
     Ok(())
 }

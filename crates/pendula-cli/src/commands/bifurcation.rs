@@ -218,12 +218,15 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         with_unit(transient, tu),
         if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
     );
-    summary.write(&json!({
-        "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
-        "transient": transient, "samples": samples, "steps_per_period": m,
-        "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
-        "threads": threads, "wall_s": wall,
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
+            "transient": transient, "samples": samples, "steps_per_period": m,
+            "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
+            "threads": threads, "wall_s": wall,
+        }),
+    )?;
     Ok(())
 }

@@ -251,8 +251,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "t_extrapolated": c.extrapolated(), "drift_rate": c.drift_rate,
         })).collect::<Vec<_>>(),
     });
-    summary.write(&doc)?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary, &doc)?;
     Ok(())
 }
 

@@ -115,10 +115,10 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         results.iter().map(|r| (r.method.to_owned(), json!(r.note()))).collect();
     let dts: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|r| (r.method.to_owned(), json!(r.hs))).collect();
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
     )?;
-    out.finish()?;
     Ok(())
 }
 

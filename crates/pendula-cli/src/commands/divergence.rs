@@ -122,12 +122,15 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         );
     }
     out.figure("divergence", &fig)?;
-    summary.write(&json!({
-        "system": system, "method": method.name, "dt": h, "t_end": t_end,
-        "delta": delta, "variable": variable, "saturation": saturation,
-        "growth_rate": fit.map(|f| f.rate),
-        "fit_window": fit.map(|f| [f.t_start, f.t_end]),
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "method": method.name, "dt": h, "t_end": t_end,
+            "delta": delta, "variable": variable, "saturation": saturation,
+            "growth_rate": fit.map(|f| f.rate),
+            "fit_window": fit.map(|f| [f.t_start, f.t_end]),
+        }),
+    )?;
     Ok(())
 }

@@ -8,7 +8,6 @@
 //! two steps) and FILE-converged.png, in `--out-dir` (default `pendula-out/fractal/`, with
 //! FILE = fractal) or beside `--out FILE.npy`; all files appear whole or not at all.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -126,6 +125,9 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         integrator::tao::check_binding_step(&scheme, h)?;
     }
     let threads = crate::config::parse_threads(args.threads.as_deref())?;
+    if args.out.as_deref() == Some(Path::new("-")) {
+        bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");
+    }
     if let Some(out) = &args.out
         && out.extension().and_then(|e| e.to_str()) != Some("npy")
     {
@@ -137,14 +139,24 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         Some(_) => None,
         None => Some(OutDir::new(args.out_dir.as_deref(), "fractal")?),
     };
-    let (out, flag) = match (&args.out, &dir) {
-        (Some(out), _) => (out.clone(), "--out"),
-        (None, Some(dir)) => (dir.path().join("fractal.npy"), "--out-dir"),
+    let names = ["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"];
+    let (paths, files): (Vec<PathBuf>, Vec<AtomicFile>) = match (&args.out, &dir) {
+        (Some(out), _) => {
+            let paths = [
+                out.clone(),
+                beside(out, ".png"),
+                beside(out, "-converged.npy"),
+                beside(out, "-converged.png"),
+            ];
+            let files = paths.iter().map(|p| AtomicFile::create(p, "--out")).collect::<Result<_>>()?;
+            (paths.to_vec(), files)
+        }
+        (None, Some(dir)) => {
+            let files: Vec<AtomicFile> = names.iter().map(|n| dir.file(n)).collect::<Result<_>>()?;
+            (names.iter().map(|n| dir.path().join(n)).collect(), files)
+        }
         (None, None) => unreachable!("a directory when there is no --out"),
     };
-    let paths =
-        [out.clone(), beside(&out, ".png"), beside(&out, "-converged.npy"), beside(&out, "-converged.png")];
-    let files: Vec<AtomicFile> = paths.iter().map(|p| AtomicFile::create(p, flag)).collect::<Result<_>>()?;
     let summary = Summary::open(args.summary.as_deref())?;
 
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
@@ -207,7 +219,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
             }
             Err(e) => return Err(e.into()),
         };
-        file.handle()?.write_all(&bytes)?;
+        file.write_all(&bytes)?;
         Ok(())
     };
     write_png(&png, &picture)?;
@@ -226,7 +238,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
             pendula_viz::BLACK,
         )
     };
-    flags_png.handle()?.write_all(&flags_map.png()?)?;
+    flags_png.write_all(&flags_map.png()?)?;
     let doc = json!({
         "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
         "tolerance": tolerance,
@@ -241,15 +253,6 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         "threads": threads, "wall_s": wall,
         "files": paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     });
-    // The four files appear together or not at all.
-    let files = vec![npy, png, flags_npy, flags_png];
-    match dir {
-        Some(mut dir) => {
-            dir.commit(files)?;
-            dir.finish()?;
-        }
-        None => AtomicFile::commit_all(files)?,
-    }
     sayln!(
         summary,
         "fractal {n1}x{n2}, t-max {t_max} s, {} at dt = {h} s and {} s: {flipped} pixels flip, {} cannot (energy), {unconverged} unconverged ({:.2}%) [{wall:.1} s, {threads} threads]",
@@ -258,7 +261,18 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         fractal.forbidden,
         100.0 * share
     );
-    sayln!(summary, "wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
-    summary.write(&doc)?;
+    let wrote =
+        format!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    let on_stdout = summary.on_stdout();
+    // The four files and the summary appear together or not at all.
+    let files = vec![npy, png, flags_npy, flags_png];
+    match dir {
+        Some(mut dir) => {
+            dir.commit(files)?;
+            dir.finish_with(summary, &doc)?;
+        }
+        None => summary.write_with(&doc, files)?,
+    }
+    crate::study::say_after(on_stdout, &wrote);
     Ok(())
 }

@@ -61,10 +61,11 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             "invalid --t-end {t_end}: at least 20 re-orthonormalisations (every --renormalise {renormalise} s) are needed for the uncertainty"
         );
     }
-    let model = values.build();
-    let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
+    // The outputs before the work: a path that cannot be written fails first.
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
+    let model = values.build();
+    let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
 
     let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
     let mut header = vec!["t"];
@@ -118,7 +119,8 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
         band(lambda - err),
     );
     out.figure("lyapunov", &fig)?;
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({
             "system": system, "method": method.name, "dt": h, "t_end": t_end,
             "transient": transient, "renormalise": renormalise,
@@ -128,6 +130,5 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             "spectrum_uncertainty": args.spectrum.then(|| result.uncertainty.clone()),
         }),
     )?;
-    out.finish()?;
     Ok(())
 }

@@ -87,14 +87,14 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
         out.figure(name, &fig)?;
     }
     let worst = rows.iter().map(|r| (r.simulated / r.exact - 1.0).abs()).fold(0.0, f64::max);
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({
             "method": method.name, "dt": h,
             "max_rel_error_simulated": worst,
             "rows": rows.iter().map(|r| json!({"amplitude_deg": r.amplitude_deg, "simulated": r.simulated, "exact": r.exact, "small_angle": r.small_angle})).collect::<Vec<_>>(),
         }),
     )?;
-    out.finish()?;
     Ok(())
 }
 

@@ -42,6 +42,9 @@ pub struct PlotArgs {
 
 /// Checks that `path` names a PNG or SVG file; `flag` names the option.
 pub fn check_image_path(path: &Path, flag: &str) -> Result<()> {
+    if path == Path::new("-") {
+        bail!("invalid {flag} -: a picture is written to a file, not stdout; give FILE.png or FILE.svg");
+    }
     match path.extension().and_then(|e| e.to_str()) {
         Some("png" | "svg") => Ok(()),
         _ => bail!("invalid {flag} `{}`: the format follows the extension; use .png or .svg", path.display()),
@@ -581,6 +584,9 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     if !args.file.exists() {
         bail!("cannot read {}: no such file", args.file.display());
     }
+    // The picture may not replace what it is drawn from.
+    crate::output::claim_input(&args.file, "input file")?;
+    let file = AtomicFile::create(&out, "--out")?;
     let contents = read(args)?;
     let bytes = match contents {
         Contents::Table(t) => {
@@ -620,8 +626,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             map.png()?
         }
     };
-    let file = AtomicFile::create(&out, "--out")?;
-    std::io::Write::write_all(&mut file.handle()?, &bytes)?;
+    file.write_all(&bytes)?;
     file.commit()?;
     eprintln!("wrote {}", out.display());
     Ok(())

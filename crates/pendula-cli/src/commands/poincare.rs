@@ -104,6 +104,9 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
         (None, _) => bail!("--method {} takes fixed steps: give --dt", method.name),
     };
     let spec = PoincareSpec { energy, count, section, value, t_end };
+    // The outputs before the work: a path that cannot be written fails first.
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let orbits = poincare(&*model, method, stepping, &spec)?;
 
     let other = 1 - section;
@@ -140,8 +143,6 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     if total == 0 {
         bail!("no orbit crossed the section in {t_end} s: raise --t-end or change --energy");
     }
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
     let p_section = format!("p{}", &name[5..]);
     out.csv("poincare.csv", &["orbit", "t", q_name, &p_name, name, &p_section], &rows)?;
     out.figure("poincare", &fig)?;
@@ -152,13 +153,16 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
         with_unit(t_end, info.time_unit()),
         with_unit(format!("{worst_energy:.2e}"), info.energy_unit())
     );
-    summary.write(&json!({
-        "system": system, "method": method.name, "energy": energy, "count": count,
-        "section": {"name": name, "value": value, "direction": "rising"},
-        "t_end": t_end, "crossings": total,
-        "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
-        "max_energy_error": worst_energy,
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "method": method.name, "energy": energy, "count": count,
+            "section": {"name": name, "value": value, "direction": "rising"},
+            "t_end": t_end, "crossings": total,
+            "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
+            "max_energy_error": worst_energy,
+        }),
+    )?;
     Ok(())
 }

@@ -93,16 +93,19 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
     for (name, fig) in resonance_figures(&points) {
         out.figure(name, &fig)?;
     }
-    summary.write(&json!({
-        "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4",
-        "resonance_peaks": RESONANCE.iter().zip(&peaks).map(|(&zeta, p)| json!({
-            "zeta": zeta,
-            "drive_ratio": p.as_ref().map(|p| p.ratio),
-            "amplitude_exact": p.as_ref().map(|p| p.amplitude_exact),
-            "amplitude_simulated": p.as_ref().map(|p| p.amplitude_simulated),
-        })).collect::<Vec<_>>(),
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4",
+            "resonance_peaks": RESONANCE.iter().zip(&peaks).map(|(&zeta, p)| json!({
+                "zeta": zeta,
+                "drive_ratio": p.as_ref().map(|p| p.ratio),
+                "amplitude_exact": p.as_ref().map(|p| p.amplitude_exact),
+                "amplitude_simulated": p.as_ref().map(|p| p.amplitude_simulated),
+            })).collect::<Vec<_>>(),
+        }),
+    )?;
     Ok(())
 }
 

@@ -561,7 +561,8 @@ fn build(page: &mut Page) -> Result<()> {
 
 /// Regenerates the README gallery into `dir`.
 fn gallery(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create --gallery {}", dir.display()))?;
+    let created = crate::output::CreatedDirs::create(dir, "--gallery")?;
+    crate::output::probe(dir, "--gallery")?;
     let work = tempfile::tempdir()?;
     let _quiet = Quiet::on();
     let mut done: Vec<&str> = Vec::new();
@@ -577,9 +578,10 @@ fn gallery(dir: &Path) -> Result<()> {
         }
         let bytes = std::fs::read(&from)?;
         let file = crate::output::AtomicFile::create(&dir.join(entry.name), "--gallery")?;
-        std::io::Write::write_all(&mut file.handle()?, &bytes)?;
+        file.write_all(&bytes)?;
         file.commit()?;
     }
+    created.keep();
     drop(_quiet);
     println!("gallery: {} pictures in {}", GALLERY.len(), dir.display());
     Ok(())

@@ -72,10 +72,10 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
         results.iter().map(|(m, h)| ((*m).to_owned(), json!(h))).collect();
     let note_map: serde_json::Map<String, serde_json::Value> =
         results.iter().zip(&notes).map(|((m, _), n)| ((*m).to_owned(), json!(n))).collect();
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({ "system": system, "criterion": { "t_end": t_end, "max_rel_energy_error": bound }, "largest_stable_dt": map, "notes": note_map }),
     )?;
-    out.finish()?;
     Ok(())
 }
 

@@ -335,6 +335,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let sweep = parse(args)?;
     let threads = crate::config::parse_threads(args.threads.as_deref())?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
+    if out_path == Path::new("-") {
+        bail!("invalid --out -: sweep writes a .npy file, not stdout; give FILE.npy");
+    }
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
     }
@@ -373,9 +376,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     if sharded {
         shape = vec![end - start, cols];
     }
-    write_npy(&out_file, &shape, &data)?;
+    let written = write_npy(&out_file, &shape, &data)?;
     let description = json!({
-        "pendula_sweep": 1,
+        "pendula_sweep": SHARD_FORMAT,
         "system": sweep.info.name,
         "method": sweep.method.name,
         "dt": sweep.h,
@@ -388,6 +391,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         "offset": start,
         "count": end - start,
         "fingerprint": sweep.fingerprint(),
+        "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
         "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per cell" },
         "threads": threads,
         "wall_s": wall_s,
@@ -397,9 +401,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         write_json(&f, &description)?;
         files.push(f);
     }
-    // The array and its shard description appear together or not at all.
-    AtomicFile::commit_all(files)?;
-    summary.write(&description)?;
+    // The array, its shard description and the summary appear together or not at all.
+    summary.write_with(&description, files)?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
         sweep.info.name,
@@ -545,19 +548,67 @@ fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress
     })
 }
 
+/// The format of a shard's description (FILE.npy.json), in `pendula_sweep`. Format 2 added
+/// `data` (the .npy file's length and CRC-32, which `merge` checks); readers ignore keys they
+/// do not know, so adding one needs no new format, and changing one does.
+pub const SHARD_FORMAT: u64 = 2;
+
+/// What [`write_npy`] wrote: the file's length and CRC-32.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Written {
+    pub bytes: u64,
+    pub crc32: u32,
+}
+
+/// A writer that counts and checksums what passes through it.
+struct Checksummed<W> {
+    inner: W,
+    crc: crc32fast::Hasher,
+    bytes: u64,
+}
+
+impl<W: std::io::Write> std::io::Write for Checksummed<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The length and CRC-32 of what `reader` holds, read to its end.
+pub(crate) fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
+    let mut sink = Checksummed { inner: std::io::sink(), crc: crc32fast::Hasher::new(), bytes: 0 };
+    std::io::copy(&mut reader, &mut sink)?;
+    Ok(Written { bytes: sink.bytes, crc32: sink.crc.finalize() })
+}
+
+/// Writes `data` as a .npy array of `shape` into `file`; its length and checksum.
 pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
     file: &AtomicFile,
     shape: &[usize],
     data: &[T],
-) -> Result<()> {
+) -> Result<Written> {
     use ndarray_npy::WriteNpyExt;
     use std::io::Write;
     let array =
         ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
-    let mut w = std::io::BufWriter::new(file.handle()?);
-    array.write_npy(&mut w)?;
+    let mut w = Checksummed {
+        inner: std::io::BufWriter::new(file.handle()?),
+        crc: crc32fast::Hasher::new(),
+        bytes: 0,
+    };
+    array.write_npy(&mut w).map_err(|e| match e {
+        // The file's own error, which names it.
+        ndarray_npy::WriteNpyError::Io(io) => anyhow::Error::new(io),
+        other => anyhow::Error::new(other),
+    })?;
     w.flush()?;
-    Ok(())
+    Ok(Written { bytes: w.bytes, crc32: w.crc.finalize() })
 }
 
 pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {

@@ -180,7 +180,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             "dt": p.h, "tol": p.tol, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
         })).collect::<Vec<_>>()))).collect::<serde_json::Map<_, _>>(),
     });
-    summary.write(&doc)?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary, &doc)?;
     Ok(())
 }
