@@ -13,8 +13,9 @@ pub struct Cli {
 }
 
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
-step did not converge); 2 invalid input (arguments, values, scenario file, output path); 130, 143, \
-129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
+step did not converge, adaptive step fell below its minimum); 2 invalid input (arguments, values, \
+scenario file, output path, a request over the limits without --allow-large); 130, 143, 129 \
+interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -194,4 +195,6 @@ pub struct SimulateArgs {
     /// End the run at the first event.
     #[arg(long)]
     pub stop_on_event: bool,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }

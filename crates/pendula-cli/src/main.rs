@@ -8,6 +8,7 @@ mod cli;
 mod commands;
 mod config;
 mod generate;
+mod limits;
 mod list;
 mod output;
 mod simulate;
@@ -68,7 +69,11 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
 /// 1 when the computation itself failed, 2 for everything the user can fix in the input.
 fn exit_code(err: &anyhow::Error) -> u8 {
     match err.downcast_ref::<pendula::Error>() {
-        Some(pendula::Error::NonFinite { .. } | pendula::Error::NewtonDidNotConverge { .. }) => 1,
+        Some(
+            pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::StepSizeTooSmall { .. },
+        ) => 1,
         _ => 2,
     }
 }

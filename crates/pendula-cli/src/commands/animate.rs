@@ -48,6 +48,8 @@ pub struct AnimateArgs {
     /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
@@ -88,7 +90,27 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         bail!("invalid --compare {d}: must be finite");
     }
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    spec.schedule()?;
+    let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
+    // What it costs: the runs, and the frames' bytes (GIF or MP4 keep the animation in
+    // memory until it is written): the default animation's GIF takes 0.03 bytes a pixel,
+    // counted here as 0.05.
+    let runs = if delta.is_some() { 2.0 } else { 1.0 };
+    let frames = (t_end * fps as f64).ceil() + 1.0;
+    let bytes = frames * size.0 as f64 * size.1 as f64 * 0.05;
+    let how = format!("{} frames of {}x{} pixels", crate::limits::round(frames), size.0, size.1);
+    crate::limits::check(
+        "animate",
+        args.allow_large,
+        &[
+            crate::limits::Estimate::new(
+                crate::limits::Cost::Steps,
+                runs * schedule.steps as f64,
+                format!("{runs} runs x {} steps", crate::limits::round(schedule.steps as f64)),
+            ),
+            crate::limits::Estimate::new(crate::limits::Cost::Output, bytes, how.clone()),
+            crate::limits::Estimate::new(crate::limits::Cost::Memory, bytes, how),
+        ],
+    )?;
     if out.parent().is_some_and(|p| !p.as_os_str().is_empty()) && args.out.is_none() {
         std::fs::create_dir_all(out.parent().expect("checked"))?;
     }
