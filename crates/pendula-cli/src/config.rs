@@ -377,7 +377,7 @@ pub fn count(n: u64) -> String {
     if digits.starts_with('1') && digits[1..].bytes().all(|b| b == b'0') {
         format!("10^{}", digits.len() - 1)
     } else {
-        Short(n as f64).to_string()
+        limits::sci(n as f64)
     }
 }
 
@@ -606,7 +606,15 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         (None, None, End::Time(_)) if scenario.t_end.is_some() => "t_end",
         (None, None, End::Time(_)) => "--t-end",
     };
-    schedule(&spec, dt_flag, end_flag)?;
+    // An adaptive run's --dt is only its first step: it does not count the run's steps
+    // (estimated below), and is checked only as a step.
+    let checked = match (matches!(method.scheme, Scheme::Embedded(_)), end) {
+        (true, End::Time(t)) if t.is_finite() && t > 0.0 && h.is_finite() && h > 0.0 => {
+            RunSpec { h: t, ..spec }
+        }
+        _ => spec,
+    };
+    schedule(&checked, dt_flag, end_flag)?;
     let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
         Ok(match text {
             Some(t) => parse_float(flag, t, "a number")?,
@@ -731,28 +739,29 @@ fn simulate_estimates(
     plot: bool,
 ) -> Result<Vec<Estimate>> {
     use pendula::observe::Grid;
-    let schedule = spec.schedule()?;
-    let (steps, how) = match tolerances {
-        Some(tol) => {
+    let (steps, t_end, how) = match (tolerances, spec.end) {
+        (Some(tol), End::Time(t_end)) => {
             let period = limits::motion_period(&*values.build(), values.initial_state());
-            let steps = limits::adaptive_steps(schedule.t_end, period, tol.h_max);
-            (
-                steps,
-                format!(
-                    "at least {} adaptive steps per period of {} s over {} s",
-                    limits::ADAPTIVE_STEPS_PER_PERIOD,
-                    Short(period),
-                    Short(schedule.t_end)
-                ),
-            )
+            let steps = limits::adaptive_steps(t_end, period, tol.h_max);
+            let how = format!(
+                "at least {} adaptive steps per period of {} s over {} s",
+                limits::ADAPTIVE_STEPS_PER_PERIOD,
+                Short(period),
+                Short(t_end)
+            );
+            (steps, t_end, how)
         }
-        None => (schedule.steps as f64, format!("{} steps of {} s", count(schedule.steps), Short(spec.h))),
+        _ => {
+            let schedule = spec.schedule()?;
+            let how = format!("{} steps of {} s", count(schedule.steps), Short(spec.h));
+            (schedule.steps as f64, schedule.t_end, how)
+        }
     };
     let columns = (values.info().state.len() + 2) as f64;
     // Rows: the grid's, or every n-th step and the last; a plot without a trajectory keeps
     // every step.
     let rows = |every: Option<u64>| match (grid, every) {
-        (Some(Grid::Spacing(dt)), _) => schedule.t_end / dt + 2.0,
+        (Some(Grid::Spacing(dt)), _) => t_end / dt + 2.0,
         (Some(Grid::Times(times)), _) => times.len() as f64 + 1.0,
         (None, Some(n)) => steps / n as f64 + 2.0,
         (None, None) => 0.0,

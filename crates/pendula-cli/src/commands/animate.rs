@@ -44,7 +44,7 @@ pub struct AnimateArgs {
     /// Frames per second of simulated time [default: 30]. A GIF plays 1 to 50 exactly (its
     /// delays are whole centiseconds, alternated, e.g. 3, 3, 4 cs for 30 fps); MP4 up to 240.
     #[arg(long, value_name = "N")]
-    pub fps: Option<u32>,
+    pub fps: Option<String>,
     /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
@@ -60,10 +60,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
     let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "a time in seconds")?;
-    let fps = args.fps.unwrap_or(30);
-    if fps == 0 || fps > 240 {
-        bail!("invalid --fps {fps}: must be 1 to 240 (1 to 50 for a GIF)");
-    }
+    let fps = match &args.fps {
+        Some(text) => {
+            crate::config::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32
+        }
+        None => 30,
+    };
     let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
     let mp4 = match out.extension().and_then(|e| e.to_str()) {

@@ -45,7 +45,7 @@ pub struct BifurcationArgs {
     /// The state variable plotted against the parameter [default: the first velocity].
     #[arg(long, value_name = "NAME")]
     pub variable: Option<String>,
-    /// Worker threads [default: all cores].
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     #[command(flatten)]
@@ -185,7 +185,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
                 anyhow::Error::new(pendula::Error::NonFinite { t: e.t }).context(format!(
                     "{} = {}",
                     axis.name,
-                    axis.centre(e.member)
+                    pendula::error::Short(axis.centre(e.member))
                 ))
             })?;
             Ok(data)

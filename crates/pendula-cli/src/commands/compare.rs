@@ -23,7 +23,7 @@ use serde_json::json;
 
 use pendula::error::Short;
 
-use crate::config::{f64_arg, positive_arg};
+use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate, round};
 use crate::study::{self, Common, OutDir, Summary, num, short};
 
@@ -133,18 +133,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "a number of evaluations per second > 0",
         )?),
     };
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
-    let (h_check, h_flag) = match steps {
-        Steps::Equal(h) => (h, "--dt"),
-        Steps::EqualCost(n) => (1.0 / n, "--evals-per-second"),
-    };
-    let schedule =
-        crate::config::schedule(&RunSpec { t0: 0.0, h: h_check, end: End::Time(t_end) }, h_flag, "--t-end")?;
+    let t_end =
+        positive_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
     // What it costs: at one step, every method's steps; at equal cost, every method's
     // evaluations, each counted as a step (a step costs at least one).
-    let per_method = schedule.steps as f64;
+    let per_method = match steps {
+        Steps::Equal(h) => limits::steps(t_end, h),
+        Steps::EqualCost(n) => (t_end * n).ceil(),
+    };
     let how = match steps {
         Steps::Equal(h) => {
             format!("{} methods x {} steps of {} s", methods.len(), round(per_method), Short(h))
@@ -158,6 +156,17 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         args.common.allow_large,
         &[Estimate::new(Cost::Steps, methods.len() as f64 * per_method, how)],
     )?;
+    match steps {
+        Steps::Equal(h) => {
+            crate::config::schedule(&RunSpec { t0: 0.0, h, end: End::Time(t_end) }, "--dt", "--t-end")?;
+        }
+        Steps::EqualCost(n) if per_method > limits::MAX_STEPS as f64 => anyhow::bail!(
+            "invalid --t-end {}: at {} evaluations per second it is more than 10^13 steps",
+            Short(t_end),
+            Short(n)
+        ),
+        Steps::EqualCost(_) => {}
+    }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
 

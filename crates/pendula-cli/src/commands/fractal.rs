@@ -51,7 +51,8 @@ pub struct FractalArgs {
     /// Set a parameter (m1, m2, l1, l2, g); the pendulum starts at rest.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Worker threads [default: all cores]; the result does not depend on it.
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores]; the
+    /// result does not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     /// Directory for fractal.npy, fractal.png, fractal-converged.npy and fractal-converged.png

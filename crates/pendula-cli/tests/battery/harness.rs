@@ -29,6 +29,8 @@ pub struct Case {
     /// setup left it.
     pub creates: Vec<String>,
     pub after: Option<DirFn>,
+    /// The most bytes stderr may hold (a message must not echo megabytes of input).
+    pub max_stderr: Option<usize>,
 }
 
 impl Case {
@@ -43,6 +45,7 @@ impl Case {
             says: Vec::new(),
             creates: Vec::new(),
             after: None,
+            max_stderr: None,
         }
     }
 
@@ -79,6 +82,12 @@ impl Case {
     /// Checks the directory after the run (in addition to the default check).
     pub fn after(mut self, f: impl Fn(&Path) + Send + Sync + 'static) -> Self {
         self.after = Some(Box::new(f));
+        self
+    }
+
+    /// At most `bytes` on stderr.
+    pub fn brief(mut self, bytes: usize) -> Self {
+        self.max_stderr = Some(bytes);
         self
     }
 
@@ -189,6 +198,11 @@ pub fn run_one(case: &Case) -> Option<String> {
         if !stderr.contains(fragment.as_str()) {
             problems.push(format!("stderr lacks {fragment:?}"));
         }
+    }
+    if let Some(max) = case.max_stderr
+        && stderr.len() > max
+    {
+        problems.push(format!("stderr holds {} bytes, more than {max}", stderr.len()));
     }
     if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
         problems.push("panicked".into());
