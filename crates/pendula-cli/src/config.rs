@@ -416,7 +416,8 @@ fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f6
         toml::Value::Integer(i) => number_value(name, *i as f64, quantity),
         toml::Value::String(s) => parse_value(name, s, Some(quantity)),
         other => bail!(
-            "invalid value {other} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\""
+            "invalid value {} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\"",
+            clip(&other.to_string())
         ),
     }
 }

@@ -112,7 +112,7 @@ pub fn check(command: &str, allow_large: bool, estimates: &[Estimate]) -> Result
     for e in estimates {
         let (limit, why) = e.cost.limit();
         // A NaN estimate (from a NaN input that slipped through) is refused too.
-        if !(e.amount <= limit) && !allow_large {
+        if (e.amount.is_nan() || e.amount > limit) && !allow_large {
             bail!(
                 "{command}: refusing a request of about {} ({}), over the limit of {} ({why}); give --allow-large to run it anyway",
                 e.cost.amount(e.amount),
@@ -122,7 +122,7 @@ pub fn check(command: &str, allow_large: bool, estimates: &[Estimate]) -> Result
         }
         if e.cost == Cost::Memory
             && let Some(total) = physical_memory()
-            && !(e.amount <= total)
+            && (e.amount.is_nan() || e.amount > total)
         {
             bail!(
                 "{command}: the request needs about {} of memory ({}), more than this machine's {}, even with --allow-large",

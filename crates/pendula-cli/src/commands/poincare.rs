@@ -40,7 +40,8 @@ pub struct PoincareArgs {
     /// Fixed step size, s (required by fixed-step methods).
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// Relative and absolute tolerance of adaptive methods [default: 1e-10].
+    /// Relative and absolute tolerance of adaptive methods, 1e-15 (round-off) to 1 [default:
+    /// 1e-10].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub tol: Option<String>,
     #[command(flatten)]

@@ -25,7 +25,8 @@ pub struct WorkPrecisionArgs {
     /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853) [default: 1e-3].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_max: Option<String>,
-    /// Tightest tolerance for the adaptive methods [default: 1e-12].
+    /// Tightest tolerance for the adaptive methods, at least 1e-15 (round-off) [default:
+    /// 1e-12].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_min: Option<String>,
     /// Number of tolerances, geometrically spaced, 2 to 30 [default: 10].

@@ -87,6 +87,13 @@ pub fn cases() -> Vec<Case> {
         Case::new("a separation lost in rounding", "divergence --set theta1=1e10")
             .says("lost in rounding")
             .says("--delta"),
+        // The report's folder must be one.
+        Case::new("a report into a file", "report --out-dir f")
+            .setup(|d| std::fs::write(d.join("f"), "precious").unwrap())
+            .says("--out-dir f"),
+        Case::new("a gallery into a file", "report --gallery f")
+            .setup(|d| std::fs::write(d.join("f"), "precious").unwrap())
+            .says("--gallery f"),
         // Echoes stay short.
         Case::new("a plot of a CSV with a 100 kB field", "plot t.csv")
             .setup(|d| std::fs::write(d.join("t.csv"), format!("t,x\n0,{}\n", "z".repeat(100_000))).unwrap())
