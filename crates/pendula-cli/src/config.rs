@@ -618,6 +618,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     schedule(&checked, dt_flag, end_flag)?;
     let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
         Ok(match text {
+            // The largest step is unbounded by default, and may be said so.
+            Some(t)
+                if flag == "--h-max" && float(t) == Err(Unusable::Infinite) && !t.trim().starts_with('-') =>
+            {
+                f64::INFINITY
+            }
             Some(t) => parse_float(flag, t, "a number")?,
             None => file.unwrap_or(default),
         })
@@ -818,5 +824,47 @@ fn output(path: PathBuf) -> Result<Output> {
             "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout",
             path.display()
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_beyond_f64_are_refused_as_what_they_are() {
+        assert_eq!(float("1e400"), Err(Unusable::Overflow));
+        assert_eq!(float("-1e400"), Err(Unusable::Overflow));
+        assert_eq!(float("inf"), Err(Unusable::Infinite));
+        assert_eq!(float("-Infinity"), Err(Unusable::Infinite));
+        assert_eq!(float("NaN"), Err(Unusable::NaN));
+        assert_eq!(float("1e-320"), Err(Unusable::Underflow));
+        assert_eq!(float("1e-400"), Err(Unusable::Underflow));
+        assert_eq!(float("fast"), Err(Unusable::NotANumber));
+        // Zero written any way is zero, and the extremes of the normal range are numbers.
+        for zero in ["0", "-0.0", "0e-400", "0.000e5"] {
+            assert_eq!(float(zero), Ok(0.0), "{zero}");
+        }
+        assert_eq!(float("2.2250738585072014e-308"), Ok(f64::MIN_POSITIVE));
+        assert_eq!(float("1.7976931348623157e308"), Ok(f64::MAX));
+    }
+
+    #[test]
+    fn nesting_is_counted_outside_strings_and_comments() {
+        assert_eq!(too_deep("a = [[1, 2], [3]]\n", 2), None);
+        assert_eq!(too_deep("a = [[[1]]]\n", 2), Some(6));
+        assert_eq!(too_deep("a = \"[[[[\" # {{{{\nb = '[[[['\n", 2), None);
+        assert_eq!(too_deep("a = \"\"\"\n[[[[\n\"\"\"\nb = '''{{{{'''\n", 2), None);
+        assert_eq!(too_deep("a = \"\\\"[[[\"\n", 2), None);
+        assert_eq!(too_deep("a = { b = { c = { d = 1 } } }\n", 2), Some(16));
+    }
+
+    #[test]
+    fn echoes_are_clipped() {
+        assert_eq!(clip("short"), "short");
+        let long = clip(&"x".repeat(1 << 20));
+        assert!(long.len() < 80 && long.contains("1048576 bytes"), "{long}");
+        assert_eq!(count(10_000_000_000_000), "10^13");
+        assert_eq!(count(12_345), "12345");
     }
 }
