@@ -567,7 +567,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
     if let Some(text) = &args.binding {
         let omega = parse_float("--binding", text, "a number > 0, in 1/s")?;
-        method = method.with_binding(omega)?;
+        method = method.with_binding(omega).map_err(|e| flag_error(e, &[("binding", "--binding")]))?;
     }
 
     let mut settings = match preset {

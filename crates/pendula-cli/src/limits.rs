@@ -200,7 +200,9 @@ pub fn bytes(x: f64) -> String {
     } else if v.fract() == 0.0 || v >= 100.0 {
         format!("{v:.0}")
     } else {
-        format!("{:.3}", v).trim_end_matches('0').trim_end_matches('.').to_owned()
+        // Three significant digits: 29.8 GiB, 1.5 KiB.
+        let decimals = if v >= 10.0 { 1 } else { 2 };
+        format!("{v:.decimals$}").trim_end_matches('0').trim_end_matches('.').to_owned()
     };
     format!("{shown} {}", UNITS[unit])
 }
@@ -320,6 +322,7 @@ mod tests {
         assert_eq!(bytes(1536.0), "1.5 KiB");
         assert_eq!(bytes(MAX_OUTPUT_BYTES), "1 GiB");
         assert_eq!(bytes(8e15), "7276 TiB");
+        assert_eq!(bytes(3.2e10), "29.8 GiB");
         assert_eq!(round(12345.0), "12345");
         assert_eq!(round(1e14), "1e14");
         assert_eq!(round(7.86432e19), "7.864e19");

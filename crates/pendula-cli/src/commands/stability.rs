@@ -52,7 +52,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
                 methods.len(),
                 limits::round(per_run),
                 H_RANGE.0,
-                short(t_end)
+                pendula::error::Short(t_end)
             ),
         )],
     )?;
