@@ -327,12 +327,20 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
     )?;
     // A method that needs what the system lacks is refused now, on one step of one cell.
     let probe = sweep.values(0)?;
-    probe.build().solve(
-        method,
-        probe.initial_state(),
-        &RunSpec { t0: 0.0, h, end: End::Steps(1) },
-        &mut pendula::observe::Ignore,
-    )?;
+    probe
+        .build()
+        .solve(
+            method,
+            probe.initial_state(),
+            &RunSpec { t0: 0.0, h, end: End::Steps(1) },
+            &mut pendula::observe::Ignore,
+        )
+        // A numerical failure in that step is the first cell's, and named so (exit 1).
+        .map_err(|e| {
+            let numerical = crate::study::numerical(&e);
+            let e = anyhow::Error::new(e);
+            if numerical { e.context("cell 0 of the sweep") } else { e }
+        })?;
     Ok(sweep)
 }
 

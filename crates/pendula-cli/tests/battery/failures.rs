@@ -93,6 +93,7 @@ pub fn cases() -> Vec<Case> {
         .creates("pendula-out/fractal"),
         Case::new("sweep's non-finite state", "sweep --set g=1e300 --grid theta1=-pi:pi:4")
             .exit(1)
+            .says("cell 0 of the sweep")
             .says("non-finite"),
         Case::new(
             "bifurcation's non-finite state",
