@@ -8,6 +8,7 @@ mod cli;
 mod commands;
 mod config;
 mod generate;
+mod limits;
 mod list;
 mod output;
 mod simulate;
@@ -74,7 +75,11 @@ fn exit_code(err: &anyhow::Error) -> u8 {
         return 1;
     }
     match err.downcast_ref::<pendula::Error>() {
-        Some(pendula::Error::NonFinite { .. } | pendula::Error::NewtonDidNotConverge { .. }) => 1,
+        Some(
+            pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::StepSizeTooSmall { .. },
+        ) => 1,
         _ => 2,
     }
 }

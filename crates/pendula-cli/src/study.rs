@@ -11,7 +11,9 @@ use pendula::integrator::{self, METHODS, Method, Requirement};
 use pendula::system::{self, DynModel, Values};
 use pendula_viz::Figure;
 
-use crate::config::{f64_arg, parse_settings};
+use pendula::error::Short;
+
+use crate::config::{f64_arg, parse_count, parse_settings, positive_arg};
 
 /// `print!` for a command's human output, through its [`Summary`]: `say!(summary, "...")`.
 macro_rules! say {
@@ -37,6 +39,8 @@ pub struct Common {
     /// Write the headline numbers as JSON here (`-`: on stdout, and the tables on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// A geometric range of step sizes and an end time, as convergence and work-precision take
@@ -50,13 +54,14 @@ pub struct StepRange {
     /// Largest step size, s [default: 0.05 for convergence, 0.1 for work-precision].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt_max: Option<String>,
-    /// Number of step sizes, geometrically spaced [default: 5 for convergence, 7 for
+    /// Number of step sizes, geometrically spaced, 2 to 30 [default: 5 for convergence, 7 for
     /// work-precision].
     #[arg(long, value_name = "N")]
-    pub levels: Option<usize>,
+    pub levels: Option<String>,
     /// End time at which the error is measured, s [default: the system's study horizon, a
     /// few small-oscillation periods: 10 s for the oscillator and the pendulum, 2 s for the
-    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum].
+    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum]. Every run of
+    /// the study together takes at most 10^11 steps (--allow-large lifts it).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
 }
@@ -64,17 +69,19 @@ pub struct StepRange {
 impl StepRange {
     /// The steps, largest first, and the end time, validated.
     pub fn resolve(&self, default_max: f64, default_levels: usize) -> Result<(Vec<f64>, f64)> {
-        let levels = self.levels.unwrap_or(default_levels);
-        if levels < 2 {
-            bail!("invalid --levels {levels}: need at least 2 step sizes");
-        }
-        let dt_max = f64_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
+        let levels = match &self.levels {
+            Some(text) => parse_count("--levels", text, 2, crate::limits::MAX_LEVELS, "step sizes")? as usize,
+            None => default_levels,
+        };
+        let dt_max = positive_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
         let fallback = dt_max / 2f64.powi(levels as i32 - 1);
-        let dt_min = f64_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
+        let dt_min = positive_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), 10.0, "an end time in seconds")?;
-        if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
+        if dt_max <= dt_min {
             bail!(
-                "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
+                "invalid step range --dt-min {} --dt-max {}: need 0 < dt-min < dt-max, both finite",
+                Short(dt_min),
+                Short(dt_max)
             );
         }
         let spec = pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) };
@@ -96,12 +103,76 @@ impl StepRange {
         use crate::commands::convergence::Ladder;
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
         if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
-            pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) }.schedule()?;
+            let spec = pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) };
+            crate::config::schedule(&spec, "--t-end", "--t-end")?;
             return Ok((Ladder::PerMethod, t_end));
         }
-        let with_t = StepRange { t_end: Some(t_end.to_string()), ..self.clone() };
+        // The end time as read (its shortest round-trip text), for `resolve` to read again.
+        let with_t = StepRange { t_end: Some(format!("{t_end:e}")), ..self.clone() };
         let (hs, t_end) = with_t.resolve(0.05, 5)?;
         Ok((Ladder::Given(hs), t_end))
+    }
+}
+
+/// What an accuracy study (convergence, work-precision) costs: its reference run to `t_end`
+/// (none where the model has an exact solution; else dop853 at tolerance 1e-14, at least
+/// [`crate::limits::ADAPTIVE_STEPS_PER_PERIOD`] steps a period) and `runs`, the steps of
+/// every method's runs. Refused over the limit unless `allow_large`.
+pub fn check_study(
+    command: &str,
+    allow_large: bool,
+    values: &Values,
+    t_end: f64,
+    runs: f64,
+    how: String,
+) -> Result<()> {
+    use crate::limits::{self, Cost, Estimate};
+    let model = values.build();
+    let y0 = values.initial_state();
+    let reference = if model.exact(t_end, y0).is_some() {
+        0.0
+    } else {
+        limits::adaptive_steps(t_end, limits::motion_period(&*model, y0), f64::INFINITY)
+    };
+    limits::check(
+        command,
+        allow_large,
+        &[Estimate::new(
+            Cost::Steps,
+            runs + reference,
+            format!("{how}, and {} for the reference run", limits::round(reference)),
+        )],
+    )
+}
+
+/// A failed reference run of an accuracy study: an error naming it (exit 1 for a numerical
+/// failure, through the library error it wraps).
+pub fn reference_failed(e: pendula::Error, t_end: f64) -> anyhow::Error {
+    anyhow::Error::new(e).context(format!(
+        "the reference run (dop853 at tolerance {:e} to t = {} s) failed",
+        pendula::analysis::REFERENCE_TOLERANCE,
+        Short(t_end)
+    ))
+}
+
+/// Whether a library error is a numerical failure (exit 1), not a refusal of the input.
+pub fn numerical(e: &pendula::Error) -> bool {
+    matches!(
+        e,
+        pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::StepSizeTooSmall { .. }
+    )
+}
+
+/// When no run of a study gave a result and one failed numerically: that failure, as the
+/// study's error (exit 1), instead of an empty figure.
+pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) -> Result<()> {
+    match first {
+        Some(e) if !produced && numerical(&e) => {
+            Err(anyhow::Error::new(e).context(format!("{command}: every run failed; the first")))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -160,14 +231,26 @@ pub fn methods(
     };
     match list {
         // A method asked for by name must apply: the library's refusal is the error.
-        Some(text) => text
-            .split(',')
-            .map(|name| {
-                let method = integrator::find(name.trim())?;
-                requirement_met(method, model, values)?;
-                Ok(method)
-            })
-            .collect(),
+        Some(text) => {
+            let methods = text
+                .split(',')
+                .map(|name| {
+                    let method = integrator::find(name.trim())?;
+                    requirement_met(method, model, values)?;
+                    Ok(method)
+                })
+                .collect::<Result<Vec<&'static Method>>>()?;
+            for (i, m) in methods.iter().enumerate() {
+                if methods[..i].iter().any(|n| n.name == m.name) {
+                    bail!(
+                        "invalid --methods `{}`: {} is listed twice; list each method once",
+                        crate::config::clip(text),
+                        m.name
+                    );
+                }
+            }
+            Ok(methods)
+        }
         None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values) && stable(m)).collect()),
     }
 }

@@ -66,6 +66,9 @@ impl RunSpec {
                 if n == 0 {
                     return Err(invalid("steps", 0.0, "the number of steps must be >= 1"));
                 }
+                if n as f64 > MAX_STEPS {
+                    return Err(invalid("steps", n as f64, "the number of steps must be at most 10^13"));
+                }
                 Ok(Schedule { steps: n, last_h: h, t_end: self.t0 + n as f64 * h })
             }
             End::Time(t_end) => {
@@ -327,7 +330,10 @@ pub fn solve_adaptive<M: Model>(
         if last {
             h = t_end - t;
         }
-        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs());
+        // Never below what the end time can resolve: a smaller step would need more than
+        // 1/(16 ε) ≈ 3·10¹⁴ steps to get there, and at t = 0 a floor of 16 ε |t| alone is 0,
+        // which let a rejected step shrink to 0 and the run stall for ever.
+        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs().max(t_end));
         if h < floor && !last {
             return Err(Error::StepSizeTooSmall { t, h });
         }

@@ -21,7 +21,10 @@ use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
 use crate::commands::sweep::{batch_method, parse_axis, write_npy};
-use crate::config::{f64_arg, parse_settings};
+use pendula::error::Short;
+
+use crate::config::{f64_arg, parse_settings, positive_arg};
+use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 use crate::study::{OutDir, Summary};
 
@@ -47,7 +50,8 @@ pub struct FractalArgs {
     /// Set a parameter (m1, m2, l1, l2, g); the pendulum starts at rest.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Worker threads [default: all cores]; the result does not depend on it.
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores]; the
+    /// result does not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     /// Directory for fractal.npy, fractal.png, fractal-converged.npy and fractal-converged.png
@@ -60,6 +64,8 @@ pub struct FractalArgs {
     /// Write a JSON summary here (`-`: on stdout, and the report line on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// `dir/stem.npy` → `dir/stem{suffix}`.
@@ -102,17 +108,14 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         *target = GridAxis { lo: axis.lo, hi: axis.hi, n: axis.n };
         seen.push(axis.name);
     }
-    let t_max = f64_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
-    if !(t_max.is_finite() && t_max > 0.0) {
-        bail!("invalid --t-max {t_max}: must be finite and > 0");
-    }
-    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
-    if !(h.is_finite() && h > 0.0 && h <= t_max) {
-        bail!("invalid --dt {h}: must be finite, > 0 and at most --t-max {t_max}");
+    let t_max = positive_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
+    let h = positive_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    if h > t_max {
+        bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
     }
     let tolerance = f64_arg("--tolerance", args.tolerance.as_deref(), 0.01, "a time in seconds")?;
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        bail!("invalid --tolerance {tolerance}: must be finite and >= 0");
+    if tolerance < 0.0 {
+        bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
     }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let Some(batch) = batch_method(method) else {
@@ -124,10 +127,29 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     if let BatchMethod::Tao(scheme) = batch {
         integrator::tao::check_binding_step(&scheme, h)?;
     }
-    let threads = crate::config::parse_threads(args.threads.as_deref())?;
+    let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
     if args.out.as_deref() == Some(Path::new("-")) {
         bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");
     }
+    // What it costs, before any of it: every pixel at dt and at dt/2 (the allowed ones stop
+    // at their first flip, so this is an upper estimate), and per pixel its flip times, flags
+    // and images in memory (some 64 bytes) and 9 bytes of .npy.
+    let pixels = theta1.n as f64 * theta2.n as f64;
+    let steps = limits::steps(t_max, h) + limits::steps(t_max, h / 2.0);
+    let grid = format!("{} x {} pixels", theta1.n, theta2.n);
+    limits::check(
+        "fractal",
+        args.allow_large,
+        &[
+            Estimate::new(
+                Cost::LaneSteps,
+                pixels * steps,
+                format!("{grid} x {} steps", limits::round(steps)),
+            ),
+            Estimate::new(Cost::Memory, pixels * 64.0, format!("{grid} x 64 bytes")),
+            Estimate::new(Cost::Output, pixels * 9.0, format!("{grid} x 9 bytes")),
+        ],
+    )?;
     if let Some(out) = &args.out
         && out.extension().and_then(|e| e.to_str()) != Some("npy")
     {
@@ -172,7 +194,18 @@ pub fn run(args: &FractalArgs) -> Result<()> {
             bar.set_position(before + n);
         }
     };
-    let fractal = pool.install(|| flip_fractal_with_progress(&spec, &tick))?;
+    // A non-finite state is a numerical failure (exit 1) at a pixel, as in sweep.
+    let fractal = pool.install(|| flip_fractal_with_progress(&spec, &tick)).map_err(|e| match e {
+        pendula::ensemble::EnsembleError::NonFinite(f) => {
+            let (i, j) = (f.member % theta1.n, f.member / theta1.n);
+            anyhow::Error::new(pendula::Error::NonFinite { t: f.t }).context(format!(
+                "fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {}",
+                Short(theta1.centre(i)),
+                Short(theta2.centre(j))
+            ))
+        }
+        other => anyhow::Error::new(other),
+    })?;
     bar.finish_and_clear();
     let wall = begin.elapsed().as_secs_f64();
 

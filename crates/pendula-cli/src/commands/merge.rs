@@ -24,6 +24,8 @@ pub struct MergeArgs {
     /// The full array (a new path: not one of the shards).
     #[arg(long, value_name = "FILE.npy")]
     pub out: PathBuf,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// One shard, as its description states it.
@@ -137,6 +139,24 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         }
     }
     let shards = first.n;
+    // More shards than files: some are missing, found without a table of `shards` entries
+    // (their count comes from a file, and may be huge).
+    if shards > parts.len() {
+        let absent = shards - parts.iter().map(|p| p.k).collect::<std::collections::BTreeSet<_>>().len();
+        let named: Vec<String> = (1..=shards)
+            .filter(|k| !parts.iter().any(|p| p.k == *k))
+            .take(5)
+            .map(|k| format!("{k}/{shards}"))
+            .collect();
+        let more =
+            if absent > named.len() { format!(" and {} more", absent - named.len()) } else { String::new() };
+        bail!(
+            "shard{} {}{more} {} missing: give all {shards} shards",
+            if absent > 1 { "s" } else { "" },
+            named.join(", "),
+            if absent > 1 { "are" } else { "is" }
+        );
+    }
     let mut seen: Vec<Option<&Path>> = vec![None; shards];
     for s in &parts {
         if let Some(other) = seen[s.k - 1].replace(&s.path) {
@@ -158,6 +178,23 @@ pub fn run(args: &MergeArgs) -> Result<()> {
             if missing.len() > 1 { "are" } else { "is" }
         );
     }
+    let shape = first.shape.clone();
+    let columns = *shape.last().expect("a checked shape");
+    // The descriptions' shape is what the array will hold, in memory and then on disk:
+    // checked (and counted without overflow) before anything is read or allocated.
+    let total = shape.iter().try_fold(1_usize, |t, &a| t.checked_mul(a)).with_context(|| {
+        format!("{}: its shape {shape:?} has more values than can be counted", json_of(&first.path))
+    })?;
+    let bytes = total as f64 * 8.0;
+    let how = format!("{} values of shape {shape:?}", crate::limits::round(total as f64));
+    crate::limits::check(
+        "merge",
+        args.allow_large,
+        &[
+            crate::limits::Estimate::new(crate::limits::Cost::Memory, bytes, how.clone()),
+            crate::limits::Estimate::new(crate::limits::Cost::Output, bytes, how),
+        ],
+    )?;
     // Each file is the one its description was written with: its length, then its checksum,
     // before its contents are believed.
     for s in &parts {
@@ -185,10 +222,24 @@ pub fn run(args: &MergeArgs) -> Result<()> {
             );
         }
     }
-    let shape = first.shape.clone();
-    let columns = *shape.last().expect("a checked shape");
-    let total = shape.iter().try_fold(1_usize, |t, &a| t.checked_mul(a)).context("the grid is too large")?;
-    let mut data = vec![f64::NAN; total];
+    for s in &parts {
+        // The shard's header must hold what its description says, before it is read.
+        let claim = crate::limits::npy_claim(&s.path)?;
+        if claim.shape != [s.count, columns] || claim.item != 8 {
+            bail!(
+                "{}: shape {:?} of {}-byte values, its description says ({}, {columns}) float64",
+                s.path.display(),
+                claim.shape,
+                claim.item,
+                s.count
+            );
+        }
+    }
+    let mut data = Vec::new();
+    data.try_reserve_exact(total).map_err(|_| {
+        anyhow::anyhow!("cannot allocate {} for the merged array", crate::limits::bytes(bytes))
+    })?;
+    data.resize(total, f64::NAN);
     for s in &parts {
         let file =
             std::fs::File::open(&s.path).with_context(|| format!("cannot read {}", s.path.display()))?;

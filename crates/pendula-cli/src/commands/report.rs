@@ -273,7 +273,8 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
     let (mut bounded, mut growing, mut failed) = (Vec::new(), Vec::new(), Vec::new());
     let mut rows = Vec::new();
     for (name, m) in methods {
-        let growth = m["growth"].as_str().unwrap_or("-");
+        // A failed run has no growth: its status (`failed`, `refused`) is shown instead.
+        let growth = m["growth"].as_str().or(m["status"].as_str()).unwrap_or("-");
         match growth {
             "bounded" => bounded.push(name.clone()),
             "growing" => growing.push(name.clone()),
@@ -282,7 +283,7 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
         rows.push(vec![
             name.clone(),
             short(f(&m["dt"])),
-            m["cost_evals"].to_string(),
+            m["cost_evals"].as_u64().map_or_else(|| "-".to_owned(), |c| c.to_string()),
             short(f(&m["max_rel_energy_error"])),
             short(f(&m["drift_rate"])),
             growth.to_owned(),

@@ -39,6 +39,8 @@ pub struct Case {
     pub fifos: Vec<(String, BytesFn)>,
     /// Whether the case needs root (mknod); without it the case is skipped, and says so.
     pub root: bool,
+    /// The most bytes stderr may hold (a message must not echo megabytes of input).
+    pub max_stderr: Option<usize>,
 }
 
 impl Case {
@@ -55,6 +57,7 @@ impl Case {
             after: None,
             fifos: Vec::new(),
             root: false,
+            max_stderr: None,
         }
     }
 
@@ -104,6 +107,12 @@ impl Case {
     /// The case needs root (its setup makes device nodes with mknod); it is skipped otherwise.
     pub fn needs_root(mut self) -> Self {
         self.root = true;
+        self
+    }
+
+    /// At most `bytes` on stderr.
+    pub fn brief(mut self, bytes: usize) -> Self {
+        self.max_stderr = Some(bytes);
         self
     }
 
@@ -285,6 +294,11 @@ pub fn run_one(case: &Case) -> Option<String> {
         if !stderr.contains(fragment.as_str()) {
             problems.push(format!("stderr lacks {fragment:?}"));
         }
+    }
+    if let Some(max) = case.max_stderr
+        && stderr.len() > max
+    {
+        problems.push(format!("stderr holds {} bytes, more than {max}", stderr.len()));
     }
     if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
         problems.push("panicked".into());
