@@ -145,25 +145,43 @@ fn run_group(
 ))]
 fn period_kernel<const FMA: bool>(lanes: &mut Lanes, drive: &[f64]) {
     let steps = (drive.len() - 1) / 2;
-    let Lanes { theta, omega, h, damping, amplitude } = lanes;
-    let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
-        -w * damping - trig::sin_with::<FMA>(th) + amplitude * c
-    };
     for k in 0..steps {
-        let (c0, c_half, c1) = (drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]);
-        for i in 0..LANES {
-            let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
-            let hh = 0.5 * h;
-            let k1 = accel(th, w, b, a, c0);
-            let (th2, w2) = (th + hh * w, w + hh * k1);
-            let k2 = accel(th2, w2, b, a, c_half);
-            let (th3, w3) = (th + hh * w2, w + hh * k2);
-            let k3 = accel(th3, w3, b, a, c_half);
-            let (th4, w4) = (th + h * w3, w + h * k3);
-            let k4 = accel(th4, w4, b, a, c1);
-            let h6 = h / 6.0;
-            theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
-            omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        let c = [drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]];
+        let before = (lanes.theta, lanes.omega);
+        if !rk4_step::<FMA, false>(lanes, c) {
+            // An angle of the step was beyond the sine's fast range (rare: only the first
+            // period, before any wrap, or an enormous ω): the step again, reducing such
+            // angles exactly; the other lanes get the same bits.
+            (lanes.theta, lanes.omega) = before;
+            rk4_step::<FMA, true>(lanes, c);
         }
     }
+}
+
+/// One RK4 step for every lane, with the drive c at its start, middle and end, and the fast
+/// sine alone (`WIDE` false) or one for every angle; whether every angle it took the sine of
+/// was in the fast range ([`trig::is_fast`]) — if not, without `WIDE`, the step is wrong.
+#[inline(always)]
+fn rk4_step<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, [c0, c_half, c1]: [f64; 3]) -> bool {
+    let Lanes { theta, omega, h, damping, amplitude } = lanes;
+    let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
+        -w * damping - trig::sin_with::<FMA, WIDE>(th) + amplitude * c
+    };
+    let mut fast = true;
+    for i in 0..LANES {
+        let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
+        let hh = 0.5 * h;
+        let k1 = accel(th, w, b, a, c0);
+        let (th2, w2) = (th + hh * w, w + hh * k1);
+        let k2 = accel(th2, w2, b, a, c_half);
+        let (th3, w3) = (th + hh * w2, w + hh * k2);
+        let k3 = accel(th3, w3, b, a, c_half);
+        let (th4, w4) = (th + h * w3, w + h * k3);
+        let k4 = accel(th4, w4, b, a, c1);
+        fast &= trig::is_fast(th) & trig::is_fast(th2) & trig::is_fast(th3) & trig::is_fast(th4);
+        let h6 = h / 6.0;
+        theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
+        omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+    fast
 }

@@ -240,18 +240,48 @@ fn flip_time(lanes: &Lanes, i: usize, h: f64) -> f64 {
     step * h + first * h
 }
 
+/// Whether the fast trigonometry serves every lane's a, b and a − b ([`trig::is_fast`]): one
+/// test per lane group and stage, which keeps the kernels' loops branch-free.
+#[inline(always)]
+fn fast_lanes(a: &V, b: &V) -> bool {
+    let mut fast = true;
+    for i in 0..LANES {
+        fast &= trig::is_fast(a[i]) & trig::is_fast(b[i]) & trig::is_fast(a[i] - b[i]);
+    }
+    fast
+}
+
 /// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
 /// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC), with the branch-free sine and
-/// cosine (θ' = ω needs no work).
+/// cosine (θ' = ω needs no work), or, when an angle is beyond their fast range, a copy of the
+/// loop that reduces such arguments exactly.
 #[inline(always)]
 fn accelerations<const FMA: bool>(p: &[V; 7], th1: &V, th2: &V, w1: &V, w2: &V, a1: &mut V, a2: &mut V) {
+    if fast_lanes(th1, th2) {
+        accelerations_with::<FMA, false>(p, th1, th2, w1, w2, a1, a2);
+    } else {
+        accelerations_with::<FMA, true>(p, th1, th2, w1, w2, a1, a2);
+    }
+}
+
+/// [`accelerations`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn accelerations_with<const FMA: bool, const WIDE: bool>(
+    p: &[V; 7],
+    th1: &V,
+    th2: &V,
+    w1: &V,
+    w2: &V,
+    a1: &mut V,
+    a2: &mut V,
+) {
     for i in 0..LANES {
         // The parameter products that do not change, computed once per lane group in the same
         // grouping as the scalar expressions: m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g.
         let (m11, m2l2, neg_m2l2, m12g, l1, l2, g) =
             (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i]);
-        let (sd, cd) = trig::sin_cos_with::<FMA>(th1[i] - th2[i]);
-        let (s1, s2) = (trig::sin_with::<FMA>(th1[i]), trig::sin_with::<FMA>(th2[i]));
+        let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(th1[i] - th2[i]);
+        let (s1, s2) = (trig::sin_with::<FMA, WIDE>(th1[i]), trig::sin_with::<FMA, WIDE>(th2[i]));
         let m12 = m2l2 * cd;
         let m21 = l1 * cd;
         let m22 = l2;
@@ -396,19 +426,37 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
 
 /// The gradient (∂H/∂q₁, ∂H/∂q₂, ∂H/∂p₁, ∂H/∂p₂) of the double pendulum's Hamiltonian at
 /// (q, p) for every lane, in the expressions of `DoublePendulumForm`'s `dh_dq` and `dh_dp`
-/// (raw parameters m₁, m₂, l₁, l₂, g per lane).
+/// (raw parameters m₁, m₂, l₁, l₂, g per lane); as [`accelerations`], the exact reduction's
+/// copy of the loop only when an angle is beyond the fast range.
 #[inline(always)]
 fn gradient<const FMA: bool>(raw: &[V; 5], q1: &V, q2: &V, p1: &V, p2: &V, out: &mut [V; 4]) {
+    if fast_lanes(q1, q2) {
+        gradient_with::<FMA, false>(raw, q1, q2, p1, p2, out);
+    } else {
+        gradient_with::<FMA, true>(raw, q1, q2, p1, p2, out);
+    }
+}
+
+/// [`gradient`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn gradient_with<const FMA: bool, const WIDE: bool>(
+    raw: &[V; 5],
+    q1: &V,
+    q2: &V,
+    p1: &V,
+    p2: &V,
+    out: &mut [V; 4],
+) {
     for i in 0..LANES {
         let (m1, m2, l1, l2, g) = (raw[0][i], raw[1][i], raw[2][i], raw[3][i], raw[4][i]);
-        let (s, c) = trig::sin_cos_with::<FMA>(q1[i] - q2[i]);
+        let (s, c) = trig::sin_cos_with::<FMA, WIDE>(q1[i] - q2[i]);
         let d = m1 + m2 * s * s;
         let (a, b) = (p1[i], p2[i]);
         let bracket = m2 * c / (l1 * l1) * a * a - (m2 * c * c + (m1 + m2)) / (l1 * l2) * a * b
             + (m1 + m2) * c / (l2 * l2) * b * b;
         let coupling = s / (d * d) * bracket;
-        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA>(q1[i]);
-        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA>(q2[i]);
+        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA, WIDE>(q1[i]);
+        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA, WIDE>(q2[i]);
         let det = m2 * l1 * l1 * l2 * l2 * d;
         let bc = m2 * l1 * l2 * c;
         out[2][i] = (m2 * l2 * l2 * a - bc * b) / det;
@@ -637,10 +685,24 @@ pub fn rk4_trajectory(
 }
 
 /// The trigonometry of a state: (sin, cos) of θ₁ − θ₂, θ₁ and θ₂ — what both the
-/// accelerations and the energy need, computed once per step.
+/// accelerations and the energy need, computed once per step (one test of the angles picks
+/// the fast path for all three, or the path for every angle).
 #[inline(always)]
 fn trig_of<const FMA: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
-    [trig::sin_cos_with::<FMA>(y[0] - y[1]), trig::sin_cos_with::<FMA>(y[0]), trig::sin_cos_with::<FMA>(y[1])]
+    if fast_pair(y[0], y[1]) { trig_of_with::<FMA, false>(y) } else { trig_of_with::<FMA, true>(y) }
+}
+
+/// Whether the fast trigonometry serves a, b and a − b ([`trig::is_fast`]).
+#[inline(always)]
+fn fast_pair(a: f64, b: f64) -> bool {
+    trig::is_fast(a) & trig::is_fast(b) & trig::is_fast(a - b)
+}
+
+/// [`trig_of`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn trig_of_with<const FMA: bool, const WIDE: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
+    let sc = trig::sin_cos_with::<FMA, WIDE>;
+    [sc(y[0] - y[1]), sc(y[0]), sc(y[1])]
 }
 
 /// The energy T + V of one double pendulum (the expressions of `DoublePendulum::energy`)
@@ -678,11 +740,22 @@ fn accelerations_from<const FMA: bool>(
     [y[2], y[3], m(r1, m22, -(m12 * r2)) * inverse, m(m11, r2, -(m21 * r1)) * inverse]
 }
 
-/// The accelerations of one double pendulum at y.
+/// The accelerations of one double pendulum at y (as [`trig_of`], one test of the angles).
 #[inline(always)]
 fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
-    let (sd, cd) = trig::sin_cos_with::<FMA>(y[0] - y[1]);
-    accelerations_from::<FMA>(p, y, sd, cd, trig::sin_with::<FMA>(y[0]), trig::sin_with::<FMA>(y[1]))
+    if fast_pair(y[0], y[1]) {
+        accelerations_one_with::<FMA, false>(p, y)
+    } else {
+        accelerations_one_with::<FMA, true>(p, y)
+    }
+}
+
+/// [`accelerations_one`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
+    let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(y[0] - y[1]);
+    let s = trig::sin_with::<FMA, WIDE>;
+    accelerations_from::<FMA>(p, y, sd, cd, s(y[0]), s(y[1]))
 }
 
 #[multiversion::multiversion(targets(
