@@ -1,48 +1,14 @@
-//! The ensemble engine: its sine and cosine against the platform's, its RK4 lanes against
-//! the scalar RK4, flip times against located events, bitwise determinism across thread
-//! counts and chunkings, and non-finite members reported by index.
+//! The ensemble engine: its RK4 lanes against the scalar RK4, flip times against located
+//! events, bitwise determinism across thread counts and chunkings, and non-finite members
+//! reported by index (its sine and cosine: trig.rs).
 
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult, trig};
+use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
 use pendula::events::{EventLocator, EventSpec};
 use pendula::integrator::explicit_rk::RK4;
 use pendula::system::double::DoublePendulum;
 use pendula::{End, RunSpec};
 
-use crate::support::values;
-
-/// Distance in units in the last place between two finite doubles.
-fn ulps(a: f64, b: f64) -> u64 {
-    let key = |x: f64| {
-        let bits = x.to_bits() as i64;
-        if bits < 0 { i64::MIN - bits } else { bits }
-    };
-    key(a).abs_diff(key(b))
-}
-
-/// A deterministic sequence in [lo, hi) (a 64-bit LCG; no test depends on its quality).
-fn samples(n: usize, lo: f64, hi: f64) -> impl Iterator<Item = f64> {
-    let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
-    (0..n).map(move |_| {
-        s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        lo + (hi - lo) * ((s >> 11) as f64 / (1u64 << 53) as f64)
-    })
-}
-
-#[test]
-fn ref_sine_and_cosine_are_within_two_ulps_of_the_platform() {
-    let mut worst = (0u64, 0u64);
-    for (lo, hi) in [(-1e4, 1e4), (-10.0, 10.0), (-1e-3, 1e-3), (-4.0, 4.0)] {
-        for x in samples(200_000, lo, hi) {
-            let (s, c) = trig::sin_cos(x);
-            worst.0 = worst.0.max(ulps(s, x.sin())).max(ulps(trig::sin(x), x.sin()));
-            worst.1 = worst.1.max(ulps(c, x.cos()));
-        }
-    }
-    // Exact values at the quadrant boundaries' neighbours and zero.
-    assert_eq!(trig::sin_cos(0.0), (0.0, 1.0));
-    eprintln!("max ulps: sin {}, cos {}", worst.0, worst.1);
-    assert!(worst.0 <= 2 && worst.1 <= 2, "{worst:?}");
-}
+use crate::support::{samples, values};
 
 fn members() -> Vec<Member> {
     let mut out = Vec::new();
