@@ -107,10 +107,21 @@ fn run_group(
     let per_member = spec.samples * 2;
     let last_period = group.iter().map(|g| g.transient_periods).max().unwrap_or(0) + spec.samples as u64;
     for period in 0..last_period {
-        if has_fma() {
-            period_kernel::<true>(&mut lanes, drive);
+        let before = (lanes.theta, lanes.omega);
+        let fast = if has_fma() {
+            period_kernel::<true, false>(&mut lanes, drive)
         } else {
-            period_kernel::<false>(&mut lanes, drive);
+            period_kernel::<false, false>(&mut lanes, drive)
+        };
+        if !fast {
+            // An angle was beyond the sine's fast range (rare: the first period, before any
+            // wrap, or an enormous ω): the period again, reducing such angles exactly.
+            (lanes.theta, lanes.omega) = before;
+            if has_fma() {
+                period_kernel::<true, true>(&mut lanes, drive);
+            } else {
+                period_kernel::<false, true>(&mut lanes, drive);
+            }
         }
         for (i, member) in group.iter().enumerate() {
             let (theta, omega) = (lanes.theta[i], lanes.omega[i]);
@@ -134,7 +145,10 @@ fn run_group(
     Ok(())
 }
 
-/// One drive period of RK4 steps for every lane.
+/// One drive period of RK4 steps for every lane. Not `WIDE`: the fast sine alone, tracking
+/// the largest |angle| it takes per lane (data flow only: a branch in the loop would slow it),
+/// and whether all were in the fast range — if not, the results are wrong. `WIDE`: angles
+/// beyond the fast range reduced exactly, per lane (true); the others get the same bits.
 #[multiversion::multiversion(targets(
     "x86_64+avx512f+avx512dq+avx2+fma",
     "x86_64+avx2+fma",
@@ -143,45 +157,35 @@ fn run_group(
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-fn period_kernel<const FMA: bool>(lanes: &mut Lanes, drive: &[f64]) {
+fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[f64]) -> bool {
     let steps = (drive.len() - 1) / 2;
-    for k in 0..steps {
-        let c = [drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]];
-        let before = (lanes.theta, lanes.omega);
-        if !rk4_step::<FMA, false>(lanes, c) {
-            // An angle of the step was beyond the sine's fast range (rare: only the first
-            // period, before any wrap, or an enormous ω): the step again, reducing such
-            // angles exactly; the other lanes get the same bits.
-            (lanes.theta, lanes.omega) = before;
-            rk4_step::<FMA, true>(lanes, c);
-        }
-    }
-}
-
-/// One RK4 step for every lane, with the drive c at its start, middle and end, and the fast
-/// sine alone (`WIDE` false) or one for every angle; whether every angle it took the sine of
-/// was in the fast range ([`trig::is_fast`]) — if not, without `WIDE`, the step is wrong.
-#[inline(always)]
-fn rk4_step<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, [c0, c_half, c1]: [f64; 3]) -> bool {
     let Lanes { theta, omega, h, damping, amplitude } = lanes;
     let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
         -w * damping - trig::sin_with::<FMA, WIDE>(th) + amplitude * c
     };
-    let mut fast = true;
-    for i in 0..LANES {
-        let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
-        let hh = 0.5 * h;
-        let k1 = accel(th, w, b, a, c0);
-        let (th2, w2) = (th + hh * w, w + hh * k1);
-        let k2 = accel(th2, w2, b, a, c_half);
-        let (th3, w3) = (th + hh * w2, w + hh * k2);
-        let k3 = accel(th3, w3, b, a, c_half);
-        let (th4, w4) = (th + h * w3, w + h * k3);
-        let k4 = accel(th4, w4, b, a, c1);
-        fast &= trig::is_fast(th) & trig::is_fast(th2) & trig::is_fast(th3) & trig::is_fast(th4);
-        let h6 = h / 6.0;
-        theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
-        omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    // max(x, r) by a comparison, not f64::max: one instruction, and a NaN x (which either path
+    // turns into NaN) leaves r as it was.
+    let max = |x: f64, r: f64| if x > r { x } else { r };
+    let mut reach = [0.0; LANES];
+    for k in 0..steps {
+        let (c0, c_half, c1) = (drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]);
+        for i in 0..LANES {
+            let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
+            let hh = 0.5 * h;
+            let k1 = accel(th, w, b, a, c0);
+            let (th2, w2) = (th + hh * w, w + hh * k1);
+            let k2 = accel(th2, w2, b, a, c_half);
+            let (th3, w3) = (th + hh * w2, w + hh * k2);
+            let k3 = accel(th3, w3, b, a, c_half);
+            let (th4, w4) = (th + h * w3, w + h * k3);
+            let k4 = accel(th4, w4, b, a, c1);
+            if !WIDE {
+                reach[i] = max(th4.abs(), max(th3.abs(), max(th2.abs(), max(th.abs(), reach[i]))));
+            }
+            let h6 = h / 6.0;
+            theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
+            omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
     }
-    fast
+    WIDE || !reach.iter().fold(false, |beyond, &r| beyond | (r > trig::FAST_RANGE))
 }

@@ -9,10 +9,11 @@
 //! quadrant k mod 4 selects and signs them. [`sin`] alone reduces by π instead (one
 //! polynomial, no select).
 //!
-//! **Beyond**, and for infinities: the exact (Payne–Hanek) reduction of [`exact`], scalar.
-//! A loop over lanes keeps its fast, vectorised body by checking once per lane group that
-//! every argument is [`is_fast`], and running a copy of the body that takes
-//! `sin_cos_with::<_, true>` otherwise; lanes in the fast range get the same bits either way.
+//! **Beyond**, and for infinities: the exact (Payne–Hanek) reduction of [`exact`], scalar,
+//! which `sin_cos_with::<_, true>` (`WIDE`) takes for the arguments that are not [`is_fast`].
+//! The lane kernels stay branch-free: their fast copy (`WIDE` false) only tracks the largest
+//! |angle| per lane, and a lane group that went beyond the fast range runs again with the
+//! `WIDE` copy, in which lanes in the fast range get the same bits as before.
 //!
 //! Accuracy, against the platform's `sin`/`cos` (glibc) over every finite double (exponents
 //! drawn uniformly, and values next to multiples of π/2) and against mpmath on hard cases
@@ -35,9 +36,8 @@ pub mod exact;
 /// keeps k·P₁ exact and the reduction's absolute error below 6.8·10⁻²¹.
 pub const FAST_RANGE: f64 = 1_048_576.0;
 
-/// Whether the fast path serves x (|x| ≤ [`FAST_RANGE`], or x is NaN, which both paths turn
-/// into NaN): the test a lane group makes once for all its arguments, so that its loop stays
-/// branch-free unless some lane needs the exact reduction.
+/// Whether the fast path serves x: |x| ≤ [`FAST_RANGE`], or x is NaN, which both paths turn
+/// into NaN.
 #[inline(always)]
 pub fn is_fast(x: f64) -> bool {
     (x.abs() <= FAST_RANGE) | x.is_nan()
