@@ -4,16 +4,17 @@
 //!
 //! **Fast path**, |x| ≤ [`FAST_RANGE`] = 2²⁰: x = k π/2 + r with k = round(2x/π) (round to
 //! nearest even, by the 1.5·2⁵² trick) and r by a two-part Cody–Waite reduction (π/2 split
-//! into a 33-bit piece, so k·P₁ is exact for |k| < 2²⁰, and the rest); then sin r and cos r by
-//! the minimax polynomials of fdlibm's `__kernel_sin` and `__kernel_cos` on |r| ≤ π/4, and the
-//! quadrant k mod 4 selects and signs them. [`sin`] alone reduces by π instead (one
-//! polynomial, no select).
+//! into fdlibm's 33-bit piece P₁, whose last two bits are zero, so k·P₁ is exact for
+//! |k| < 2²², and the rest); then sin r and cos r by the minimax polynomials of fdlibm's
+//! `__kernel_sin` and `__kernel_cos` on |r| ≤ π/4, and the quadrant k mod 4 selects and signs
+//! them. [`sin`] alone reduces by π instead (one polynomial, no select).
 //!
 //! **Beyond**, and for infinities: the exact (Payne–Hanek) reduction of [`exact`], scalar,
 //! which `sin_cos_with::<_, true>` (`WIDE`) takes for the arguments that are not [`is_fast`].
-//! The lane kernels stay branch-free: their fast copy (`WIDE` false) only tracks the largest
-//! |angle| per lane, and a lane group that went beyond the fast range runs again with the
-//! `WIDE` copy, in which lanes in the fast range get the same bits as before.
+//! The lane kernels stay branch-free: their fast copy (`WIDE` false) only tracks how far each
+//! lane's angles reach (or, in the driven kernel, a bound from its speeds), and a lane group
+//! that may have gone beyond the fast range runs again with the `WIDE` copy, in which lanes in
+//! the fast range get the same bits as before.
 //!
 //! Accuracy, against the platform's `sin`/`cos` (glibc) over every finite double (exponents
 //! drawn uniformly, and values next to multiples of π/2) and against mpmath on hard cases
@@ -33,7 +34,7 @@
 pub mod exact;
 
 /// The largest |x| the fast path serves: 2²⁰ rad (about 1.7·10⁵ turns), where k ≤ 667 544
-/// keeps k·P₁ exact and the reduction's absolute error below 6.8·10⁻²¹.
+/// keeps k·P₁ exact with room to spare and the reduction's absolute error below 6.8·10⁻²¹.
 pub const FAST_RANGE: f64 = 1_048_576.0;
 
 /// Whether the fast path serves x: |x| ≤ [`FAST_RANGE`], or x is NaN, which both paths turn
@@ -45,7 +46,8 @@ pub fn is_fast(x: f64) -> bool {
 
 /// 2/π.
 const TWO_OVER_PI: f64 = std::f64::consts::FRAC_2_PI;
-/// π/2 ≈ P1 + P2T: P1 has 33 significant bits (k·P1 is exact for |k| < 2²⁰), P2T is the
+/// π/2 ≈ P1 + P2T: P1 is fdlibm's `pio2_1`, the first 33 bits of π/2, of which the last two
+/// are zero (so k·P1 is exact for |k| < 2²², |x| < 6.6·10⁶), P2T is the
 /// double nearest π/2 − P1 (fdlibm's `pio2_1t`, 3.5·10⁻²⁷ from it by mpmath); the reduction's
 /// absolute error is then at most |k|·3.5·10⁻²⁷ + ½ ulp(k·P2T), far below an ulp of r except
 /// near the multiples of π/2, where r itself is tiny.
