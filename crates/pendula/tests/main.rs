@@ -29,3 +29,4 @@ mod schedule;
 mod special;
 mod support;
 mod symplectic;
+mod trig;
