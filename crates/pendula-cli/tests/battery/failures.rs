@@ -97,7 +97,7 @@ pub fn cases() -> Vec<Case> {
             .says("non-finite"),
         Case::new(
             "bifurcation's non-finite state",
-            "bifurcation --param drive_amplitude=1e300:1e301:2 --transient 10 --samples 2 --out-dir o",
+            "bifurcation --param drive_amplitude=1e308:1.7e308:2 --transient 100 --samples 2 --out-dir o",
         )
         .exit(1)
         .says("drive_amplitude = ")
