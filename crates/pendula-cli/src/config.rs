@@ -56,7 +56,7 @@ pub struct SimulateConfig {
 /// A scenario file: the same names as the flags.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Scenario {
+pub(crate) struct Scenario {
     system: Option<String>,
     method: Option<String>,
     dt: Option<f64>,
@@ -86,6 +86,13 @@ fn read_scenario(path: &Path) -> Result<Scenario> {
     file.take(limits::MAX_SCENARIO_BYTES + 1)
         .read_to_end(&mut bytes)
         .with_context(|| format!("cannot read scenario file {name}"))?;
+    parse_scenario(bytes, &name.to_string())
+}
+
+/// The scenario in `bytes`, the contents of the file `name`: checked for its size, UTF-8 and
+/// nesting before the TOML parser sees it (the fuzz harness, `src/fuzz/`, calls it with
+/// generated files).
+pub(crate) fn parse_scenario(bytes: Vec<u8>, name: &str) -> Result<Scenario> {
     if bytes.len() as u64 > limits::MAX_SCENARIO_BYTES {
         bail!(
             "scenario file {name} is larger than {}, the limit for a scenario (a few lines of keys and values)",
@@ -555,6 +562,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         Some(path) => read_scenario(path)?,
         None => Scenario::default(),
     };
+    simulate_with(args, scenario)
+}
+
+/// [`simulate`] with the scenario file already read: the flags override `scenario`.
+pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<SimulateConfig> {
     let preset = args.preset.as_deref().map(system::driven::find_preset).transpose()?;
     let system_name = args
         .system

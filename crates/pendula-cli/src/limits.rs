@@ -252,10 +252,15 @@ impl NpyClaim {
 /// Reads and checks the header of the .npy at `path` (format 1, 2 or 3): the values its
 /// shape and type claim must be what the file holds after the header.
 pub fn npy_claim(path: &std::path::Path) -> Result<NpyClaim> {
-    use std::io::Read;
     let name = path.display();
-    let mut file = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?;
+    let file = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?;
     let length = file.metadata().map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?.len();
+    npy_claim_from(file, length, &name.to_string())
+}
+
+/// [`npy_claim`] of the .npy `file`, `length` bytes long, named `name` in messages (the fuzz
+/// harness, `src/fuzz/`, reads generated files from memory).
+pub(crate) fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &str) -> Result<NpyClaim> {
     let bad = |why: &str| anyhow::anyhow!("{name} is not a valid .npy file: {why}");
     let mut head = [0u8; 12];
     file.read_exact(&mut head[..10]).map_err(|_| bad("too short for a header"))?;

@@ -312,7 +312,7 @@ pub fn draw(panels: &[Figure], path: &Path) -> Result<Vec<u8>> {
 
 /// A grid from `sweep` or `fractal`: axes (from the JSON description beside the file, when
 /// there is one) and the values of each cell.
-struct Grid {
+pub(crate) struct Grid {
     /// (name, lo, hi, n) per axis, fastest first.
     axes: Vec<(String, f64, f64, usize)>,
     /// Column names; one unnamed column for a fractal.
@@ -449,12 +449,13 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
 }
 
 /// What a file holds, read.
-enum Contents {
+pub(crate) enum Contents {
     Table(Trajectory),
     Grid(Grid),
 }
 
-fn read(args: &PlotArgs) -> Result<Contents> {
+/// Reads `args.file` (the fuzz harness, `src/fuzz/`, calls it on generated files).
+pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
     let path = &args.file;
     let title =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
@@ -610,8 +611,26 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     // The picture may not replace what it is drawn from.
     crate::output::claim_input(&args.file, "input file")?;
     let file = AtomicFile::create(&out, "--out")?;
-    let contents = read(args)?;
-    let bytes = match contents {
+    let bytes = match picture(args, &out, read(args)?)? {
+        Picture::Panels(panels) => draw(&panels, &out)?,
+        Picture::Map(map) => map.png()?,
+    };
+    file.write_all(&bytes)?;
+    file.commit()?;
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
+/// What `plot` draws: a table's panels, or a grid's heat map.
+pub(crate) enum Picture {
+    Panels(Vec<Figure>),
+    Map(Heatmap),
+}
+
+/// The picture of `contents` that the flags ask for, checked and laid out, not yet drawn
+/// into `out`.
+pub(crate) fn picture(args: &PlotArgs, out: &Path, contents: Contents) -> Result<Picture> {
+    Ok(match contents {
         Contents::Table(t) => {
             let mut panels = Vec::new();
             if args.x.is_some() || !args.y.is_empty() || !(args.phase || args.energy) {
@@ -623,7 +642,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             if args.energy {
                 panels.push(t.energy_error()?);
             }
-            draw(&panels, &out)?
+            Picture::Panels(panels)
         }
         Contents::Grid(g) => {
             if args.phase || args.energy || args.x.is_some() {
@@ -645,12 +664,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
                 bail!("invalid --out {}: heat maps are drawn as .png", out.display());
             }
             let title = args.file.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            let map = heatmap(&g, column, title)?;
-            map.png()?
+            Picture::Map(heatmap(&g, column, title)?)
         }
-    };
-    file.write_all(&bytes)?;
-    file.commit()?;
-    eprintln!("wrote {}", out.display());
-    Ok(())
+    })
 }
