@@ -86,7 +86,8 @@ fn exit_code(err: &anyhow::Error) -> u8 {
 
 /// The error and its causes, `: `-separated as anyhow's `{:#}` prints them, without a cause
 /// that only repeats the end of the message before it (a CSV or NPY writer's error wrapping a
-/// [`output::WriteError`] prints it, then gives it as its source).
+/// [`output::WriteError`] prints it, then gives it as its source); at most [`MAX_MESSAGE`]
+/// bytes.
 fn message(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
@@ -96,7 +97,23 @@ fn message(err: &anyhow::Error) -> String {
         }
         parts.push(text);
     }
-    parts.join(": ")
+    elide(parts.join(": "))
+}
+
+/// The longest message printed. Values are clipped where a message quotes them
+/// (`config::clip`), but paths are quoted whole, and an argument may hold 128 KiB (Linux's
+/// limit): a message quoting such a path twice would bury its reason.
+const MAX_MESSAGE: usize = 4096;
+
+/// `text`, or when longer than [`MAX_MESSAGE`] its beginning and its end (where the reason
+/// usually is: `…: File name too long`) with the middle elided.
+fn elide(text: String) -> String {
+    if text.len() <= MAX_MESSAGE {
+        return text;
+    }
+    let head = text.floor_char_boundary(MAX_MESSAGE / 2);
+    let tail = text.ceil_char_boundary(text.len() - MAX_MESSAGE / 4);
+    format!("{} … ({} bytes elided) … {}", &text[..head], tail - head, &text[tail..])
 }
 
 /// A reader that went away (`pendula simulate --out - | head`) is not an error.
@@ -107,4 +124,20 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
                 |e| matches!(e.kind(), csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::BrokenPipe),
             )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{MAX_MESSAGE, elide};
+
+    #[test]
+    fn long_messages_keep_their_beginning_and_their_end() {
+        assert_eq!(elide("short".into()), "short");
+        let path = "é".repeat(70_000);
+        let long = elide(format!("cannot write --out {path}: File name too long (os error 36)"));
+        assert!(long.len() <= MAX_MESSAGE, "{} bytes", long.len());
+        assert!(long.starts_with("cannot write --out éé"), "{long}");
+        assert!(long.ends_with("File name too long (os error 36)"), "{long}");
+        assert!(long.contains("bytes elided"), "{long}");
+    }
 }

@@ -99,8 +99,10 @@ pub(crate) fn describe(path: &Path) -> Result<Shard> {
     if !(1 <= k && k <= n && n <= cells) {
         bail!("{json}: shard {k} of {n} is not a shard of a grid of {cells} cells");
     }
-    // The slices `sweep` cuts: N contiguous ones, as equal as possible.
-    let (start, end) = ((k - 1) * cells / n, k * cells / n);
+    // The slices `sweep` cuts: N contiguous ones, as equal as possible. In u128, as `sweep`
+    // counts them: k × cells overflows usize for a description's huge grid cut in many shards.
+    let slice = |k: usize| (k as u128 * cells as u128 / n as u128) as usize;
+    let (start, end) = (slice(k - 1), slice(k));
     if (shard.offset, shard.count) != (start, end - start) {
         bail!(
             "{json}: the description says cells {} to {} (offset {}, count {}), but shard {k}/{n} of {cells} cells is cells {start} to {end}: the description does not match the grid",

@@ -104,7 +104,57 @@ pub fn cases() -> Vec<Case> {
             .arg(format!("--set=theta1={}", "9".repeat(100_000)))
             .says("`theta1`")
             .brief(400),
+        // Paths are quoted whole, but a message is at most 4 KiB: its middle is elided.
+        Case::new("a 100 kB --out", "simulate --steps 1")
+            .arg(format!("--out={}.csv", "p".repeat(100_000)))
+            .says("cannot write --out ppp")
+            .says("bytes elided")
+            .says("File name too long")
+            .brief(4200),
+        // Found by the fuzz harness (src/fuzz): .npy headers that the claim and the reader
+        // read differently, or that the reader's parser takes days over.
+        Case::new("a .npy header giving its shape twice", "plot x.npy")
+            .setup(|d| {
+                let header =
+                    "{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'shape': (1000000000000000,), }";
+                std::fs::write(d.join("x.npy"), npy(header, &[0; 8])).unwrap();
+            })
+            .says("x.npy")
+            .says("claims [1000000000000000] values of 8 bytes"),
+        Case::new("a .npy header nested 40 deep", "plot x.npy")
+            .setup(|d| {
+                let header = format!(
+                    "{{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'x': {}1{}}}",
+                    "{1: ".repeat(40),
+                    "}".repeat(40)
+                );
+                std::fs::write(d.join("x.npy"), npy(&header, &[0; 8])).unwrap();
+            })
+            .says("its header nests 9 deep, more than 8"),
+        Case::new("a .npy of no values along an axis too long to count", "plot x.npy")
+            .setup(|d| {
+                let header = "{'descr': '<f8', 'fortran_order': False, 'shape': (0, 9223372036854775808), }";
+                std::fs::write(d.join("x.npy"), npy(header, &[])).unwrap();
+            })
+            .says("beyond counting"),
+        Case::new("a .npy of values of no bytes", "plot x.npy")
+            .setup(|d| {
+                let header = "{'descr': '|V0', 'fortran_order': False, 'shape': (100000000000,), }";
+                std::fs::write(d.join("x.npy"), npy(header, &[])).unwrap();
+            })
+            .says("take no bytes"),
     ]
+}
+
+/// A .npy file (format 1) of `header` (a Python dict, padded here) and `data`.
+fn npy(header: &str, data: &[u8]) -> Vec<u8> {
+    let pad = (64 - (10 + header.len() + 1) % 64) % 64;
+    let header = format!("{header}{}\n", " ".repeat(pad));
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.bytes());
+    bytes.extend(data);
+    bytes
 }
 
 #[test]

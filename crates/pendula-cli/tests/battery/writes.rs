@@ -501,6 +501,18 @@ fn merge() -> Vec<Case> {
                 std::fs::write(path, &text[..text.len() / 2]).unwrap();
             })
             .says("invalid shard description p1.npy.json"),
+        // Found by the fuzz harness (src/fuzz): k x cells overflowed, a panic.
+        Case::new("a description of a grid too large to count its slices", ALL)
+            .setup(|d| {
+                shards(d);
+                edit(d, "p3.npy.json", |j| {
+                    j["shape"] = serde_json::json!([1u64 << 62, 4]);
+                    j["shard"] = 5.into();
+                    j["shards"] = 5.into();
+                });
+            })
+            .says("p3.npy.json: the description says cells 4 to 6")
+            .says("does not match the grid"),
         Case::new("a merge that fails keeps the earlier output", "merge p1.npy p2.npy --out m.npy")
             .setup(|d| {
                 shards(d);
