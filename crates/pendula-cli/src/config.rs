@@ -398,6 +398,23 @@ pub fn clip(text: &str) -> String {
     }
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Set by the fuzz harness (`src/fuzz/`) on its threads: its millions of generated
+    /// values would fill the test's captured output with warnings, and the list of values
+    /// warned about once with their texts.
+    pub(crate) static QUIET_WARNINGS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether warnings and notes on stderr are silenced: only ever on the fuzz harness's
+/// threads, in the unit tests.
+pub(crate) fn quiet() -> bool {
+    #[cfg(test)]
+    return QUIET_WARNINGS.get();
+    #[cfg(not(test))]
+    false
+}
+
 /// Warns on stderr, once per name and value, when a bare number for an angle exceeds a full
 /// turn: `theta1=120` is far more likely 120° than 19 turns. It is a warning, not an error,
 /// because spun-up starts (several turns) are legitimate.
@@ -405,6 +422,9 @@ fn warn_radians(name: &str, text: &str, value: f64) {
     use std::sync::Mutex;
     static WARNED: Mutex<Vec<(String, String)>> = Mutex::new(Vec::new());
     if !(value.abs() > std::f64::consts::TAU && value.is_finite()) {
+        return;
+    }
+    if quiet() {
         return;
     }
     let key = (name.to_owned(), text.to_owned());

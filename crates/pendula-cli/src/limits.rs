@@ -25,6 +25,9 @@ pub const MAX_MEMORY_BYTES: f64 = (2u64 << 30) as f64;
 pub const MAX_INPUT_BYTES: f64 = (1u64 << 30) as f64;
 /// Bytes of a scenario file: a scenario is a few lines, and it is read whole.
 pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+/// Bytes of a JSON description beside a .npy (a shard's, a sweep's or fractal's summary):
+/// some hundred bytes per axis, and it is read whole.
+pub const MAX_DESCRIPTION_BYTES: u64 = 1 << 20;
 /// Nesting of arrays and tables in a scenario file (the parser recurses on it).
 pub const MAX_SCENARIO_DEPTH: usize = 16;
 /// Step sizes of a convergence or work-precision study, and tolerances of work-precision:

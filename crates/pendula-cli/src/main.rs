@@ -7,6 +7,8 @@ mod study;
 mod cli;
 mod commands;
 mod config;
+#[cfg(test)]
+mod fuzz;
 mod generate;
 mod limits;
 mod list;

@@ -455,8 +455,49 @@ fn conflict(old: &Claim, new: &Claim) -> Option<String> {
     }
 }
 
+/// Every first change a run makes outside itself passes here: a claim in the run's list of
+/// outputs, a directory or a temporary file created. Everything a command checks before its
+/// first output has been checked by then, and nothing written. In the unit tests' build a
+/// thread may stop its command here ([`validate_only`]): the fuzz harness (`src/fuzz/`)
+/// so validates millions of generated requests without running them.
+fn first_change() -> Result<()> {
+    #[cfg(test)]
+    if VALIDATE_ONLY.get() {
+        return Err(Validated.into());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+thread_local! {
+    static VALIDATE_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Stops this thread's commands at their first output ([`first_change`]) with [`Validated`]
+/// (`on`), or lets them run (`!on`). Tests only.
+#[cfg(test)]
+pub(crate) fn validate_only(on: bool) {
+    VALIDATE_ONLY.set(on);
+}
+
+/// The error of a command stopped by [`validate_only`]: its input was accepted.
+#[cfg(test)]
+#[derive(Debug)]
+pub(crate) struct Validated;
+
+#[cfg(test)]
+impl std::fmt::Display for Validated {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("validated; stopped before the first output")
+    }
+}
+
+#[cfg(test)]
+impl std::error::Error for Validated {}
+
 /// Adds `claim` to the current run's list, or says why it collides with one there.
 fn claim(claim: Claim) -> Result<()> {
+    first_change()?;
     let mut claims = CLAIMS.lock().unwrap_or_else(PoisonError::into_inner);
     if claims.is_empty() {
         claims.push(Vec::new());
@@ -526,6 +567,7 @@ fn temp_name() -> String {
 /// Checks that the directory `dir` (of option `flag`) takes new files, before any work: a
 /// temporary file is created there and removed at once.
 pub fn probe(dir: &Path, flag: &str) -> Result<()> {
+    first_change()?;
     let temp = dir.join(temp_name());
     let mut live = live();
     OpenOptions::new().write(true).create_new(true).open(&temp).map_err(|e| WriteError::new(flag, dir, e))?;
@@ -560,6 +602,7 @@ impl CreatedDirs {
             }
         }
         missing.reverse();
+        first_change()?;
         let mut live = live();
         live.dirs.extend(missing.iter().cloned());
         let created = CreatedDirs { dirs: missing };

@@ -333,8 +333,9 @@ fn description(path: &Path) -> Option<serde_json::Value> {
         candidates.push(path.with_file_name(format!("{fractal}.json")));
     }
     candidates.iter().find_map(|p| {
-        let text = std::fs::read_to_string(p).ok()?;
-        let doc: serde_json::Value = serde_json::from_str(&text).ok()?;
+        // Larger than a description: not one of ours.
+        let text = crate::commands::sweep::read_capped(p, crate::limits::MAX_DESCRIPTION_BYTES).ok()?;
+        let doc: serde_json::Value = serde_json::from_slice(&text).ok()?;
         doc.get("axes").and_then(|a| a.as_array()).is_some().then_some(doc)
     })
 }
@@ -564,11 +565,13 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                         .chain((1..c - 1).map(|k| format!("y{k}")))
                         .chain(std::iter::once("energy".to_owned()))
                         .collect();
-                    eprintln!(
-                        "note: {} has {c} columns, taken as t, y1 … y{}, energy; give --system NAME for names and units",
-                        path.display(),
-                        c - 2
-                    );
+                    if !crate::config::quiet() {
+                        eprintln!(
+                            "note: {} has {c} columns, taken as t, y1 … y{}, energy; give --system NAME for names and units",
+                            path.display(),
+                            c - 2
+                        );
+                    }
                     let mut t = Trajectory::new(title, names, values, None);
                     t.energy = Some(c - 1);
                     let half = (c - 2) / 2;
@@ -601,8 +604,17 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     if !args.file.exists() {
         bail!("cannot read {}: no such file", args.file.display());
     }
-    // The file is read whole: its size is checked first.
-    let size = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0) as f64;
+    // The file is read whole: its size is checked first, and a FIFO or device has none to
+    // check (/dev/zero would be read until memory runs out).
+    let meta =
+        std::fs::metadata(&args.file).with_context(|| format!("cannot read {}", args.file.display()))?;
+    if !meta.is_file() {
+        bail!(
+            "cannot read {}: it is not a regular file (plot reads a file whole, and checks its size first)",
+            args.file.display()
+        );
+    }
+    let size = meta.len() as f64;
     crate::limits::check(
         "plot",
         args.allow_large,

@@ -704,8 +704,23 @@ pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<(
 /// Reads a shard's description (FILE.npy.json).
 pub fn read_description(npy: &Path) -> Result<serde_json::Value> {
     let path = PathBuf::from(format!("{}.json", npy.display()));
-    let text = std::fs::read_to_string(&path).with_context(|| {
+    let text = read_capped(&path, limits::MAX_DESCRIPTION_BYTES).with_context(|| {
         format!("cannot read {} (the shard's description, written by sweep --shard)", path.display())
     })?;
-    serde_json::from_str(&text).with_context(|| format!("invalid shard description {}", path.display()))
+    serde_json::from_slice(&text).with_context(|| format!("invalid shard description {}", path.display()))
+}
+
+/// The bytes of the file at `path`, at most `cap` of them: a larger file (or an endless one,
+/// /dev/zero) is an error, found without reading it whole.
+pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(std::io::Error::other(format!(
+            "it is larger than {}, more than a description holds",
+            limits::bytes(cap as f64)
+        )));
+    }
+    Ok(bytes)
 }

@@ -143,6 +143,9 @@ pub fn cases() -> Vec<Case> {
                 std::fs::write(d.join("x.npy"), npy(header, &[])).unwrap();
             })
             .says("take no bytes"),
+        Case::new("a plot of an endless file", "plot z.csv")
+            .setup(|d| std::os::unix::fs::symlink("/dev/zero", d.join("z.csv")).unwrap())
+            .says("z.csv: it is not a regular file"),
     ]
 }
 

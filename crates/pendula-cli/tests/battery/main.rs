@@ -7,9 +7,11 @@
 //! - `writes`: outputs never destroyed or confused (special files, the same path twice,
 //!   directories, full disks);
 //! - `input`: ambiguous or out-of-range input refused with a message naming it;
-//! - `failures`: numerical failures reported as failures (exit 1), never as results.
+//! - `failures`: numerical failures reported as failures (exit 1), never as results;
+//! - `fuzz`: generated requests (proptest, a fixed seed), each of which must end cleanly.
 
 mod failures;
+mod fuzz;
 mod harness;
 mod input;
 mod limits;

@@ -513,6 +513,16 @@ fn merge() -> Vec<Case> {
             })
             .says("p3.npy.json: the description says cells 4 to 6")
             .says("does not match the grid"),
+        Case::new("a description larger than a description", ALL)
+            .setup(|d| {
+                shards(d);
+                let path = d.join("p2.npy.json");
+                let mut text = std::fs::read(&path).unwrap();
+                text.extend(std::iter::repeat_n(b' ', 2 << 20));
+                std::fs::write(path, text).unwrap();
+            })
+            .says("cannot read p2.npy.json")
+            .says("larger than 1 MiB"),
         Case::new("a merge that fails keeps the earlier output", "merge p1.npy p2.npy --out m.npy")
             .setup(|d| {
                 shards(d);
