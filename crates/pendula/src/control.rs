@@ -2,6 +2,7 @@
 //! OrdinaryDiffEq): a PI controller on the scaled error norm.
 
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 
 /// Tolerances and step bounds of an adaptive run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,5 +95,16 @@ impl PiController {
         } else {
             Verdict::Reject(h / (fac11 / safety).min(1.0 / min_factor))
         }
+    }
+}
+
+/// The previous step's error, which the PI controller's next proposal depends on.
+impl Snapshot for PiController {
+    fn save(&self, out: &mut Words) {
+        out.f64(self.previous);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        self.previous = from.f64()?;
+        Ok(())
     }
 }

@@ -41,7 +41,9 @@
 //! vertical, y up), g = 9.81 m/s² by default. Abbreviations: t time, h step size, y state,
 //! q positions, p momenta, rhs right-hand side f(t, y), H Hamiltonian.
 
+pub mod adaptive;
 pub mod analysis;
+pub mod checkpoint;
 pub mod control;
 pub mod ensemble;
 pub mod error;
@@ -53,4 +55,6 @@ pub mod special;
 pub mod system;
 
 pub use error::Error;
-pub use simulate::{End, Outcome, Report, RunSpec, Simulation, solve, solve_adaptive};
+pub use simulate::{
+    End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive, solve_resumable,
+};
