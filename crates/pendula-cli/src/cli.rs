@@ -14,7 +14,8 @@ pub struct Cli {
 
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
 step did not converge); 2 invalid input (arguments, values, scenario file, output path); 130, 143, \
-129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
+129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed; with --checkpoint, the \
+checkpoint written first, for `pendula resume`).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -63,6 +64,9 @@ pub enum Command {
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.
     Merge(Box<crate::commands::merge::MergeArgs>),
+    /// Continue a run of simulate, sweep or fractal from its --checkpoint FILE: the outputs
+    /// are byte-identical to an uninterrupted run's.
+    Resume(Box<crate::commands::resume::ResumeArgs>),
     /// Plot a pendula CSV or .npy file: time series, a phase portrait, the energy error, or
     /// a heat map of a sweep or fractal grid.
     Plot(Box<crate::commands::plot::PlotArgs>),
@@ -119,7 +123,7 @@ pub enum ListWhat {
     Presets,
 }
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SimulateArgs {
     /// System to integrate (see `pendula list systems`) [default: double].
     pub system: Option<String>,
@@ -194,4 +198,13 @@ pub struct SimulateArgs {
     /// End the run at the first event.
     #[arg(long)]
     pub stop_on_event: bool,
+    /// Write the run's whole state to FILE every --checkpoint-every seconds of simulated
+    /// time and when interrupted (SIGINT, SIGTERM, SIGHUP), so that `pendula resume FILE`
+    /// continues it to the same bits; meanwhile the trajectory is written to OUT.partial,
+    /// and both are removed when the run ends.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Simulated seconds between checkpoints [default: only when interrupted].
+    #[arg(long, value_name = "T", allow_hyphen_values = true, requires = "checkpoint")]
+    pub checkpoint_every: Option<String>,
 }

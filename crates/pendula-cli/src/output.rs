@@ -1,6 +1,5 @@
 //! Writing results: files appear whole or not at all — also when the run is interrupted by
-//! SIGINT, SIGTERM or SIGHUP — and trajectories stream to disk as CSV or .npy, so memory does not
-//! grow with the run's length.
+//! SIGINT, SIGTERM or SIGHUP.
 //!
 //! Every [`AtomicFile`] registers its temporary path in a process-wide list while it lives;
 //! the interrupt thread ([`on_interrupt`]) kills the child processes writing into those
@@ -8,17 +7,24 @@
 //! renaming into place and cleaning up all hold the list's lock, so an interrupt sees a file
 //! either before its rename (and removes it) or after (and leaves the finished file alone):
 //! an existing file of the target's name is replaced whole or not at all.
+//!
+//! A run that writes checkpoints (`--checkpoint`) registers itself ([`Checkpointing`]): the
+//! first interrupt then only sets [`pause_flag`], which the run loop polls at every step;
+//! the run writes its checkpoint and ends with [`Interrupted`] (exit 128 + the signal), its
+//! partial trajectory ([`PartialFile`], visible as `OUT.partial`) kept for `pendula resume`.
+//! A second interrupt ends the process at once, as without checkpoints: the checkpoint on
+//! disk is then the last complete one, and a partial trajectory no checkpoint refers to yet
+//! is removed.
 
 use std::fs::File;
-use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, ExitStatus};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use anyhow::{Context, Result, bail};
 use tempfile::NamedTempFile;
-
-use crate::config::Output;
 
 /// What an interrupt must clean up.
 struct Live {
@@ -42,9 +48,72 @@ impl Live {
     }
 }
 
+/// Whether a run that writes checkpoints is going ([`Checkpointing`]).
+static CHECKPOINTING: AtomicBool = AtomicBool::new(false);
+/// Set by the first interrupt during such a run: pause at the next step and checkpoint.
+static PAUSE: AtomicBool = AtomicBool::new(false);
+/// The signal that set [`PAUSE`].
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// The flag a checkpointing run polls at every step (a relaxed load: nothing measurable).
+pub fn pause_flag() -> &'static AtomicBool {
+    &PAUSE
+}
+
+/// The signal that asked a checkpointing run to stop, if one did.
+pub fn interrupted_by() -> Option<i32> {
+    PAUSE.load(Ordering::SeqCst).then(|| SIGNAL.load(Ordering::SeqCst))
+}
+
+/// While it lives, the first interrupt asks the run to pause and checkpoint instead of
+/// ending the process.
+pub struct Checkpointing(());
+
+impl Checkpointing {
+    /// Registers the run.
+    pub fn start() -> Self {
+        CHECKPOINTING.store(true, Ordering::SeqCst);
+        Checkpointing(())
+    }
+}
+
+impl Drop for Checkpointing {
+    fn drop(&mut self) {
+        CHECKPOINTING.store(false, Ordering::SeqCst);
+    }
+}
+
+/// The end of a run that an interrupt stopped after writing its checkpoint: exit 128 +
+/// the signal, with a message saying how to continue.
+#[derive(Debug)]
+pub struct Interrupted {
+    /// The signal's number.
+    pub signal: i32,
+    /// What was kept and how to continue.
+    pub message: String,
+}
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "interrupted by {}: {}", signal_name(self.signal), self.message)
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+fn signal_name(signal: i32) -> &'static str {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    match signal {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "SIGHUP",
+    }
+}
+
 /// Starts the thread that turns SIGINT, SIGTERM and SIGHUP (the terminal closed) into a clean
 /// exit: children killed, temporary files removed, exit status 130, 143 or 129 (128 + the
-/// signal, as shells report it).
+/// signal, as shells report it). During a checkpointing run the first signal asks the run
+/// to pause and checkpoint instead ([`Checkpointing`]); a second one exits at once.
 pub fn on_interrupt() -> Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
@@ -52,7 +121,19 @@ pub fn on_interrupt() -> Result<()> {
     std::thread::Builder::new()
         .name("interrupt".into())
         .spawn(move || {
-            if let Some(signal) = signals.forever().next() {
+            // Clear a progress bar's line first when one may be drawn.
+            let clear = if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };
+            for signal in signals.forever() {
+                if CHECKPOINTING.load(Ordering::SeqCst) && !PAUSE.load(Ordering::SeqCst) {
+                    SIGNAL.store(signal, Ordering::SeqCst);
+                    PAUSE.store(true, Ordering::SeqCst);
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "{clear}{}: finishing the step (or chunk) in progress to write a checkpoint (interrupt again to stop at once)",
+                        signal_name(signal)
+                    );
+                    continue;
+                }
                 // Held until the process ends: no file is created or renamed after this.
                 let mut live = live();
                 for (_, child) in &mut live.children {
@@ -63,14 +144,7 @@ pub fn on_interrupt() -> Result<()> {
                 for path in &live.temps {
                     let _ = std::fs::remove_file(path);
                 }
-                let name = match signal {
-                    SIGINT => "SIGINT",
-                    SIGTERM => "SIGTERM",
-                    _ => "SIGHUP",
-                };
-                // Clear a progress bar's line first when one may be drawn.
-                let clear =
-                    if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };
+                let name = signal_name(signal);
                 let _ = writeln!(std::io::stderr(), "{clear}interrupted by {name}: unfinished files removed");
                 std::process::exit(128 + signal);
             }
@@ -183,6 +257,15 @@ impl AtomicFile {
     /// Renames several finished files into place as one step for an interrupt: all of them
     /// or none.
     pub fn commit_all(files: Vec<AtomicFile>) -> Result<()> {
+        Self::commit_with(files, |_| Ok(()))
+    }
+
+    /// [`AtomicFile::commit_all`], then `also` (which may keep a [`PartialFile`] or remove
+    /// files), as one step for an interrupt.
+    pub fn commit_with(
+        files: Vec<AtomicFile>,
+        also: impl FnOnce(&mut Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
         let mut live = live();
         for mut file in files {
             let temp = file.temp.take().expect("not yet committed");
@@ -190,7 +273,117 @@ impl AtomicFile {
             // On failure the error owns the temporary file, and dropping it removes it.
             temp.persist(&file.path).with_context(|| format!("cannot write {}", file.path.display()))?;
         }
-        Ok(())
+        also(&mut Guard(live))
+    }
+}
+
+/// The interrupt list, locked: what is done through it is one step for an interrupt.
+pub struct Guard<'a>(MutexGuard<'a, Live>);
+
+impl Guard<'_> {
+    /// Takes `path` off the list: an interrupt no longer removes it.
+    pub fn forget(&mut self, path: &Path) {
+        self.0.forget(path);
+    }
+
+    /// Creates (or empties) `path`, which an interrupt removes until it is forgotten.
+    pub fn create_listed(&mut self, path: &Path) -> std::io::Result<File> {
+        let file = File::options().read(true).write(true).create(true).truncate(true).open(path)?;
+        self.0.temps.push(path.to_owned());
+        Ok(file)
+    }
+}
+
+/// Runs `f` as one step for an interrupt.
+pub fn together<R>(f: impl FnOnce(&mut Guard<'_>) -> R) -> R {
+    f(&mut Guard(live()))
+}
+
+/// A trajectory written by a checkpointing run under a visible name beside its target,
+/// `OUT.partial`, so that a checkpoint can refer to it and `pendula resume` continue it.
+/// Until a checkpoint refers to it ([`PartialFile::keep`]) an interrupt removes it like a
+/// temporary file; afterwards it stays with its checkpoint. [`PartialFile::finish`] renames
+/// it into place.
+#[derive(Debug)]
+pub struct PartialFile {
+    path: PathBuf,
+    target: PathBuf,
+    /// Whether it is still in the interrupt's list (no checkpoint refers to it).
+    listed: bool,
+}
+
+impl PartialFile {
+    /// The partial file of `target`: `target` with `.partial` appended.
+    pub fn path_of(target: &Path) -> PathBuf {
+        let mut name = target.as_os_str().to_owned();
+        name.push(".partial");
+        PathBuf::from(name)
+    }
+
+    /// Creates (or empties) the partial file of `target`; `flag` names the option for
+    /// messages.
+    pub fn create(target: &Path, flag: &str) -> Result<(Self, File)> {
+        if target.is_dir() {
+            bail!("cannot write {flag} {}: it is a directory", target.display());
+        }
+        let path = Self::path_of(target);
+        let file = together(|guard| guard.create_listed(&path))
+            .with_context(|| format!("cannot write {flag} {}", path.display()))?;
+        Ok((PartialFile { path, target: target.to_owned(), listed: true }, file))
+    }
+
+    /// Opens the partial file `path` of `target` that a checkpoint refers to.
+    pub fn reopen(target: &Path, path: &Path) -> Result<(Self, File)> {
+        let file = File::options().read(true).write(true).open(path).with_context(|| {
+            format!("cannot open the partial trajectory {} that the checkpoint refers to", path.display())
+        })?;
+        Ok((PartialFile { path: path.to_owned(), target: target.to_owned(), listed: false }, file))
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Takes it off the interrupt's list: a checkpoint now refers to it.
+    pub fn keep(&mut self, guard: &mut Guard<'_>) {
+        guard.0.forget(&self.path);
+        self.listed = false;
+    }
+
+    /// Writes its contents to the disk, so that a checkpoint written next never refers to
+    /// bytes that a crash could lose.
+    pub fn sync(&self) -> Result<()> {
+        File::open(&self.path)
+            .and_then(|f| f.sync_data())
+            .with_context(|| format!("cannot write {}", self.path.display()))
+    }
+
+    /// Renames the finished trajectory into place.
+    pub fn finish(mut self, guard: &mut Guard<'_>) -> Result<()> {
+        guard.0.forget(&self.path);
+        self.listed = false;
+        std::fs::rename(&self.path, &self.target)
+            .with_context(|| format!("cannot write {}", self.target.display()))
+    }
+
+    /// Removes it (the run failed: nothing it wrote is of use).
+    pub fn remove(mut self) {
+        let mut live = live();
+        live.forget(&self.path);
+        self.listed = false;
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+impl Drop for PartialFile {
+    fn drop(&mut self) {
+        // Still listed: no checkpoint refers to it, so nothing can continue it.
+        if self.listed {
+            let mut live = live();
+            live.forget(&self.path);
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
 
@@ -201,133 +394,5 @@ impl Drop for AtomicFile {
             live.forget(temp.path());
             drop(temp);
         }
-    }
-}
-
-/// Where trajectory rows go.
-pub enum Sink {
-    /// Nowhere (`--every 0`).
-    Discard,
-    /// CSV rows, streamed.
-    Csv(Box<csv::Writer<Box<dyn Write>>>),
-    /// Rows of a 2-D float64 .npy array, streamed.
-    Npy(NpyRows),
-}
-
-impl Sink {
-    /// A sink for `output` with these column names; `file` is the open output file.
-    pub fn new(output: Option<&Output>, file: Option<&AtomicFile>, columns: &[&str]) -> Result<Self> {
-        let writer: Box<dyn Write> = match output {
-            None => return Ok(Sink::Discard),
-            Some(Output::Npy(_)) => {
-                let file = file.expect("a .npy output has a file").handle()?;
-                return Ok(Sink::Npy(NpyRows::new(file, columns.len())?));
-            }
-            Some(Output::Stdout) => Box::new(std::io::stdout().lock()),
-            Some(Output::Csv(_)) => Box::new(file.expect("a CSV file output has a file").handle()?),
-        };
-        let mut csv = csv::WriterBuilder::new().buffer_capacity(1 << 16).from_writer(writer);
-        csv.write_record(columns)?;
-        Ok(Sink::Csv(Box::new(csv)))
-    }
-
-    /// Writes one row.
-    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
-        match self {
-            Sink::Discard => {}
-            Sink::Npy(npy) => npy.row(values)?,
-            Sink::Csv(w) => {
-                let mut buf = ryu::Buffer::new();
-                for v in values {
-                    w.write_field(buf.format(v))?;
-                }
-                w.write_record(None::<&[u8]>)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Flushes the rows; for .npy, writes the final row count into the header.
-    pub fn finish(self) -> Result<()> {
-        match self {
-            Sink::Discard => Ok(()),
-            Sink::Csv(mut w) => Ok(w.flush()?),
-            Sink::Npy(npy) => npy.finish(),
-        }
-    }
-}
-
-/// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row: the header is
-/// written first with room for any row count, and rewritten with the real one at the end.
-pub struct NpyRows {
-    out: BufWriter<File>,
-    columns: usize,
-    rows: u64,
-    header_len: usize,
-}
-
-impl NpyRows {
-    /// Starts the array in `file` (at its start).
-    pub fn new(file: File, columns: usize) -> Result<Self> {
-        // The header's size for the longest row count; every header is padded to it.
-        let header_len = npy_header(u64::MAX, columns, 0).len();
-        let mut out = BufWriter::with_capacity(1 << 16, file);
-        out.write_all(&npy_header(0, columns, header_len))?;
-        Ok(NpyRows { out, columns, rows: 0, header_len })
-    }
-
-    /// Appends one row of `columns` values.
-    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
-        let mut n = 0;
-        for v in values {
-            self.out.write_all(&v.to_le_bytes())?;
-            n += 1;
-        }
-        debug_assert_eq!(n, self.columns, "a row has one value per column");
-        self.rows += 1;
-        Ok(())
-    }
-
-    /// Writes the header with the final shape.
-    pub fn finish(self) -> Result<()> {
-        let mut file = self.out.into_inner().map_err(|e| e.into_error())?;
-        file.seek(SeekFrom::Start(0))?;
-        file.write_all(&npy_header(self.rows, self.columns, self.header_len))?;
-        file.flush()?;
-        Ok(())
-    }
-}
-
-/// The NPY 1.0 header of a C-order float64 array of shape (rows, columns): magic, version,
-/// the length, and the dictionary padded with spaces and a newline so that the whole header
-/// is `min_len` bytes or the next multiple of 64 (the format's alignment).
-fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
-    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
-    let unpadded = 10 + dict.len() + 1;
-    let total = unpadded.div_ceil(64).max(1) * 64;
-    let total = total.max(min_len);
-    let mut header = Vec::with_capacity(total);
-    header.extend_from_slice(b"\x93NUMPY\x01\x00");
-    header.extend_from_slice(&u16::try_from(total - 10).expect("a short header").to_le_bytes());
-    header.extend_from_slice(dict.as_bytes());
-    header.resize(total - 1, b' ');
-    header.push(b'\n');
-    header
-}
-
-#[cfg(test)]
-mod tests {
-    use super::npy_header;
-
-    #[test]
-    fn npy_headers_are_aligned_and_of_one_length() {
-        let long = npy_header(u64::MAX, 6, 0).len();
-        assert_eq!(long % 64, 0);
-        let short = npy_header(3, 6, long);
-        assert_eq!(short.len(), long);
-        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
-        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
-        assert!(short.ends_with(b" \n"));
     }
 }

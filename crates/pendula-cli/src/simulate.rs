@@ -1,4 +1,6 @@
-//! `pendula simulate`: one system, one method, a trajectory and a summary.
+//! `pendula simulate`: one system, one method, a trajectory and a summary — run in one go,
+//! or in legs between checkpoints (`--checkpoint`, continued by `pendula resume`), which
+//! give the same bytes.
 
 use std::io::Write;
 use std::ops::ControlFlow;
@@ -7,21 +9,25 @@ use std::time::Instant;
 use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
+use pendula::checkpoint::{Leg, Pause, Snapshot, Words};
 use pendula::error::Short;
 use pendula::events::{EndAtEvent, EventLocator, EventSpec};
-use pendula::observe::{Every, Ignore, Observer, Resample, Sample};
+use pendula::observe::{Every, Observer, Resample, Sample};
+use pendula::{Report, Stepping};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
-use crate::output::{AtomicFile, Sink};
+use crate::output::{AtomicFile, PartialFile};
+use crate::run_state::{Resumed, Saved};
+use crate::sink::Sink;
 use crate::study::Summary;
 
 /// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
-struct Writer<'a> {
+pub(crate) struct Writer<'a> {
     model: &'a dyn pendula::system::DynModel,
-    sink: Sink,
-    rows: u64,
+    pub(crate) sink: Sink,
+    pub(crate) rows: u64,
     /// The rows, flat, when the run is to be drawn.
     kept: Option<Vec<f64>>,
     failure: Option<anyhow::Error>,
@@ -45,12 +51,15 @@ impl Observer for Writer<'_> {
 
 /// A progress bar over simulated time (stderr, drawn only on a terminal) for runs longer
 /// than half a second, looked at every 4096 steps: a per-step check of one bit pattern.
-struct Progress {
+pub(crate) struct Progress {
     bar: Option<ProgressBar>,
     start: Instant,
     t0: f64,
     span: f64,
 }
+
+/// What watches a run: the event locator, the energy balance, the rows, the progress bar.
+pub(crate) type Watch<'a> = EndAtEvent<'a, (EnergyBalance<'a>, (Rows<'a>, Progress))>;
 
 /// Ticks of the bar from t0 to t_end.
 const PROGRESS_TICKS: u64 = 1000;
@@ -89,6 +98,65 @@ impl Progress {
     }
 }
 
+/// Which rows go to the writer: those on a time grid (`--output-dt`, `--t-eval`), every
+/// N-th step's and the last, or none (then the writer is not called at all: it would
+/// evaluate the energy at every step for nothing).
+pub(crate) enum Rows<'a> {
+    Grid(Resample<Writer<'a>>),
+    Every(Every<Writer<'a>>),
+    None(Writer<'a>),
+}
+
+impl<'a> Rows<'a> {
+    pub(crate) fn writer(&mut self) -> &mut Writer<'a> {
+        match self {
+            Rows::Grid(r) => &mut r.inner,
+            Rows::Every(e) => &mut e.inner,
+            Rows::None(w) => w,
+        }
+    }
+
+    fn into_writer(self) -> Writer<'a> {
+        match self {
+            Rows::Grid(r) => r.inner,
+            Rows::Every(e) => e.inner,
+            Rows::None(w) => w,
+        }
+    }
+}
+
+/// The grid's position (the other kinds keep none: `Every` counts steps from the samples).
+impl Snapshot for Rows<'_> {
+    fn save(&self, out: &mut Words) {
+        if let Rows::Grid(r) = self {
+            r.save(out);
+        }
+    }
+    fn restore(&mut self, from: &mut pendula::checkpoint::Reader<'_>) -> Result<(), pendula::Error> {
+        match self {
+            Rows::Grid(r) => r.restore(from),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Observer for Rows<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+        match self {
+            Rows::Grid(r) => r.observe(s),
+            Rows::Every(e) => e.observe(s),
+            Rows::None(_) => ControlFlow::Continue(()),
+        }
+    }
+    fn wants_dense(&self) -> bool {
+        match self {
+            Rows::Grid(r) => r.wants_dense(),
+            Rows::Every(e) => e.wants_dense(),
+            Rows::None(_) => false,
+        }
+    }
+}
+
 impl Observer for Progress {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
         self.at(s.step, s.t);
@@ -97,32 +165,84 @@ impl Observer for Progress {
 }
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    execute(args, None)
+}
+
+/// Where the trajectory is written: a temporary file renamed into place at the end, or, for
+/// a run that writes checkpoints, the visible `OUT.partial` a checkpoint can refer to.
+enum Trajectory {
+    Atomic(AtomicFile),
+    Partial(PartialFile),
+}
+
+/// Runs `simulate` from the start, or `resumed` from a checkpoint (`pendula resume`).
+pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary, grid, plot } =
-        &config;
+    let SimulateConfig {
+        values,
+        method,
+        spec,
+        tolerances,
+        first_step,
+        every,
+        out,
+        summary,
+        grid,
+        plot,
+        checkpoint,
+    } = &config;
+    let fingerprint = crate::run_state::fingerprint(&config, args);
+    if let Some(r) = &resumed {
+        r.checkpoint.check_fingerprint(&fingerprint)?;
+    }
+    if let (Some(c), None) = (checkpoint, &resumed)
+        && c.path.exists()
+    {
+        anyhow::bail!(
+            "invalid --checkpoint {}: it exists (from a run interrupted earlier?): continue that run with `pendula resume {}`, or remove the file to start again",
+            c.path.display(),
+            c.path.display()
+        );
+    }
     let info = values.info();
+    let mut columns = vec!["t"];
+    columns.extend(info.state.iter().map(|q| q.name));
+    columns.push("energy");
     // Open the outputs first: a path that cannot be written fails before the work.
-    let out_file = match out {
-        Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
-        _ => None,
+    let (trajectory, sink, kept) = match (out, checkpoint, &resumed) {
+        (Some(Output::Csv(p) | Output::Npy(p)), None, _) => {
+            let file = AtomicFile::create(p, "--out")?;
+            let sink = Sink::new(out.as_ref(), Some(file.handle()?), &columns)?;
+            (Some(Trajectory::Atomic(file)), sink, None)
+        }
+        (Some(o @ (Output::Csv(p) | Output::Npy(p))), Some(_), Some(r)) => {
+            let (position, partial) = r.out.as_ref().ok_or_else(|| r.mismatch("a trajectory file"))?;
+            let (partial, file) = PartialFile::reopen(p, partial)?;
+            let (sink, kept) =
+                Sink::resume(o, file, partial.path(), columns.len(), position, plot.is_some())?;
+            (Some(Trajectory::Partial(partial)), sink, kept)
+        }
+        (Some(Output::Csv(p) | Output::Npy(p)), Some(_), None) => {
+            let (partial, file) = PartialFile::create(p, "--out")?;
+            let sink = Sink::new(out.as_ref(), Some(file), &columns)?;
+            (Some(Trajectory::Partial(partial)), sink, None)
+        }
+        (o, _, _) => (None, Sink::new(o.as_ref(), None, &columns)?, None),
     };
     // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
     let summary_out = Summary::open(summary.as_deref())?;
     let plot_file = plot.as_deref().map(|p| AtomicFile::create(p, "--plot")).transpose()?;
 
-    let mut columns = vec!["t"];
-    columns.extend(info.state.iter().map(|q| q.name));
-    columns.push("energy");
     let model = values.build();
     // The energy error relative to the system's scale, or for damped and driven runs the
     // energy balance E − E(0) − W.
-    let mut energy = EnergyBalance::new(&*model, values.initial_state());
-    let mut progress = Progress::new(spec.t0, spec.schedule()?.t_end);
-    let mut writer = Writer {
+    let energy = EnergyBalance::new(&*model, values.initial_state());
+    let progress = Progress::new(spec.t0, spec.schedule()?.t_end);
+    let writer = Writer {
         model: &*model,
-        sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
+        sink,
         rows: 0,
-        kept: plot.is_some().then(Vec::new),
+        kept: kept.or_else(|| plot.is_some().then(Vec::new)),
         failure: None,
     };
     let specs = args
@@ -133,47 +253,104 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let watch_events = !specs.is_empty();
     // Rows: on the --output-dt / --t-eval grid, or every N-th step and the last (a plot
     // without a trajectory file draws every step).
-    let (mut on_grid, mut thinned, mut none);
-    let rows: &mut dyn Observer = match (grid, every.or(plot.is_some().then_some(1))) {
-        (Some(g), _) => {
-            on_grid = Resample::new(g.clone(), info.state.len(), &mut writer);
-            &mut on_grid
-        }
-        (None, Some(n)) => {
-            thinned = Every { n, inner: &mut writer };
-            &mut thinned
-        }
-        (None, None) => {
-            none = Ignore;
-            &mut none
-        }
+    let rows = match (grid, every.or(plot.is_some().then_some(1))) {
+        (Some(g), _) => Rows::Grid(Resample::new(g.clone(), info.state.len(), writer)),
+        (None, Some(n)) => Rows::Every(Every { n, inner: writer }),
+        (None, None) => Rows::None(writer),
     };
     // The energy is tracked at every step; a terminal event ends the run, and the rows, at
     // the event's time and state.
-    let mut watch =
-        EndAtEvent { events: EventLocator::new(&*model, specs), inner: (&mut energy, (rows, &mut progress)) };
-    // Without events the locator is left out: one call per step less on the fast paths.
-    let observers: &mut dyn Observer = if watch_events { &mut watch } else { &mut watch.inner };
-    let start = Instant::now();
-    let report = match tolerances {
-        Some(tol) => {
-            let t_end = spec.schedule()?.t_end;
-            model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, observers)
-        }
-        // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
-        // It implements the free equations: damped or driven runs take the general path.
-        None if info.name == "double" && method.name == "rk4" && !double(values).is_forced() => {
-            pendula::ensemble::rk4_trajectory(&double(values), values.initial_state(), spec, observers)
-        }
-        None => model.solve(method, values.initial_state(), spec, observers),
+    let mut watch: Watch<'_> =
+        EndAtEvent { events: EventLocator::new(&*model, specs), inner: (energy, (rows, progress)) };
+    let mut saved = match &resumed {
+        Some(r) => Some(r.restore(&mut watch)?),
+        None => None,
     };
-    let wall_s = start.elapsed().as_secs_f64();
-    let EndAtEvent { events, .. } = watch;
+    // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
+    // It implements the free equations: damped or driven runs take the general path.
+    let fast =
+        tolerances.is_none() && info.name == "double" && method.name == "rk4" && !double(values).is_forced();
+    let stepping = match tolerances {
+        Some(tol) => Stepping::Adaptive { t_end: spec.schedule()?.t_end, h0: *first_step, tol },
+        None => Stepping::Fixed(*spec),
+    };
+    let _registered = checkpoint.as_ref().map(|_| crate::output::Checkpointing::start());
+    let mut trajectory = trajectory;
+    let mut next = saved.as_ref().map_or_else(
+        || checkpoint.as_ref().and_then(|c| c.every).unwrap_or(f64::INFINITY),
+        |s| s.next_checkpoint,
+    );
+    let earlier_wall = resumed.as_ref().map_or(0.0, |r| r.wall_s);
+    let start = Instant::now();
+    // Legs between checkpoints; one leg without --checkpoint.
+    let report = loop {
+        let flag = checkpoint.as_ref().map(|_| crate::output::pause_flag());
+        let pause = Pause { at: next, flag };
+        // Without events the locator is left out: one call per step less on the fast paths.
+        let observers: &mut dyn Observer = if watch_events { &mut watch } else { &mut watch.inner };
+        let from = saved.as_ref().map(|s| &s.run);
+        let leg = if fast {
+            pendula::ensemble::rk4_trajectory_resumable(
+                &double(values),
+                values.initial_state(),
+                spec,
+                observers,
+                from,
+                &pause,
+            )
+        } else {
+            model.solve_resumable(method, values.initial_state(), &stepping, observers, from, &pause)
+        };
+        if let Some(err) = watch.inner.1.0.writer().failure.take() {
+            return Err(err);
+        }
+        let state = match leg {
+            Ok(Leg::Done(report)) => break report,
+            Ok(Leg::Paused(state)) => state,
+            Err(err) => {
+                // A run that failed leaves nothing: its checkpoint would fail the same way.
+                if let (Some(c), Some(Trajectory::Partial(p))) = (checkpoint, trajectory.take()) {
+                    p.remove();
+                    let _ = std::fs::remove_file(&c.path);
+                } else if let Some(c) = checkpoint {
+                    let _ = std::fs::remove_file(&c.path);
+                }
+                return Err(err.into());
+            }
+        };
+        let c = checkpoint.as_ref().expect("only a checkpointing run pauses");
+        // The next checkpoint at the next multiple of the interval after this one.
+        next = c.every.map_or(f64::INFINITY, |every| every * ((state.t / every).floor() + 1.0));
+        let partial = match &mut trajectory {
+            Some(Trajectory::Partial(p)) => Some(p),
+            _ => None,
+        };
+        let at = Saved { run: state, next_checkpoint: next };
+        let wall_s = earlier_wall + start.elapsed().as_secs_f64();
+        crate::run_state::write(&c.path, args, &fingerprint, &at, &mut watch, partial, wall_s)?;
+        if let Some(signal) = crate::output::interrupted_by() {
+            watch.inner.1.1.finish();
+            return Err(crate::output::Interrupted {
+                signal,
+                message: format!(
+                    "checkpoint written to {} at t = {} s (step {}); continue with `pendula resume {}`",
+                    c.path.display(),
+                    Short(at.run.t),
+                    at.run.steps,
+                    c.path.display()
+                ),
+            }
+            .into());
+        }
+        saved = Some(at);
+    };
+    let wall_s = earlier_wall + start.elapsed().as_secs_f64();
+    let EndAtEvent { events, inner: (energy, (rows, progress)) } = watch;
     progress.finish();
+    let mut writer = rows.into_writer();
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }
-    let report = report?;
     let energy_unit = info.energy_unit();
     let rows = writer.rows;
     writer.sink.finish()?;
@@ -191,12 +368,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         )?;
         file.handle()?.write_all(&bytes)?;
     }
-    if let Some(f) = out_file {
-        f.commit()?;
-    }
-    if let Some(f) = plot_file {
-        f.commit()?;
-    }
+    finish_files(trajectory, plot_file, checkpoint.as_ref().map(|c| c.path.as_path()))?;
+    let report: &Report = &report;
 
     let mut final_state = Map::new();
     final_state.insert("t".into(), json!(t_end));
@@ -294,6 +467,32 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     std::io::stderr().write_all(&err)?;
     Ok(())
+}
+
+/// Puts the finished files in place, as one step for an interrupt: the trajectory (renamed
+/// from its temporary or partial name) and the plot; a checkpointing run's checkpoint is
+/// removed (the run is complete).
+fn finish_files(
+    trajectory: Option<Trajectory>,
+    plot: Option<AtomicFile>,
+    checkpoint: Option<&std::path::Path>,
+) -> Result<()> {
+    let (mut files, mut partial) = (Vec::new(), None);
+    match trajectory {
+        Some(Trajectory::Atomic(f)) => files.push(f),
+        Some(Trajectory::Partial(p)) => partial = Some(p),
+        None => {}
+    }
+    files.extend(plot);
+    AtomicFile::commit_with(files, |guard| {
+        if let Some(p) = partial {
+            p.finish(guard)?;
+        }
+        if let Some(c) = checkpoint {
+            crate::checkpoint::remove(c)?;
+        }
+        Ok(())
+    })
 }
 
 /// The double pendulum of these values (of the `double` system).
