@@ -193,7 +193,8 @@ impl Chunks {
 
     /// Computes the chunks not `done` in order with `compute(cells, values)` into `data`
     /// (cells × width values), recording each; stops before the next chunk when interrupted
-    /// ([`crate::output::Interrupted`]). A computation that fails (a non-finite state)
+    /// ([`crate::output::Interrupted`]; the caller registers the run with
+    /// [`crate::output::Checkpointing`] before it starts). A computation that fails (a non-finite state)
     /// would fail again on resume: the checkpoint and its values are then removed.
     pub fn run(
         mut self,
@@ -201,7 +202,6 @@ impl Chunks {
         data: &mut [f64],
         mut compute: impl FnMut(Range<usize>, &mut [f64]) -> Result<()>,
     ) -> Result<Self> {
-        let _registered = crate::output::Checkpointing::start();
         assert_eq!(done.len(), self.count(), "one flag per chunk");
         for (index, _) in done.iter().enumerate().filter(|(_, done)| !**done) {
             if let Some(signal) = crate::output::interrupted_by() {

@@ -195,6 +195,9 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
     if let Some(r) = &resumed {
         r.checkpoint.check_fingerprint(&fingerprint)?;
     }
+    // From here an interrupt asks for a checkpoint (taken after the first step at the
+    // earliest) rather than ending the process.
+    let _registered = checkpoint.as_ref().map(|_| crate::output::Checkpointing::start());
     if let (Some(c), None) = (checkpoint, &resumed)
         && c.path.exists()
     {
@@ -274,7 +277,6 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
         Some(tol) => Stepping::Adaptive { t_end: spec.schedule()?.t_end, h0: *first_step, tol },
         None => Stepping::Fixed(*spec),
     };
-    let _registered = checkpoint.as_ref().map(|_| crate::output::Checkpointing::start());
     let mut trajectory = trajectory;
     let mut next = saved.as_ref().map_or_else(
         || checkpoint.as_ref().and_then(|c| c.every).unwrap_or(f64::INFINITY),

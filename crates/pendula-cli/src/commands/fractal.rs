@@ -183,6 +183,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     let (fractal, chunks) = match checkpoint {
         None => (pool.install(|| flip_fractal_with_progress(&spec, &tick))?, None),
         Some(path) => {
+            let _registered = crate::output::Checkpointing::start();
             let pixels = theta1.n * theta2.n;
             // Both flip times of each pixel, one after the other.
             let mut times = vec![f64::NAN; 2 * pixels];

@@ -395,6 +395,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
             None
         }
         Some(path) => {
+            let _registered = crate::output::Checkpointing::start();
             let fingerprint = format!("{}|fma {}", sweep.fingerprint(), ensemble::has_fma());
             let chunks = match resumed {
                 Some(c) => {
