@@ -88,8 +88,8 @@ impl Resumed {
     pub fn restore(&self, watch: &mut Watch<'_>) -> Result<Saved> {
         let context = || format!("the checkpoint {} does not fit its run", self.checkpoint.path.display());
         watch.events.restore_all(&self.events, "the event locator").with_context(context)?;
-        watch.inner.0.restore_all(&self.energy, "the energy balance").with_context(context)?;
-        let rows = &mut watch.inner.1.0;
+        watch.energy.restore_all(&self.energy, "the energy balance").with_context(context)?;
+        let rows = &mut watch.rows;
         rows.restore_all(&self.rows, "the rows").with_context(context)?;
         rows.writer().rows = self.writer_rows;
         Ok(Saved { run: self.saved_run.clone(), next_checkpoint: self.next_checkpoint })
@@ -136,7 +136,7 @@ pub fn write(
     partial: Option<&mut PartialFile>,
     wall_s: f64,
 ) -> Result<()> {
-    let writer = watch.inner.1.0.writer();
+    let writer = watch.rows.writer();
     let writer_rows = writer.rows;
     let position = writer.sink.position(writer_rows)?;
     if let Some(p) = &partial {
@@ -163,8 +163,8 @@ pub fn write(
         "next_checkpoint": hex_f64(at.next_checkpoint),
         "run": hex_words(&at.run.to_words()),
         "events": hex_words(&watch.events.snapshot()),
-        "energy": hex_words(&watch.inner.0.snapshot()),
-        "rows": hex_words(&watch.inner.1.0.snapshot()),
+        "energy": hex_words(&watch.energy.snapshot()),
+        "rows": hex_words(&watch.rows.snapshot()),
         "writer_rows": writer_rows,
         "out": out,
     });

@@ -1,7 +1,7 @@
 //! The adaptive loop of the embedded pairs: attempt a step, let the PI controller judge its
 //! error estimate, accept or reject it, and land on the end time exactly. It can pause after
 //! an accepted step and continue from the [`RunState`] it hands back
-//! ([`crate::simulate::solve_resumable`]).
+//! ([`crate::resume::solve_resumable`]).
 
 use crate::Error;
 use crate::checkpoint::{Leg, Pause, Reader, RunState, Snapshot, Words};
@@ -9,7 +9,7 @@ use crate::control::{PiController, Tolerances, Verdict};
 use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::{Method, Scheme};
 use crate::observe::{Observer, Sample};
-use crate::simulate::{Counted, Outcome, Report, Stepping};
+use crate::simulate::{Counted, Outcome, Report};
 use crate::system::{Model, System};
 
 /// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly),
@@ -28,8 +28,8 @@ pub fn solve_adaptive<M: Model>(
     tol: &Tolerances,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
-    let stepping = Stepping::Adaptive { t_end, h0, tol };
-    match crate::simulate::solve_resumable(model, method, y0, &stepping, observer, None, &Pause::NEVER)? {
+    assert_eq!(y0.len(), model.dim(), "initial state of the wrong length");
+    match run(model, method, y0, t_end, h0, tol, observer, None, &Pause::NEVER)? {
         Leg::Done(report) => Ok(report),
         Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
     }

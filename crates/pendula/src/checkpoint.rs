@@ -21,7 +21,7 @@
 //!
 //! A run pauses at a step boundary when a [`Pause`] says so — at a simulated time, or when
 //! an [`AtomicBool`] is set (an interrupt) — and hands back a [`RunState`]; started again
-//! from it ([`crate::simulate::solve_resumable`]) it takes the same steps, shows the
+//! from it ([`crate::resume::solve_resumable`]) it takes the same steps, shows the
 //! observer the same samples, and ends in the same bits.
 //!
 //! # References
@@ -29,9 +29,11 @@
 //! of planetary systems", MNRAS 467 (2017) 2377 (REBOUND's Simulationarchive: restarts bit
 //! for bit).
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::Error;
+use crate::observe::{Observer, Sample};
 
 /// State as a flat list of 64-bit words: floats as their bit patterns, flags as 0 or 1,
 /// slices as their length followed by their elements.
@@ -257,6 +259,49 @@ impl Pause<'_> {
     pub fn due(&self, t: f64) -> bool {
         t >= self.at || self.flag.is_some_and(|f| f.load(Ordering::Relaxed))
     }
+
+    /// Whether it never pauses.
+    pub fn never(&self) -> bool {
+        self.at == f64::INFINITY && self.flag.is_none()
+    }
+}
+
+/// An observer that shows every sample to `inner` and then, after a sample that did not end
+/// the run and is not its last, asks a [`Pause`] whether to pause there: if so it ends the
+/// run and says so (`paused`). Loops that can pause run with it around their observer, and
+/// without it (the same loop) when they never pause.
+pub(crate) struct Pausing<'a, 'p, O: ?Sized> {
+    inner: &'a mut O,
+    pause: &'a Pause<'p>,
+    /// Whether the run was ended here to pause.
+    pub(crate) paused: bool,
+}
+
+impl<'a, 'p, O: ?Sized> Pausing<'a, 'p, O> {
+    pub(crate) fn new(inner: &'a mut O, pause: &'a Pause<'p>) -> Self {
+        Pausing { inner, pause, paused: false }
+    }
+
+    /// The observer inside, for a loop that never pauses.
+    pub(crate) fn inner(&mut self) -> &mut O {
+        self.inner
+    }
+}
+
+impl<O: Observer + ?Sized> Observer for Pausing<'_, '_, O> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        if self.inner.observe(sample).is_break() {
+            return ControlFlow::Break(());
+        }
+        if !sample.last && self.pause.due(sample.t) {
+            self.paused = true;
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+    fn wants_dense(&self) -> bool {
+        self.inner.wants_dense()
+    }
 }
 
 /// Where a paused run stands, with everything needed to continue it exactly.
@@ -312,6 +357,20 @@ impl RunState {
         };
         r.finish()?;
         Ok(state)
+    }
+
+    /// A fixed-step run's position after `steps` steps, at time t in state y (the stepper's
+    /// state and the counters to be added).
+    pub(crate) fn at(steps: u64, t: f64, y: &[f64]) -> Self {
+        RunState {
+            steps,
+            t,
+            y: y.to_vec(),
+            rejected: 0,
+            evaluations: [0; 3],
+            stepper: Words::new(),
+            control: Words::new(),
+        }
     }
 
     /// Checks that the state has `dim` variables, all finite.

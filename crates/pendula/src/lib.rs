@@ -50,11 +50,11 @@ pub mod error;
 pub mod events;
 pub mod integrator;
 pub mod observe;
+pub mod resume;
 pub mod simulate;
 pub mod special;
 pub mod system;
 
 pub use error::Error;
-pub use simulate::{
-    End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive, solve_resumable,
-};
+pub use resume::solve_resumable;
+pub use simulate::{End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive};

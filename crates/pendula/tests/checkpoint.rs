@@ -327,3 +327,43 @@ fn states_that_do_not_fit_are_refused() {
     words.0.pop();
     assert!(matches!(RunState::from_words(&words), Err(Error::BadCheckpoint { .. })));
 }
+
+/// `Simulation::run_from`, the building block for a stepper of one's own: paused at a
+/// simulated time with the stepper kept (its state is the caller's), it continues to the
+/// bits of the run that never paused.
+#[test]
+fn simulation_run_from_continues_a_paused_run() {
+    use pendula::integrator::tao::TaoStepper;
+    let v = values("double", &[]);
+    let model = DoublePendulum::from_values(&v);
+    let form = model.hamiltonian_form().unwrap();
+    let pendula::integrator::Scheme::Tao(scheme) = integrator::tao::TAO_4.scheme else { unreachable!() };
+    let spec = RunSpec { t0: 0.0, h: 0.004, end: End::Time(1.0) };
+    let start = || {
+        let mut z = [0.0; 4];
+        Model::to_momenta(&model, v.initial_state(), &mut z);
+        z
+    };
+    let run = pendula::Simulation { system: &form, spec };
+    let (mut whole, mut tape) = (start(), Tape::default());
+    let outcome = run.run(&mut TaoStepper::new(scheme, 2), &mut whole, &mut tape).unwrap();
+    let (mut z, mut parts) = (start(), Tape::default());
+    let mut stepper = TaoStepper::new(scheme, 2);
+    let Leg::Paused(at) =
+        run.run_from(&mut stepper, &mut z, &mut parts, 0, &Pause { at: 0.5, flag: None }).unwrap()
+    else {
+        panic!("no pause")
+    };
+    assert_eq!(at.t, 0.5);
+    assert_eq!(at.y, z.to_vec());
+    // A fresh stepper restored from the kept one's words, as after a restart.
+    let mut restored = TaoStepper::new(scheme, 2);
+    restored.restore_all(&stepper.snapshot(), "tao").unwrap();
+    let Leg::Done(end) = run.run_from(&mut restored, &mut z, &mut parts, at.steps, &Pause::NEVER).unwrap()
+    else {
+        unreachable!()
+    };
+    assert_eq!(end, outcome);
+    assert_eq!(z, whole);
+    assert_eq!(parts, tape);
+}

@@ -1,8 +1,8 @@
 //! One double pendulum with RK4 through the ensemble engine's arithmetic: the fast path of
-//! `pendula simulate double --method rk4`, resumable like [`crate::simulate::solve_resumable`].
+//! `pendula simulate double --method rk4`, resumable like [`crate::resume::solve_resumable`].
 
 use super::{has_fma, trig};
-use crate::checkpoint::{Leg, Pause, Reader, RunState, Words};
+use crate::checkpoint::{Leg, Pause, Pausing, Reader, RunState, Words};
 use crate::observe::{Observer, Sample};
 use crate::simulate::Schedule;
 use crate::system::double::DoublePendulum;
@@ -91,13 +91,16 @@ pub fn rk4_trajectory_resumable(
         }
     };
     let p = [pendulum.m1, pendulum.m2, pendulum.l1, pendulum.l2, pendulum.g];
-    let run = Run { spec, schedule: &schedule, done, pause };
-    let (steps, outcome) = if fma {
-        trajectory_kernel::<true>(&p, &mut y, &run, observer)?
-    } else {
-        trajectory_kernel::<false>(&p, &mut y, &run, observer)?
+    // The kernel's loop is the same whether it may pause or not: the check is the
+    // observer's (see `Simulation::run_from`).
+    let mut pausing = Pausing::new(observer, pause);
+    let (steps, outcome) = match (fma, pause.never()) {
+        (true, true) => trajectory_kernel::<true, _>(&p, &mut y, spec, &schedule, done, pausing.inner())?,
+        (false, true) => trajectory_kernel::<false, _>(&p, &mut y, spec, &schedule, done, pausing.inner())?,
+        (true, false) => trajectory_kernel::<true, _>(&p, &mut y, spec, &schedule, done, &mut pausing)?,
+        (false, false) => trajectory_kernel::<false, _>(&p, &mut y, spec, &schedule, done, &mut pausing)?,
     };
-    Ok(match outcome {
+    Ok(match (!pausing.paused).then_some(outcome) {
         Some(outcome) => Leg::Done(Report {
             outcome,
             rhs_evals: 4 * steps,
@@ -119,14 +122,6 @@ pub fn rk4_trajectory_resumable(
             })
         }
     })
-}
-
-/// The run's schedule, the steps already taken and when to pause.
-struct Run<'a> {
-    spec: &'a RunSpec,
-    schedule: &'a Schedule,
-    done: u64,
-    pause: &'a Pause<'a>,
 }
 
 /// The trigonometry of a state: (sin, cos) of θ₁ − θ₂, θ₁ and θ₂ — what both the
@@ -186,26 +181,27 @@ fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-/// Steps from `run.done` (showing the initial state first when it is 0): the steps taken and
-/// how the run ended, or `None` when it paused.
-fn trajectory_kernel<const FMA: bool>(
+/// Steps from `done` (showing the initial state first when it is 0): the steps taken and how
+/// the run ended.
+fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
     p: &[f64; 5],
     y: &mut [f64; 4],
-    run: &Run<'_>,
-    observer: &mut dyn Observer,
-) -> Result<(u64, Option<Outcome>), Error> {
-    let (t0, h) = (run.spec.t0, run.spec.h);
-    let schedule = run.schedule;
+    spec: &RunSpec,
+    schedule: &Schedule,
+    done: u64,
+    observer: &mut O,
+) -> Result<(u64, Outcome), Error> {
+    let (t0, h) = (spec.t0, spec.h);
     let mut tr = trig_of::<FMA>(y);
-    if run.done == 0
+    if done == 0
         && observer
             .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(0, t0, y, false) })
             .is_break()
     {
-        return Ok((0, Some(Outcome::Stopped { steps: 0, t: t0 })));
+        return Ok((0, Outcome::Stopped { steps: 0, t: t0 }));
     }
     let m = trig::madd::<FMA>;
-    for k in run.done + 1..=schedule.steps {
+    for k in done + 1..=schedule.steps {
         let last = k == schedule.steps;
         let step = if last { schedule.last_h } else { h };
         let (hh, h6) = (0.5 * step, step / 6.0);
@@ -225,11 +221,8 @@ fn trajectory_kernel<const FMA: bool>(
             .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(k, t, y, last) })
             .is_break()
         {
-            return Ok((k, Some(Outcome::Stopped { steps: k, t })));
-        }
-        if !last && run.pause.due(t) {
-            return Ok((k, None));
+            return Ok((k, Outcome::Stopped { steps: k, t }));
         }
     }
-    Ok((schedule.steps, Some(Outcome::ReachedEnd { steps: schedule.steps, t: schedule.t_end })))
+    Ok((schedule.steps, Outcome::ReachedEnd { steps: schedule.steps, t: schedule.t_end }))
 }

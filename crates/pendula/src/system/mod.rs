@@ -373,7 +373,7 @@ pub trait DynModel: Send + Sync {
         observer: &mut dyn Observer,
     ) -> Result<Report, Error>;
     /// Runs `method` from `y0` as `stepping` says, able to pause and to continue from a
-    /// paused state (see [`crate::simulate::solve_resumable`]).
+    /// paused state (see [`crate::resume::solve_resumable`]).
     fn solve_resumable(
         &self,
         method: &Method,
@@ -453,7 +453,7 @@ impl<M: Model> DynModel for M {
         from: Option<&crate::checkpoint::RunState>,
         pause: &crate::checkpoint::Pause<'_>,
     ) -> Result<crate::checkpoint::Leg<Report>, Error> {
-        crate::simulate::solve_resumable(self, method, y0, stepping, observer, from, pause)
+        crate::resume::solve_resumable(self, method, y0, stepping, observer, from, pause)
     }
 }
 
