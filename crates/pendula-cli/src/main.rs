@@ -15,6 +15,7 @@ mod output;
 mod run_state;
 mod simulate;
 mod sink;
+mod watch;
 
 use std::io::Write;
 use std::process::ExitCode;

@@ -19,8 +19,8 @@ use crate::checkpoint::{Checkpoint, f64_from_hex, hex_f64, hex_words};
 use crate::cli::SimulateArgs;
 use crate::config::SimulateConfig;
 use crate::output::PartialFile;
-use crate::simulate::Watch;
 use crate::sink::Position;
+use crate::watch::Watch;
 
 /// Where a run paused, and when it pauses next.
 pub struct Saved {
