@@ -175,11 +175,18 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
             Ok(Leg::Done(report)) => break report,
             Ok(Leg::Paused(state)) => state,
             Err(err) => {
-                // A run that failed leaves nothing: its checkpoint would fail the same way.
-                if let (Some(c), Some(Trajectory::Partial(p))) = (checkpoint, trajectory.take()) {
-                    p.remove();
-                    let _ = std::fs::remove_file(&c.path);
-                } else if let Some(c) = checkpoint {
+                // A run that failed numerically leaves nothing: continuing from its checkpoint
+                // would fail the same way. (A checkpoint that does not fit is left as it is.)
+                let numerical = matches!(
+                    err,
+                    pendula::Error::NonFinite { .. }
+                        | pendula::Error::NewtonDidNotConverge { .. }
+                        | pendula::Error::StepSizeTooSmall { .. }
+                );
+                if let (true, Some(c)) = (numerical, checkpoint) {
+                    if let Some(Trajectory::Partial(p)) = trajectory.take() {
+                        p.remove();
+                    }
                     let _ = std::fs::remove_file(&c.path);
                 }
                 return Err(err.into());

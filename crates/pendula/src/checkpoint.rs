@@ -240,7 +240,7 @@ pub trait Snapshot {
 }
 
 /// When a run pauses: after the first step that ends at or after `at`, or after the step
-/// during which `flag` was set. Checked once per step: a comparison and a relaxed atomic
+/// during which `flag` was set (after the first step when it was set before). Checked once per step: a comparison and a relaxed atomic
 /// load.
 #[derive(Debug, Clone, Copy)]
 pub struct Pause<'a> {
@@ -267,8 +267,8 @@ impl Pause<'_> {
 }
 
 /// An observer that shows every sample to `inner` and then, after a sample that did not end
-/// the run and is not its last, asks a [`Pause`] whether to pause there: if so it ends the
-/// run and says so (`paused`). Loops that can pause run with it around their observer, and
+/// the run and is neither its first (the initial state) nor its last, asks a [`Pause`]
+/// whether to pause there: if so it ends the run and says so (`paused`). Loops that can pause run with it around their observer, and
 /// without it (the same loop) when they never pause.
 pub(crate) struct Pausing<'a, 'p, O: ?Sized> {
     inner: &'a mut O,
@@ -293,7 +293,8 @@ impl<O: Observer + ?Sized> Observer for Pausing<'_, '_, O> {
         if self.inner.observe(sample).is_break() {
             return ControlFlow::Break(());
         }
-        if !sample.last && self.pause.due(sample.t) {
+        // Not at the initial state: a run resumed from step 0 would show it again.
+        if sample.step > 0 && !sample.last && self.pause.due(sample.t) {
             self.paused = true;
             return ControlFlow::Break(());
         }
@@ -376,6 +377,9 @@ impl RunState {
     /// Checks that the state has `dim` variables, all finite.
     pub(crate) fn check(&self, dim: usize) -> Result<(), Error> {
         let bad = |reason: String| Error::BadCheckpoint { part: "the run", reason };
+        if self.steps == 0 {
+            return Err(bad("it is at step 0: a run pauses after a step, not before the first".into()));
+        }
         if self.y.len() != dim {
             return Err(bad(format!("a state of {} variables where the system has {dim}", self.y.len())));
         }

@@ -367,3 +367,40 @@ fn simulation_run_from_continues_a_paused_run() {
     assert_eq!(z, whole);
     assert_eq!(parts, tape);
 }
+
+/// A pause asked for before the run starts (an interrupt during set-up) pauses after the
+/// first step, not at the initial state, which a continued run would show again: the
+/// continued run's samples are the whole run's, each once. A saved state at step 0 is refused.
+#[test]
+fn a_pause_before_the_start_comes_after_the_first_step() {
+    let v = values("double", &[]);
+    let model = v.build();
+    let stepping = fixed(0.01, 0.5);
+    let rk4 = &integrator::explicit_rk::RK4;
+    let flag = AtomicBool::new(true);
+    let (mut whole, mut parts) = (Tape::default(), Tape::default());
+    let Leg::Done(report) =
+        model.solve_resumable(rk4, v.initial_state(), &stepping, &mut whole, None, &Pause::NEVER).unwrap()
+    else {
+        unreachable!()
+    };
+    let pause = Pause { at: f64::INFINITY, flag: Some(&flag) };
+    let Leg::Paused(state) =
+        model.solve_resumable(rk4, v.initial_state(), &stepping, &mut parts, None, &pause).unwrap()
+    else {
+        panic!("no pause")
+    };
+    assert_eq!(state.steps, 1);
+    let Leg::Done(end) = model
+        .solve_resumable(rk4, v.initial_state(), &stepping, &mut parts, Some(&state), &Pause::NEVER)
+        .unwrap()
+    else {
+        unreachable!()
+    };
+    assert_eq!(parts, whole);
+    assert_eq!(report_bits(&end), report_bits(&report));
+    let at_start = RunState { steps: 0, ..state };
+    let err =
+        model.solve_resumable(rk4, v.initial_state(), &stepping, &mut parts, Some(&at_start), &Pause::NEVER);
+    assert!(matches!(err, Err(Error::BadCheckpoint { .. })), "{err:?}");
+}
