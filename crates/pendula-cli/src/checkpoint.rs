@@ -34,6 +34,27 @@ pub const FORMAT: &str = "pendula-checkpoint";
 /// The version of the format this pendula writes and reads.
 pub const VERSION: u32 = 1;
 
+/// The largest checkpoint read (a chunked run's lists a few hundred chunks; a simulation's
+/// state is a few hundred words).
+const MAX_BYTES: u64 = 16 << 20;
+
+/// What a file that is not a regular file is, for messages.
+fn kind(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a special file"
+    }
+}
+
 /// A checkpoint's JSON, checked.
 pub struct Checkpoint {
     /// Where it was read from (absolute).
@@ -46,8 +67,21 @@ impl Checkpoint {
     /// Reads and checks the checkpoint at `path`; every error names the file.
     pub fn read(path: &Path) -> Result<Self> {
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
-        let bytes =
-            std::fs::read(&path).with_context(|| format!("cannot read the checkpoint {}", path.display()))?;
+        let cannot = || format!("cannot read the checkpoint {}", path.display());
+        // A directory, a FIFO (which would wait for a writer) or a device is no checkpoint,
+        // nor is a file far larger than any checkpoint (a trajectory given by mistake).
+        let meta = std::fs::metadata(&path).with_context(cannot)?;
+        if !meta.is_file() {
+            bail!("{}: it is {}, not a checkpoint file", cannot(), kind(&meta));
+        }
+        if meta.len() > MAX_BYTES {
+            bail!(
+                "{} is not a checkpoint pendula can resume: it has {} bytes, and a checkpoint has at most {MAX_BYTES}",
+                path.display(),
+                meta.len()
+            );
+        }
+        let bytes = std::fs::read(&path).with_context(cannot)?;
         let bad = |what: String| anyhow!("{} is not a checkpoint pendula can resume: {what}", path.display());
         let newline =
             bytes.iter().position(|&b| b == b'\n').ok_or_else(|| bad("it has no header line".into()))?;
@@ -111,17 +145,20 @@ impl Checkpoint {
     }
 }
 
-/// Writes a checkpoint for `body` to `path`, atomically; `also` runs in the same step for
-/// an interrupt as the rename (it keeps the partial file the checkpoint refers to).
+/// Writes a checkpoint for `body` to `path` (which the run claimed with
+/// [`crate::output::claim_regular`]), atomically; `also` runs in the same step for an
+/// interrupt as the rename (it keeps the partial file the checkpoint refers to). A failed
+/// write names `--checkpoint` and the path ([`crate::output::WriteError`]).
 pub fn write(path: &Path, body: &Value, also: impl FnOnce(&mut Guard<'_>) -> Result<()>) -> Result<()> {
     let json = serde_json::to_vec_pretty(body)?;
-    let file = AtomicFile::create(path, "--checkpoint")?;
+    let file = AtomicFile::recreate(path, "--checkpoint")?;
     {
         use std::io::Write;
         let mut handle = file.handle()?;
         writeln!(handle, "{FORMAT} {VERSION} crc32={:08x}", crc32fast::hash(&json))?;
         handle.write_all(&json)?;
-        handle.sync_data().with_context(|| format!("cannot write the checkpoint {}", path.display()))?;
+        handle.flush()?;
+        handle.sync_data()?;
     }
     AtomicFile::commit_with(vec![file], also)
 }
@@ -179,8 +216,11 @@ pub fn fingerprint(text: &str) -> String {
     format!("{hash:016x}")
 }
 
-/// The checkpoint flags of `simulate`, `sweep` and `fractal`, checked: the file must not be
-/// `-`, a directory, nor any of the command's outputs.
+/// The checkpoint flags of `simulate`, `sweep` and `fractal`, checked before any file is
+/// opened: the file must not be `-`, a directory, nor any of the command's outputs (by name;
+/// the writer's claims also catch the same file under other names, a FIFO or a device,
+/// [`crate::output::claim_regular`]). Returns the path as given, which write errors name
+/// ([`absolute`] for the messages that say how to continue, from any directory).
 pub fn check_path(checkpoint: &Path, outputs: &[(&str, &Path)]) -> Result<PathBuf> {
     if checkpoint.as_os_str() == "-" {
         bail!("invalid --checkpoint -: a checkpoint is a file (e.g. run.ckpt)");
@@ -188,7 +228,6 @@ pub fn check_path(checkpoint: &Path, outputs: &[(&str, &Path)]) -> Result<PathBu
     if checkpoint.is_dir() {
         bail!("invalid --checkpoint {}: it is a directory", checkpoint.display());
     }
-    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_owned());
     let path = absolute(checkpoint);
     for (flag, output) in outputs {
         if absolute(output) == path {
@@ -198,5 +237,11 @@ pub fn check_path(checkpoint: &Path, outputs: &[(&str, &Path)]) -> Result<PathBu
             );
         }
     }
-    Ok(path)
+    Ok(checkpoint.to_owned())
+}
+
+/// `path` from the root (as it is, if the working directory cannot be read): what the
+/// messages name to continue a run with `pendula resume`, from any directory.
+pub fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
 }

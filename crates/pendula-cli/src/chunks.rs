@@ -15,13 +15,13 @@ use anyhow::{Context, Result, bail};
 use serde_json::{Value, json};
 
 use crate::checkpoint::Checkpoint;
-use crate::output::Guard;
+use crate::output::{Guard, OutFile};
 
 /// A chunked run's checkpoint and its values file.
 pub struct Chunks {
     path: PathBuf,
     data_path: PathBuf,
-    data: File,
+    data: OutFile,
     /// What every version of the checkpoint repeats: command, arguments, fingerprint.
     base: Value,
     /// Cells in all, values per cell, cells per chunk.
@@ -48,6 +48,18 @@ impl Chunks {
         PathBuf::from(name)
     }
 
+    /// Claims the checkpoint `path` and its values file as outputs of the run, before any
+    /// work: regular files, neither of them another output (nor a FIFO, a device, `-`).
+    pub fn claim(path: &Path) -> Result<()> {
+        crate::output::claim_regular(path, "--checkpoint", "a checkpoint")?;
+        crate::output::claim_regular(
+            &Self::data_path(path),
+            "--checkpoint",
+            "a checkpoint's finished chunks",
+        )?;
+        Ok(())
+    }
+
     /// Starts a chunked run of `cells` cells of `width` values each: an empty values file
     /// and a checkpoint with no chunk done. `base` is what the checkpoint repeats (command,
     /// working directory, arguments, fingerprint).
@@ -55,13 +67,14 @@ impl Chunks {
         if path.exists() {
             bail!(
                 "invalid --checkpoint {}: it exists (from a run interrupted earlier?): continue that run with `pendula resume {}`, or remove the file to start again",
-                path.display(),
-                path.display()
+                crate::checkpoint::absolute(path).display(),
+                crate::checkpoint::absolute(path).display()
             );
         }
         let data_path = Self::data_path(path);
         let data = crate::output::together(|guard| guard.create_listed(&data_path))
-            .with_context(|| format!("cannot write --checkpoint {}", data_path.display()))?;
+            .map_err(|e| crate::output::WriteError::new("--checkpoint", &data_path, e))?;
+        let data = OutFile::new(data, "--checkpoint", &data_path);
         let mut chunks = Chunks {
             path: path.to_owned(),
             data_path,
@@ -123,6 +136,7 @@ impl Chunks {
             length += bytes.len() as u64;
         }
         // Values appended after the checkpoint was written are computed again.
+        let mut data = OutFile::new(data, "--checkpoint", &data_path);
         data.set_len(length)?;
         data.seek(SeekFrom::End(0))?;
         let base = json!({
@@ -160,9 +174,8 @@ impl Chunks {
     /// makes them durable, and rewrites the checkpoint.
     pub fn record(&mut self, index: usize, values: &[f64]) -> Result<()> {
         let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let name = self.data_path.display().to_string();
-        self.data.write_all(&bytes).with_context(|| format!("cannot write {name}"))?;
-        self.data.sync_data().with_context(|| format!("cannot write {name}"))?;
+        self.data.write_all(&bytes)?;
+        self.data.sync_data()?;
         self.done.push((index, crc32fast::hash(&bytes)));
         self.write()
     }
@@ -226,25 +239,38 @@ impl Chunks {
                 "{} of {} chunks done, kept in {} and {}; continue with `pendula resume {}`",
                 self.done.len(),
                 self.count(),
-                self.path.display(),
-                self.data_path.display(),
-                self.path.display()
+                crate::checkpoint::absolute(&self.path).display(),
+                crate::checkpoint::absolute(&self.data_path).display(),
+                crate::checkpoint::absolute(&self.path).display()
             ),
         }
     }
 
     /// The run is complete: removes the checkpoint and the values file (in the step that
     /// puts the outputs in place).
-    pub fn finish(self, guard: &mut Guard<'_>) -> Result<()> {
+    pub fn finish(mut self, guard: &mut Guard<'_>) -> Result<()> {
         guard.forget(&self.data_path);
+        self.listed = false;
         crate::checkpoint::remove(&self.path)?;
         crate::checkpoint::remove(&self.data_path)
     }
 
     /// The run failed: removes both, since continuing would fail the same way.
-    pub fn abandon(self) {
+    pub fn abandon(mut self) {
         crate::output::together(|guard| guard.forget(&self.data_path));
+        self.listed = false;
         let _ = std::fs::remove_file(&self.path);
         let _ = std::fs::remove_file(&self.data_path);
+    }
+}
+
+impl Drop for Chunks {
+    /// A values file that no checkpoint refers to yet (the first checkpoint could not be
+    /// written: a full disk) is of no use: removed, as an interrupt would.
+    fn drop(&mut self) {
+        if self.listed {
+            crate::output::together(|guard| guard.forget(&self.data_path));
+            let _ = std::fs::remove_file(&self.data_path);
+        }
     }
 }

@@ -13,9 +13,12 @@ pub struct Cli {
 }
 
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
-step did not converge); 2 invalid input (arguments, values, scenario file, output path); 130, 143, \
-129 interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed; with --checkpoint, the \
-checkpoint written first, for `pendula resume`).";
+step did not converge, adaptive step fell below its minimum) or its environment did (a full disk, \
+quota or I/O error while writing; the message names the path, and no earlier file is replaced); 2 \
+invalid input (arguments, values, scenario file, shards, a checkpoint that is missing, corrupt or \
+for another request, an output path that cannot be written or that is another output's, a request \
+over the limits without --allow-large); 130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP \
+(unfinished files removed; with --checkpoint, the checkpoint written first, for `pendula resume`).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -130,26 +133,30 @@ pub struct SimulateArgs {
     /// Integration method (see `pendula list methods`) [default: rk4].
     #[arg(long, value_name = "NAME")]
     pub method: Option<String>,
-    /// Step size, s; for adaptive methods the first step to try [default: 0.001].
+    /// Step size, s; for adaptive methods the first step to try [default: 0.001]. The run may
+    /// take at most 10^11 steps (10^13 with --allow-large).
     #[arg(long, allow_hyphen_values = true, value_name = "H")]
     pub dt: Option<String>,
     /// End time, s; the last step is shortened to land on it [default: 10].
     #[arg(long, allow_hyphen_values = true, value_name = "T", conflicts_with = "steps")]
     pub t_end: Option<String>,
-    /// Number of steps, instead of --t-end.
+    /// Number of steps, instead of --t-end: 1 to 10^13.
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub steps: Option<String>,
     /// Binding constant ω of tao-2 and tao-4, 1/s [default: 200]: larger holds the two copies
     /// closer on chaotic orbits; binding * dt must be <= 1.
     #[arg(long, value_name = "OMEGA", allow_hyphen_values = true)]
     pub binding: Option<String>,
-    /// Relative tolerance of adaptive methods (dopri5, dop853) [default: 1e-6].
+    /// Relative tolerance of adaptive methods (dopri5, dop853), from 1e-15 (below that the
+    /// error estimate is round-off) to 1 [default: 1e-6].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub rtol: Option<String>,
-    /// Absolute tolerance of adaptive methods [default: 1e-6].
+    /// Absolute tolerance of adaptive methods, >= 0 [default: 1e-6]; with 0, a component that
+    /// stays exactly 0 meets it (a state at rest does not stall the controller).
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub atol: Option<String>,
-    /// Smallest step an adaptive method may take, s; below it the run fails [default: 0].
+    /// Smallest step an adaptive method may take, s; below it the run fails (exit 1); never
+    /// below 16 ε t_end, which the end time cannot resolve [default: 0].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub h_min: Option<String>,
     /// Largest step an adaptive method may take, s [default: unbounded].
@@ -164,10 +171,12 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "NAME")]
     pub preset: Option<String>,
     /// TOML scenario with the same names (keys system, method, dt, t_end or steps, every,
-    /// out, summary, and a `[set]` table); flags override it.
+    /// out, summary, and a `[set]` table); flags override it. At most 1 MiB, arrays and
+    /// tables nested at most 16 deep.
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
-    /// Write every N-th step (and the last); 0 writes no trajectory [default: 1].
+    /// Write every N-th step (and the last); 0 writes no trajectory [default: 1]. The
+    /// trajectory may take at most 1 GiB (--allow-large lifts it).
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub every: Option<String>,
     /// Adaptive methods: write rows at t = 0, H, 2H, … and the last state, from the method's
@@ -207,4 +216,6 @@ pub struct SimulateArgs {
     /// Simulated seconds between checkpoints [default: only when interrupted].
     #[arg(long, value_name = "T", allow_hyphen_values = true, requires = "checkpoint")]
     pub checkpoint_every: Option<String>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }

@@ -13,6 +13,7 @@ use pendula::{End, RunSpec};
 use serde::Deserialize;
 
 use crate::cli::SimulateArgs;
+use crate::limits::{self, Cost, Estimate};
 
 /// Default step size, s.
 const DEFAULT_DT: f64 = 1e-3;
@@ -57,7 +58,7 @@ pub struct SimulateConfig {
 /// Where and how often a run writes checkpoints.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Checkpoints {
-    /// The checkpoint file (absolute).
+    /// The checkpoint file, as given (`pendula resume` gives it from the root).
     pub path: PathBuf,
     /// Simulated seconds between checkpoints; `None`: only when interrupted.
     pub every: Option<f64>,
@@ -87,14 +88,143 @@ struct Scenario {
 }
 
 fn read_scenario(path: &Path) -> Result<Scenario> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read scenario file {}", path.display()))?;
-    let scenario: Scenario =
-        toml::from_str(&text).map_err(|e| anyhow!("invalid scenario file {}: {e}", path.display()))?;
+    use std::io::Read;
+    let name = path.display();
+    let file = std::fs::File::open(path).with_context(|| format!("cannot read scenario file {name}"))?;
+    // Read at most one byte past the cap: a huge file, or an endless one (/dev/zero, a
+    // pipe), is refused without being read whole.
+    let mut bytes = Vec::new();
+    file.take(limits::MAX_SCENARIO_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .with_context(|| format!("cannot read scenario file {name}"))?;
+    if bytes.len() as u64 > limits::MAX_SCENARIO_BYTES {
+        bail!(
+            "scenario file {name} is larger than {}, the limit for a scenario (a few lines of keys and values)",
+            limits::bytes(limits::MAX_SCENARIO_BYTES as f64)
+        );
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let (line, column) = line_column(&String::from_utf8_lossy(e.as_bytes()), at);
+        anyhow!("invalid scenario file {name}, line {line}, column {column}: not UTF-8 text")
+    })?;
+    // The parser recurses on nested arrays and inline tables: a deep nest is refused first.
+    if let Some(at) = too_deep(&text, limits::MAX_SCENARIO_DEPTH) {
+        let (line, column) = line_column(&text, at);
+        bail!(
+            "invalid scenario file {name}, line {line}, column {column}: arrays or tables nested more than {} deep",
+            limits::MAX_SCENARIO_DEPTH
+        );
+    }
+    let scenario: Scenario = toml::from_str(&text).map_err(|e| {
+        // toml's own message quotes the whole offending line and serde's may quote a whole
+        // value: the message is clipped and the line shown around the error only.
+        let message = clip_message(e.message());
+        match e.span() {
+            Some(span) => {
+                let (line, column) = line_column(&text, span.start);
+                let excerpt = excerpt(&text, span.start);
+                anyhow!("invalid scenario file {name}, line {line}, column {column}: {message}\n  {excerpt}")
+            }
+            None => anyhow!("invalid scenario file {name}: {message}"),
+        }
+    })?;
     if scenario.t_end.is_some() && scenario.steps.is_some() {
-        bail!("scenario file {} sets both t_end and steps; set one", path.display());
+        bail!("scenario file {name} sets both t_end and steps; set one");
     }
     Ok(scenario)
+}
+
+/// The 1-based line and column (in characters) of byte `at` of `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let at = floor_boundary(text, at);
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[start..].chars().count() + 1)
+}
+
+/// The largest char boundary of `text` at or before `at`.
+fn floor_boundary(text: &str, at: usize) -> usize {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    at
+}
+
+/// The line around byte `at`: at most 30 characters either side, marked where cut.
+fn excerpt(text: &str, at: usize) -> String {
+    const SIDE: usize = 30;
+    let at = floor_boundary(text, at);
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let end = text[at..].find('\n').map_or(text.len(), |i| at + i);
+    let before: Vec<char> = text[start..at].chars().collect();
+    let after: Vec<char> = text[at..end].chars().collect();
+    let (b, a) = (before.len().saturating_sub(SIDE), after.len().min(SIDE));
+    format!(
+        "{}{}{}{}",
+        if b > 0 { "…" } else { "" },
+        before[b..].iter().collect::<String>(),
+        after[..a].iter().collect::<String>(),
+        if a < after.len() { "…" } else { "" }
+    )
+}
+
+/// A parser's message, clipped to 200 characters and to its first line.
+fn clip_message(message: &str) -> String {
+    const KEEP: usize = 200;
+    let first = message.lines().next().unwrap_or("");
+    match first.char_indices().nth(KEEP) {
+        None => first.to_owned(),
+        Some((cut, _)) => format!("{}… (clipped)", &first[..cut]),
+    }
+}
+
+/// The byte offset where arrays and inline tables of a TOML text first nest deeper than
+/// `max`, if they do: brackets are counted outside strings and comments, in one pass.
+fn too_deep(text: &str, max: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let (mut i, mut depth) = (0, 0usize);
+    while i < b.len() {
+        match b[i] {
+            b'#' => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            q @ (b'"' | b'\'') => {
+                let triple = b[i..].starts_with(if q == b'"' { b"\"\"\"" } else { b"\'\'\'" });
+                let width = if triple { 3 } else { 1 };
+                i += width;
+                while i < b.len() {
+                    if q == b'"' && b[i] == b'\\' {
+                        i += 2;
+                        continue;
+                    }
+                    if b[i] == q && (width == 1 || b[i..].starts_with(&[q, q, q])) {
+                        i += width - 1;
+                        break;
+                    }
+                    // A single-line string ends at the line's end, closed or not.
+                    if width == 1 && b[i] == b'\n' {
+                        break;
+                    }
+                    i += 1;
+                }
+            }
+            b'[' | b'{' => {
+                depth += 1;
+                if depth > max {
+                    return Some(i);
+                }
+            }
+            b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        i += 1;
+    }
+    None
 }
 
 /// Marks the `deg` suffix (its factor is applied as (deg · π) / 180).
@@ -122,18 +252,154 @@ pub fn parse_value(name: &str, text: &str, quantity: Option<&Quantity>) -> Resul
     let value = match number {
         "" | "+" if factor == pi => 1.0,
         "-" if factor == pi => -1.0,
-        _ => number.parse::<f64>().map_err(|_| {
-            anyhow!(
-                "invalid value `{text}` for `{name}`: expected a number{}",
-                if angle { " (radians), or degrees with a deg suffix (120deg)" } else { "" }
-            )
+        _ => float(number).map_err(|why| {
+            let what = match why {
+                Unusable::NotANumber => format!(
+                    "expected a number{}",
+                    if angle { " (radians), or degrees with a deg suffix (120deg)" } else { "" }
+                ),
+                other => other.to_string(),
+            };
+            anyhow!("invalid value `{}` for `{name}`: {what}", clip(text))
         })?,
     };
     if factor == 1.0 && angle {
         warn_radians(name, t, value);
     }
     // (deg · π) / 180, the same rounding as the catalogue's defaults and the benchmark spec.
-    Ok(if factor == DEGREE { value * pi / 180.0 } else { value * factor })
+    let value = if factor == DEGREE { value * pi / 180.0 } else { value * factor };
+    if let Some(q) = quantity {
+        check_scale(name, text, value, q)?;
+    }
+    Ok(value)
+}
+
+/// How far from its default a mass or a length may be: beyond 10¹² times (or below 10⁻¹²
+/// times) the energies, products of masses, lengths and g, overflow or vanish in round-off
+/// against the other terms, and the run's numbers mean nothing.
+const SCALE_RANGE: f64 = 1e12;
+
+/// Refuses a mass or a length (a positive parameter in kg or m) more than [`SCALE_RANGE`]
+/// times away from its default; `text` is the value as given.
+pub fn check_scale(name: &str, text: &str, value: f64, q: &Quantity) -> Result<()> {
+    let scaled = matches!(q.unit, "kg" | "m") && q.domain == system::Domain::Positive && q.default > 0.0;
+    if scaled && value > 0.0 && value.is_finite() {
+        let ratio = value / q.default;
+        if !(1.0 / SCALE_RANGE..=SCALE_RANGE).contains(&ratio) {
+            let kind = if q.unit == "kg" { "mass" } else { "length" };
+            bail!(
+                "invalid value `{}` for `{name}`: a {kind} must be within 10^12 times its default {} {u} (from {} to {} {u}); beyond that the energies overflow or vanish in round-off",
+                clip(text),
+                Short(q.default),
+                limits::sci(q.default / SCALE_RANGE),
+                limits::sci(q.default * SCALE_RANGE),
+                u = q.unit,
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Why a text is no usable float.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unusable {
+    /// Not a number at all (`fast`).
+    NotANumber,
+    /// `nan`.
+    NaN,
+    /// `inf`, `-infinity`.
+    Infinite,
+    /// A number beyond f64's range, which Rust reads as infinity (`1e400`).
+    Overflow,
+    /// A number below the smallest normal float, which Rust reads as a subnormal with
+    /// fewer digits (`1e-320`) or as 0 (`1e-400`).
+    Underflow,
+}
+
+impl std::fmt::Display for Unusable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Unusable::NotANumber => "not a number",
+            Unusable::NaN => "NaN is not a number; a finite value is needed",
+            Unusable::Infinite => "must be finite",
+            Unusable::Overflow => "beyond the largest float (about 1.8e308); must be finite",
+            Unusable::Underflow => {
+                "below the smallest normal float (about 2.2e-308), where digits are lost or the value becomes 0"
+            }
+        })
+    }
+}
+
+/// Reads a float as typed, refusing NaN, infinities and numbers beyond f64's range, which
+/// Rust's parser turns silently into infinity, a subnormal or 0.
+pub fn float(text: &str) -> std::result::Result<f64, Unusable> {
+    let t = text.trim();
+    let v: f64 = t.parse().map_err(|_| Unusable::NotANumber)?;
+    let bare = t.trim_start_matches(['+', '-']).to_ascii_lowercase();
+    if v.is_nan() {
+        return Err(Unusable::NaN);
+    }
+    if v.is_infinite() {
+        return Err(if bare == "inf" || bare == "infinity" {
+            Unusable::Infinite
+        } else {
+            Unusable::Overflow
+        });
+    }
+    let mantissa = bare.split('e').next().unwrap_or("");
+    let nonzero = mantissa.chars().any(|c| ('1'..='9').contains(&c));
+    if (v != 0.0 && v.abs() < f64::MIN_POSITIVE) || (v == 0.0 && nonzero) {
+        return Err(Unusable::Underflow);
+    }
+    Ok(v)
+}
+
+/// A float given to `flag`: see [`float`]; the error names the flag, the text as typed and
+/// what was `expected`.
+pub fn parse_float(flag: &str, text: &str, expected: &str) -> Result<f64> {
+    float(text).map_err(|why| match why {
+        Unusable::NotANumber => anyhow!("invalid value `{}` for {flag}: expected {expected}", clip(text)),
+        other => anyhow!("invalid value `{}` for {flag}: {other}", clip(text)),
+    })
+}
+
+/// A whole number given to `flag`, from `min` to `max`; `what` names the unit (`steps`).
+/// Text that is no whole number, or one beyond the range (`99999999999999999999`), is
+/// refused with the range.
+pub fn parse_count(flag: &str, text: &str, min: u64, max: u64, what: &str) -> Result<u64> {
+    let range = format!("a whole number of {what}, >= {} and <= {}", count(min), count(max));
+    let n: u64 = text
+        .trim()
+        .parse()
+        .map_err(|_| anyhow!("invalid value `{}` for {flag}: expected {range}", clip(text)))?;
+    if !(min..=max).contains(&n) {
+        bail!("invalid value `{}` for {flag}: expected {range}", clip(text));
+    }
+    Ok(n)
+}
+
+/// A count for a message: in full up to a million, as a power of ten (`10^13`) or with an
+/// exponent beyond.
+pub fn count(n: u64) -> String {
+    if n < 1_000_000 {
+        return n.to_string();
+    }
+    let digits = n.to_string();
+    if digits.starts_with('1') && digits[1..].bytes().all(|b| b == b'0') {
+        format!("10^{}", digits.len() - 1)
+    } else {
+        limits::sci(n as f64)
+    }
+}
+
+/// The user's text for a message: at most 40 characters, and how long the rest was, so that
+/// a megabyte of input is never echoed back.
+pub fn clip(text: &str) -> String {
+    const KEEP: usize = 40;
+    match text.char_indices().nth(KEEP) {
+        None => text.to_owned(),
+        Some((cut, _)) => format!("{}… ({} bytes in all)", &text[..cut], text.len()),
+    }
 }
 
 /// Warns on stderr, once per name and value, when a bare number for an angle exceeds a full
@@ -161,16 +427,23 @@ fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f6
         toml::Value::Integer(i) => number_value(name, *i as f64, quantity),
         toml::Value::String(s) => parse_value(name, s, Some(quantity)),
         other => bail!(
-            "invalid value {other} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\""
+            "invalid value {} for `{name}` in the scenario's [set]: expected a number or a string like \"120deg\"",
+            clip(&other.to_string())
         ),
     }
 }
 
-/// A scenario's bare number: radians for an angle, so it gets the same warning as `--set`.
+/// A scenario's bare number: radians for an angle, so it gets the same warning as `--set`;
+/// masses and lengths within [`SCALE_RANGE`] of their defaults, as from `--set`.
 fn number_value(name: &str, value: f64, quantity: &Quantity) -> Result<f64> {
-    if quantity.is_angle() {
-        warn_radians(name, &Short(value).to_string(), value);
+    let text = Short(value).to_string();
+    if value != 0.0 && value.abs() < f64::MIN_POSITIVE {
+        bail!("invalid value {text} for `{name}` in the scenario's [set]: {}", Unusable::Underflow);
     }
+    if quantity.is_angle() {
+        warn_radians(name, &text, value);
+    }
+    check_scale(name, &text, value, quantity)?;
     Ok(value)
 }
 
@@ -184,19 +457,37 @@ pub fn set_example(info: &SystemInfo) -> String {
     }
 }
 
-/// Parses `--set NAME=VALUE` items against a system's quantities.
+/// Parses `--set NAME=VALUE` items against a system's quantities. A name set twice is
+/// refused, naming both: which one was meant is not ours to guess.
 pub fn parse_settings(info: &SystemInfo, items: &[String]) -> Result<Vec<(String, f64)>> {
+    let mut seen: Vec<(&str, &str)> = Vec::new();
     items
         .iter()
         .map(|item| {
             let (name, text) = item.split_once('=').ok_or_else(|| {
-                anyhow!("invalid --set `{item}`: expected NAME=VALUE, e.g. {}", set_example(info))
+                anyhow!("invalid --set `{}`: expected NAME=VALUE, e.g. {}", clip(item), set_example(info))
             })?;
             let name = name.trim();
             let q = info.quantity(name)?;
+            if let Some((_, first)) = seen.iter().find(|(n, _)| *n == name) {
+                bail!("`{name}` is set twice: --set {} and --set {}; give it once", clip(first), clip(item));
+            }
+            seen.push((name, item));
             Ok((name.to_owned(), parse_value(name, text, Some(q))?))
         })
         .collect()
+}
+
+/// Refuses `--set` items that name a quantity the command sets itself (`owned`, with why),
+/// instead of overriding them silently.
+pub fn refuse_settings(items: &[String], owned: &[&str], why: &str) -> Result<()> {
+    for item in items {
+        let name = item.split_once('=').map_or(item.as_str(), |(n, _)| n).trim();
+        if owned.contains(&name) {
+            bail!("invalid --set {}: {why}", clip(item));
+        }
+    }
+    Ok(())
 }
 
 /// The settings of `preset`, which must be for the system `info`.
@@ -212,28 +503,18 @@ pub fn preset_settings(info: &SystemInfo, preset: &system::driven::Preset) -> Re
     Ok(preset.settings.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect())
 }
 
-/// `--threads`: a whole number >= 1 when given, else every core.
-pub fn parse_threads(text: Option<&str>) -> Result<usize> {
-    match text {
-        Some(text) => {
-            let n: usize = parse_number("--threads", text, "a whole number of threads >= 1")?;
-            if n == 0 {
-                bail!("invalid --threads 0: need at least 1");
-            }
-            Ok(n)
-        }
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
-    }
-}
-
 /// An optional floating-point flag: parsed when given, `default` otherwise.
 pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
-    text.map_or(Ok(default), |t| parse_number(flag, t, expected))
+    text.map_or(Ok(default), |t| parse_float(flag, t, expected))
 }
 
-/// Parses a number given to `flag`, naming the flag and what was expected on failure.
-pub fn parse_number<T: std::str::FromStr>(flag: &str, text: &str, expected: &str) -> Result<T> {
-    text.trim().parse().map_err(|_| anyhow!("invalid value `{text}` for {flag}: expected {expected}"))
+/// A float given to `flag` that must be finite and > 0 (a step, a time span), or `default`.
+pub fn positive_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
+    let v = f64_arg(flag, text, default, expected)?;
+    if v <= 0.0 {
+        bail!("invalid value `{}` for {flag}: must be > 0 ({expected})", clip(text.unwrap_or("")));
+    }
+    Ok(v)
 }
 
 /// [`RunSpec::schedule`], its errors naming the flags the step and the end came from
@@ -247,14 +528,36 @@ pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula
                 "t-end" | "steps" => end_flag,
                 _ => return anyhow::Error::new(pendula::Error::InvalidValue { name, value, allowed }),
             };
+            // Too many steps is the step and the end together: both are named.
+            let with = match (name.as_str(), spec.end) {
+                ("dt", End::Time(t)) if allowed.contains("10^13") => format!(" to {end_flag} {}", Short(t)),
+                _ => String::new(),
+            };
             if flag.starts_with("--") {
-                anyhow!("invalid {flag} {}: {allowed}", Short(value))
+                anyhow!("invalid {flag} {}: {allowed}{with}", Short(value))
             } else {
-                anyhow!("invalid {flag} = {} in the scenario file: {allowed}", Short(value))
+                anyhow!("invalid {flag} = {} in the scenario file: {allowed}{with}", Short(value))
             }
         }
         other => other.into(),
     })
+}
+
+/// A library error about a quantity (`rtol`), renamed to the flag or key it came from
+/// (`("rtol", "--rtol")`); other errors pass unchanged.
+pub fn flag_error(e: pendula::Error, names: &[(&str, &str)]) -> anyhow::Error {
+    match e {
+        pendula::Error::InvalidValue { name, value, allowed } => {
+            match names.iter().find(|(n, _)| *n == name) {
+                Some((_, flag)) if flag.starts_with("--") => {
+                    anyhow!("invalid {flag} {}: {allowed}", Short(value))
+                }
+                Some((_, key)) => anyhow!("invalid {key} = {} in the scenario file: {allowed}", Short(value)),
+                None => pendula::Error::InvalidValue { name, value, allowed }.into(),
+            }
+        }
+        other => other.into(),
+    }
 }
 
 /// Validates `simulate`'s arguments (and scenario file) into a [`SimulateConfig`].
@@ -274,8 +577,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     let mut method =
         *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
     if let Some(text) = &args.binding {
-        let omega = parse_number("--binding", text, "a number > 0, in 1/s")?;
-        method = method.with_binding(omega)?;
+        let omega = parse_float("--binding", text, "a number > 0, in 1/s")?;
+        method = method.with_binding(omega).map_err(|e| flag_error(e, &[("binding", "--binding")]))?;
     }
 
     let mut settings = match preset {
@@ -290,14 +593,14 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     let values = info.values(&settings)?;
 
     let given_dt = match &args.dt {
-        Some(text) => Some(parse_number("--dt", text, "a step size in seconds")?),
+        Some(text) => Some(parse_float("--dt", text, "a step size in seconds")?),
         None => scenario.dt,
     };
     let h = given_dt.unwrap_or(DEFAULT_DT);
     let t_eval = args.t_eval.as_deref().map(parse_times).transpose()?;
     let end = match (&args.t_end, &args.steps) {
-        (Some(t), _) => End::Time(parse_number("--t-end", t, "an end time in seconds")?),
-        (None, Some(n)) => End::Steps(parse_number("--steps", n, "a whole number of steps >= 1")?),
+        (Some(t), _) => End::Time(parse_float("--t-end", t, "an end time in seconds")?),
+        (None, Some(n)) => End::Steps(parse_count("--steps", n, 1, limits::MAX_STEPS, "steps")?),
         (None, None) => match (scenario.t_end, scenario.steps) {
             (_, Some(n)) => End::Steps(n),
             (t, None) => End::Time(
@@ -315,10 +618,24 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         (None, None, End::Time(_)) if scenario.t_end.is_some() => "t_end",
         (None, None, End::Time(_)) => "--t-end",
     };
-    schedule(&spec, dt_flag, end_flag)?;
+    // An adaptive run's --dt is only its first step: it does not count the run's steps
+    // (estimated below), and is checked only as a step.
+    let checked = match (matches!(method.scheme, Scheme::Embedded(_)), end) {
+        (true, End::Time(t)) if t.is_finite() && t > 0.0 && h.is_finite() && h > 0.0 => {
+            RunSpec { h: t, ..spec }
+        }
+        _ => spec,
+    };
+    schedule(&checked, dt_flag, end_flag)?;
     let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
         Ok(match text {
-            Some(t) => parse_number(flag, t, "a number")?,
+            // The largest step is unbounded by default, and may be said so.
+            Some(t)
+                if flag == "--h-max" && float(t) == Err(Unusable::Infinite) && !t.trim().starts_with('-') =>
+            {
+                f64::INFINITY
+            }
+            Some(t) => parse_float(flag, t, "a number")?,
             None => file.unwrap_or(default),
         })
     };
@@ -330,7 +647,24 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
             h_min: number("--h-min", &args.h_min, scenario.h_min, 0.0)?,
             h_max: number("--h-max", &args.h_max, scenario.h_max, f64::INFINITY)?,
         };
-        tol.validate()?;
+        tol.validate().map_err(|e| {
+            let from_file = |flag: &str, given: &Option<String>| {
+                if given.is_none() {
+                    flag.trim_start_matches("--").replace('-', "_")
+                } else {
+                    flag.to_owned()
+                }
+            };
+            flag_error(
+                e,
+                &[
+                    ("rtol", &from_file("--rtol", &args.rtol)),
+                    ("atol", &from_file("--atol", &args.atol)),
+                    ("h-min", &from_file("--h-min", &args.h_min)),
+                    ("h-max", &from_file("--h-max", &args.h_max)),
+                ],
+            )
+        })?;
         if !matches!(method.scheme, Scheme::Embedded(_)) {
             bail!(
                 "--rtol, --atol, --h-min and --h-max apply to adaptive methods (dopri5, dop853); {} takes fixed steps (--dt)",
@@ -348,9 +682,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     let adaptive = tolerances.is_some();
     let grid = match (&args.output_dt, t_eval) {
         (Some(text), _) => {
-            let dt: f64 = parse_number("--output-dt", text, "a time step in seconds")?;
-            if !(dt.is_finite() && dt > 0.0) {
-                bail!("invalid --output-dt {dt}: must be finite and > 0 (s)");
+            let dt = parse_float("--output-dt", text, "a time step in seconds")?;
+            if dt <= 0.0 {
+                bail!("invalid --output-dt {}: must be finite and > 0 (s)", clip(text));
             }
             Some(pendula::observe::Grid::Spacing(dt))
         }
@@ -358,7 +692,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
             if let End::Time(t_end) = end
                 && let Some(&late) = times.iter().find(|&&t| t > t_end)
             {
-                bail!("invalid --t-eval: {late} is after --t-end {t_end}");
+                bail!("invalid --t-eval: {} is after --t-end {}", Short(late), Short(t_end));
             }
             Some(pendula::observe::Grid::Times(times))
         }
@@ -371,7 +705,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
         );
     }
     let every = match &args.every {
-        Some(text) => parse_number("--every", text, "a whole number >= 0")?,
+        Some(text) => parse_count("--every", text, 0, limits::MAX_STEPS, "steps")?,
         None => scenario.every.unwrap_or(1),
     };
     let every = (every > 0).then_some(every);
@@ -387,6 +721,16 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
     if let Some(p) = &plot {
         crate::commands::plot::check_image_path(p, "--plot")?;
     }
+    for (i, e) in args.events.iter().enumerate() {
+        if args.events[..i].iter().any(|f| f.trim() == e.trim()) {
+            bail!("invalid --event {}: it is given twice; give each event once", clip(e));
+        }
+    }
+    limits::check(
+        "simulate",
+        args.allow_large,
+        &simulate_estimates(&values, &spec, &tolerances, every, &grid, &out, plot.is_some())?,
+    )?;
     let checkpoint = checkpoints(args, out.as_ref(), summary.as_deref(), plot.as_deref())?;
     Ok(SimulateConfig {
         values,
@@ -413,9 +757,16 @@ fn checkpoints(
     let Some(file) = &args.checkpoint else { return Ok(None) };
     let every = match &args.checkpoint_every {
         Some(text) => {
-            let t: f64 = parse_number("--checkpoint-every", text, "a time in seconds")?;
+            // NaN, 1e400 and the like are refused as every float is; infinity as a time.
+            let t = match float(text) {
+                Err(Unusable::Infinite) => f64::INFINITY,
+                _ => parse_float("--checkpoint-every", text, "a time in seconds")?,
+            };
             if !(t.is_finite() && t > 0.0) {
-                bail!("invalid --checkpoint-every {}: must be finite and > 0 (simulated seconds)", Short(t));
+                bail!(
+                    "invalid --checkpoint-every {}: must be finite and > 0 (simulated seconds between checkpoints)",
+                    clip(text.trim())
+                );
             }
             Some(t)
         }
@@ -442,17 +793,81 @@ fn checkpoints(
     Ok(Some(Checkpoints { path, every }))
 }
 
+/// What a `simulate` run costs: its steps (for an adaptive run a lower estimate), the bytes
+/// of its trajectory, and with `--plot` the rows it keeps in memory to draw.
+fn simulate_estimates(
+    values: &Values,
+    spec: &RunSpec,
+    tolerances: &Option<Tolerances>,
+    every: Option<u64>,
+    grid: &Option<pendula::observe::Grid>,
+    out: &Option<Output>,
+    plot: bool,
+) -> Result<Vec<Estimate>> {
+    use pendula::observe::Grid;
+    let (steps, t_end, how) = match (tolerances, spec.end) {
+        (Some(tol), End::Time(t_end)) => {
+            let period = limits::motion_period(&*values.build(), values.initial_state());
+            let steps = limits::adaptive_steps(t_end, period, tol.h_max);
+            let how = format!(
+                "at least {} adaptive steps per period of {} s over {} s",
+                limits::ADAPTIVE_STEPS_PER_PERIOD,
+                Short(period),
+                Short(t_end)
+            );
+            (steps, t_end, how)
+        }
+        _ => {
+            let schedule = spec.schedule()?;
+            let how = format!("{} steps of {} s", count(schedule.steps), Short(spec.h));
+            (schedule.steps as f64, schedule.t_end, how)
+        }
+    };
+    let columns = (values.info().state.len() + 2) as f64;
+    // Rows: the grid's, or every n-th step and the last; a plot without a trajectory keeps
+    // every step.
+    let rows = |every: Option<u64>| match (grid, every) {
+        (Some(Grid::Spacing(dt)), _) => t_end / dt + 2.0,
+        (Some(Grid::Times(times)), _) => times.len() as f64 + 1.0,
+        (None, Some(n)) => steps / n as f64 + 2.0,
+        (None, None) => 0.0,
+    };
+    let written = rows(every);
+    let per_value = match out {
+        Some(Output::Npy(_)) => 8.0,
+        Some(_) => limits::CSV_BYTES_PER_VALUE,
+        None => 0.0,
+    };
+    let mut estimates = vec![
+        Estimate::new(Cost::Steps, steps, how),
+        Estimate::new(
+            Cost::Output,
+            written * columns * per_value,
+            format!("{} rows of {columns} values (thin them with --every N)", limits::round(written)),
+        ),
+    ];
+    if plot {
+        let kept = rows(every.or(Some(1)));
+        estimates.push(Estimate::new(
+            Cost::Memory,
+            kept * columns * 8.0,
+            format!("{} rows of {columns} values kept for --plot", limits::round(kept)),
+        ));
+    }
+    Ok(estimates)
+}
+
 /// `--t-eval T1,T2,...`: finite, non-negative, strictly increasing times in seconds.
 fn parse_times(text: &str) -> Result<Vec<f64>> {
     let times: Vec<f64> = text
         .split(',')
-        .map(|t| parse_number("--t-eval", t, "comma-separated times in seconds, e.g. 0,0.5,1"))
+        .map(|t| parse_float("--t-eval", t, "comma-separated times in seconds, e.g. 0,0.5,1"))
         .collect::<Result<_>>()?;
     if let Some(bad) = times.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
-        bail!("invalid --t-eval: {bad} is not a time >= 0 s");
+        bail!("invalid --t-eval: {} is not a time >= 0 s", Short(*bad));
     }
     if let Some(w) = times.windows(2).find(|w| w[1] <= w[0]) {
-        bail!("invalid --t-eval: the times must increase ({} then {})", w[0], w[1]);
+        bail!("invalid --t-eval: the times must increase ({} then {})", Short(w[0]), Short(w[1]));
     }
     Ok(times)
 }
@@ -464,9 +879,53 @@ fn output(path: PathBuf) -> Result<Output> {
     match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => Ok(Output::Csv(path)),
         Some("npy") => Ok(Output::Npy(path)),
+        // A FIFO or device (/dev/null) has no extension to follow: it takes CSV, in place.
+        _ if crate::output::is_special(&path) => Ok(Output::Csv(path)),
         _ => bail!(
-            "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout",
+            "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout (a FIFO or device takes CSV)",
             path.display()
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_beyond_f64_are_refused_as_what_they_are() {
+        assert_eq!(float("1e400"), Err(Unusable::Overflow));
+        assert_eq!(float("-1e400"), Err(Unusable::Overflow));
+        assert_eq!(float("inf"), Err(Unusable::Infinite));
+        assert_eq!(float("-Infinity"), Err(Unusable::Infinite));
+        assert_eq!(float("NaN"), Err(Unusable::NaN));
+        assert_eq!(float("1e-320"), Err(Unusable::Underflow));
+        assert_eq!(float("1e-400"), Err(Unusable::Underflow));
+        assert_eq!(float("fast"), Err(Unusable::NotANumber));
+        // Zero written any way is zero, and the extremes of the normal range are numbers.
+        for zero in ["0", "-0.0", "0e-400", "0.000e5"] {
+            assert_eq!(float(zero), Ok(0.0), "{zero}");
+        }
+        assert_eq!(float("2.2250738585072014e-308"), Ok(f64::MIN_POSITIVE));
+        assert_eq!(float("1.7976931348623157e308"), Ok(f64::MAX));
+    }
+
+    #[test]
+    fn nesting_is_counted_outside_strings_and_comments() {
+        assert_eq!(too_deep("a = [[1, 2], [3]]\n", 2), None);
+        assert_eq!(too_deep("a = [[[1]]]\n", 2), Some(6));
+        assert_eq!(too_deep("a = \"[[[[\" # {{{{\nb = '[[[['\n", 2), None);
+        assert_eq!(too_deep("a = \"\"\"\n[[[[\n\"\"\"\nb = '''{{{{'''\n", 2), None);
+        assert_eq!(too_deep("a = \"\\\"[[[\"\n", 2), None);
+        assert_eq!(too_deep("a = { b = { c = { d = 1 } } }\n", 2), Some(16));
+    }
+
+    #[test]
+    fn echoes_are_clipped() {
+        assert_eq!(clip("short"), "short");
+        let long = clip(&"x".repeat(1 << 20));
+        assert!(long.len() < 80 && long.contains("1048576 bytes"), "{long}");
+        assert_eq!(count(10_000_000_000_000), "10^13");
+        assert_eq!(count(12_345), "12345");
     }
 }

@@ -10,6 +10,7 @@ mod cli;
 mod commands;
 mod config;
 mod generate;
+mod limits;
 mod list;
 mod output;
 mod run_state;
@@ -43,7 +44,7 @@ fn main() -> ExitCode {
                 let _ = writeln!(std::io::stderr(), "{i}");
                 return ExitCode::from(u8::try_from(128 + i.signal).unwrap_or(130));
             }
-            let _ = writeln!(std::io::stderr(), "error: {err:#}");
+            let _ = writeln!(std::io::stderr(), "error: {}", message(&err));
             ExitCode::from(exit_code(&err))
         }
     }
@@ -51,6 +52,8 @@ fn main() -> ExitCode {
 
 /// Runs one parsed command (the report runs others through it).
 pub fn dispatch(command: &Command) -> anyhow::Result<()> {
+    // The outputs this command claims; two of them that are the same file are refused.
+    let _outputs = output::scope();
     match command {
         Command::Simulate(args) => simulate::run(args),
         Command::Compare(args) => commands::compare::run(args),
@@ -76,12 +79,35 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
     }
 }
 
-/// 1 when the computation itself failed, 2 for everything the user can fix in the input.
+/// 1 when the computation itself failed or the environment did (a full disk while writing),
+/// 2 for everything the user can fix in the input.
 fn exit_code(err: &anyhow::Error) -> u8 {
+    if output::WriteError::find(err).is_some_and(output::WriteError::environment) {
+        return 1;
+    }
     match err.downcast_ref::<pendula::Error>() {
-        Some(pendula::Error::NonFinite { .. } | pendula::Error::NewtonDidNotConverge { .. }) => 1,
+        Some(
+            pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::StepSizeTooSmall { .. },
+        ) => 1,
         _ => 2,
     }
+}
+
+/// The error and its causes, `: `-separated as anyhow's `{:#}` prints them, without a cause
+/// that only repeats the end of the message before it (a CSV or NPY writer's error wrapping a
+/// [`output::WriteError`] prints it, then gives it as its source).
+fn message(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|last| last.ends_with(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
 }
 
 /// A reader that went away (`pendula simulate --out - | head`) is not an error.

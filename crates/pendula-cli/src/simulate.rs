@@ -33,6 +33,15 @@ enum Trajectory {
     Partial(PartialFile),
 }
 
+/// The trajectory's output, claimed and not yet written.
+enum Opened<'a> {
+    Atomic(AtomicFile),
+    Partial(PartialFile),
+    /// A checkpoint's partial file, and how much of it the checkpoint recorded.
+    Resumed(&'a Output, PartialFile, crate::sink::Position),
+    None,
+}
+
 /// Runs `simulate` from the start, or `resumed` from a checkpoint (`pendula resume`).
 pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<()> {
     let config = config::simulate(args)?;
@@ -56,43 +65,60 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
     // From here an interrupt asks for a checkpoint (taken after the first step at the
     // earliest) rather than ending the process.
     let _registered = checkpoint.as_ref().map(|_| crate::output::Checkpointing::start());
-    if let (Some(c), None) = (checkpoint, &resumed)
-        && c.path.exists()
-    {
-        anyhow::bail!(
-            "invalid --checkpoint {}: it exists (from a run interrupted earlier?): continue that run with `pendula resume {}`, or remove the file to start again",
-            c.path.display(),
-            c.path.display()
-        );
+    // The checkpoint is claimed with the outputs: a regular file, none of them.
+    if let Some(c) = checkpoint {
+        crate::output::claim_regular(&c.path, "--checkpoint", "a checkpoint")?;
     }
     let info = values.info();
     let mut columns = vec!["t"];
     columns.extend(info.state.iter().map(|q| q.name));
     columns.push("energy");
-    // Open the outputs first: a path that cannot be written fails before the work.
-    let (trajectory, sink, kept) = match (out, checkpoint, &resumed) {
-        (Some(Output::Csv(p) | Output::Npy(p)), None, _) => {
-            let file = AtomicFile::create(p, "--out")?;
-            let sink = Sink::new(out.as_ref(), Some(file.handle()?), &columns)?;
-            (Some(Trajectory::Atomic(file)), sink, None)
-        }
+    // Claim every output first, writing nothing: a path that cannot be written, or two
+    // outputs that are one file, fail before any byte goes anywhere (a FIFO included).
+    let opened = match (out, checkpoint, &resumed) {
+        (Some(Output::Csv(p) | Output::Npy(p)), None, _) => Opened::Atomic(AtomicFile::create(p, "--out")?),
         (Some(o @ (Output::Csv(p) | Output::Npy(p))), Some(_), Some(r)) => {
             let (position, partial) = r.out.as_ref().ok_or_else(|| r.mismatch("a trajectory file"))?;
-            let (partial, file) = PartialFile::reopen(p, partial)?;
-            let (sink, kept) =
-                Sink::resume(o, file, partial.path(), columns.len(), position, plot.is_some())?;
-            (Some(Trajectory::Partial(partial)), sink, kept)
+            Opened::Resumed(o, PartialFile::claim_recorded(p, partial, "--out")?, *position)
         }
         (Some(Output::Csv(p) | Output::Npy(p)), Some(_), None) => {
-            let (partial, file) = PartialFile::create(p, "--out")?;
-            let sink = Sink::new(out.as_ref(), Some(file), &columns)?;
-            (Some(Trajectory::Partial(partial)), sink, None)
+            Opened::Partial(PartialFile::claim(p, "--out")?)
         }
-        (o, _, _) => (None, Sink::new(o.as_ref(), None, &columns)?, None),
+        (Some(Output::Stdout), _, _) => {
+            crate::output::claim_stdout("--out")?;
+            Opened::None
+        }
+        (None, _, _) => Opened::None,
     };
     // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
     let summary_out = Summary::open(summary.as_deref())?;
     let plot_file = plot.as_deref().map(|p| AtomicFile::create(p, "--plot")).transpose()?;
+    // Every output claimed: a checkpoint left by an earlier run is not overwritten.
+    if let (Some(c), None) = (checkpoint, &resumed)
+        && c.path.exists()
+    {
+        anyhow::bail!(
+            "invalid --checkpoint {}: it exists (from a run interrupted earlier?): continue that run with `pendula resume {}`, or remove the file to start again",
+            crate::checkpoint::absolute(&c.path).display(),
+            crate::checkpoint::absolute(&c.path).display()
+        );
+    }
+    let (trajectory, sink, kept) = match opened {
+        Opened::Atomic(file) => {
+            let sink = Sink::new(out.as_ref(), Some(file.handle()?), &columns)?;
+            (Some(Trajectory::Atomic(file)), sink, None)
+        }
+        Opened::Resumed(o, partial, position) => {
+            let (sink, kept) = Sink::resume(o, &partial, columns.len(), &position, plot.is_some())?;
+            (Some(Trajectory::Partial(partial)), sink, kept)
+        }
+        Opened::Partial(mut partial) => {
+            let file = partial.create()?;
+            let sink = Sink::new(out.as_ref(), Some(file), &columns)?;
+            (Some(Trajectory::Partial(partial)), sink, None)
+        }
+        Opened::None => (None, Sink::new(out.as_ref(), None, &columns)?, None),
+    };
 
     let model = values.build();
     // The energy error relative to the system's scale, or for damped and driven runs the
@@ -208,10 +234,10 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
                 signal,
                 message: format!(
                     "checkpoint written to {} at t = {} s (step {}); continue with `pendula resume {}`",
-                    c.path.display(),
+                    crate::checkpoint::absolute(&c.path).display(),
                     Short(at.run.t),
                     at.run.steps,
-                    c.path.display()
+                    crate::checkpoint::absolute(&c.path).display()
                 ),
             }
             .into());
@@ -240,9 +266,8 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
             &trajectory.default_panels()?,
             plot.as_deref().expect("a plot path"),
         )?;
-        file.handle()?.write_all(&bytes)?;
+        file.write_all(&bytes)?;
     }
-    finish_files(trajectory, plot_file, checkpoint.as_ref().map(|c| c.path.as_path()))?;
     let report: &Report = &report;
 
     let mut final_state = Map::new();
@@ -294,7 +319,9 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
         }).collect::<Vec<_>>(),
     });
     let summary_path = summary_out.path().map(std::path::Path::to_path_buf);
-    summary_out.write(&doc)?;
+    // The trajectory, its picture and the summary appear together or not at all; a
+    // checkpointing run's checkpoint goes in the same step (the run is complete).
+    finish_files(summary_out, &doc, trajectory, plot_file, checkpoint.as_ref().map(|c| c.path.as_path()))?;
 
     // The human summary is composed first and written at once (stderr is unbuffered).
     let mut err = Vec::new();
@@ -344,9 +371,11 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
 }
 
 /// Puts the finished files in place, as one step for an interrupt: the trajectory (renamed
-/// from its temporary or partial name) and the plot; a checkpointing run's checkpoint is
-/// removed (the run is complete).
+/// from its temporary or partial name), the plot and the summary `doc`; a checkpointing
+/// run's checkpoint is removed (the run is complete).
 fn finish_files(
+    summary: Summary,
+    doc: &Value,
     trajectory: Option<Trajectory>,
     plot: Option<AtomicFile>,
     checkpoint: Option<&std::path::Path>,
@@ -358,7 +387,7 @@ fn finish_files(
         None => {}
     }
     files.extend(plot);
-    AtomicFile::commit_with(files, |guard| {
+    summary.write_then(doc, files, |guard| {
         if let Some(p) = partial {
             p.finish(guard)?;
         }

@@ -6,14 +6,18 @@
 //! ([`Sink::resume`]) checks that prefix against its checksum, cuts off what was written
 //! after the checkpoint, and appends from there — the file ends byte-identical to one
 //! written in one go.
+//!
+//! Write errors name the output ([`crate::output::OutFile`]); into a FIFO, which cannot
+//! seek, .npy rows are spooled in an unnamed temporary file and follow the final header.
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 
 use crate::config::Output;
+use crate::output::{OutFile, PartialFile};
 
 /// A writer that counts the bytes through it and their CRC-32.
 pub struct Tally<W> {
@@ -64,7 +68,7 @@ pub enum Sink {
 
 impl Sink {
     /// A sink for `output` with these column names; `file` is the open output file.
-    pub fn new(output: Option<&Output>, file: Option<File>, columns: &[&str]) -> Result<Self> {
+    pub fn new(output: Option<&Output>, file: Option<OutFile>, columns: &[&str]) -> Result<Self> {
         let writer: Box<dyn Write> = match output {
             None => return Ok(Sink::Discard),
             Some(Output::Npy(_)) => {
@@ -75,22 +79,24 @@ impl Sink {
             Some(Output::Csv(_)) => Box::new(file.expect("a CSV file output has a file")),
         };
         let mut csv = csv_writer(Tally::new(writer));
-        csv.write_record(columns)?;
+        csv.write_record(columns).map_err(csv_error)?;
         Ok(Sink::Csv(Box::new(csv)))
     }
 
-    /// A sink that continues the trajectory in `file` (named `path` in messages) at `at`:
-    /// the first `at.bytes` bytes must have the recorded checksum; what follows them (rows
-    /// written after the checkpoint) is cut off. Returns the rows already there (values,
-    /// row after row) when `keep_rows`, for a plot.
+    /// A sink that continues the trajectory in the `partial` file (named by its path in
+    /// messages about its contents; its write errors name `--out` and the output's path) at
+    /// `at`: the first `at.bytes` bytes must have the recorded checksum; what follows them
+    /// (rows written after the checkpoint) is cut off. Returns the rows already there
+    /// (values, row after row) when `keep_rows`, for a plot.
     pub fn resume(
         output: &Output,
-        mut file: File,
-        path: &Path,
+        partial: &PartialFile,
         columns: usize,
         at: &Position,
         keep_rows: bool,
     ) -> Result<(Self, Option<Vec<f64>>)> {
+        let mut file = partial.open()?;
+        let path = partial.path();
         let length = file.metadata().with_context(|| format!("cannot read {}", path.display()))?.len();
         if length < at.bytes {
             bail!(
@@ -112,7 +118,8 @@ impl Sink {
                 path.display()
             );
         }
-        file.set_len(at.bytes).with_context(|| format!("cannot write {}", path.display()))?;
+        let mut file = OutFile::new(file, "--out", partial.shown());
+        file.set_len(at.bytes)?;
         file.seek(SeekFrom::End(0))?;
         let rows = if keep_rows { Some(parse_rows(output, &prefix, columns, at.rows, path)?) } else { None };
         let tally = Tally { inner: file, bytes: at.bytes, crc };
@@ -136,9 +143,9 @@ impl Sink {
             Sink::Csv(w) => {
                 let mut buf = ryu::Buffer::new();
                 for v in values {
-                    w.write_field(buf.format(v))?;
+                    w.write_field(buf.format(v)).map_err(csv_error)?;
                 }
-                w.write_record(None::<&[u8]>)?;
+                w.write_record(None::<&[u8]>).map_err(csv_error)?;
             }
         }
         Ok(())
@@ -154,6 +161,7 @@ impl Sink {
                 (t.bytes, t.crc.clone().finalize())
             }
             Sink::Npy(npy) => {
+                assert!(npy.spool.is_none(), "a checkpointed trajectory is a regular file");
                 npy.out.flush()?;
                 let t = npy.out.get_ref();
                 (t.bytes, t.crc.clone().finalize())
@@ -174,6 +182,16 @@ impl Sink {
 
 fn csv_writer<W: Write>(w: W) -> csv::Writer<W> {
     csv::WriterBuilder::new().buffer_capacity(1 << 16).from_writer(w)
+}
+
+/// A CSV writer's error as the writer's own when it is one ([`crate::output::WriteError`],
+/// which names the output, and is what the exit code looks for).
+fn csv_error(e: csv::Error) -> anyhow::Error {
+    let text = e.to_string();
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => io.into(),
+        _ => anyhow::anyhow!(text),
+    }
 }
 
 /// The data rows of a trajectory file's first bytes (its header skipped), as flat values.
@@ -214,8 +232,12 @@ fn parse_rows(output: &Output, bytes: &[u8], columns: usize, rows: u64, path: &P
 
 /// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row: the header is
 /// written first with room for any row count, and rewritten with the real one at the end.
+/// Into a FIFO, which cannot seek, the rows are spooled in an unnamed temporary file (gone
+/// with the process, however it ends) and follow the final header at the end.
 pub struct NpyRows {
-    out: BufWriter<Tally<File>>,
+    out: BufWriter<Tally<OutFile>>,
+    /// The rows, when `out` cannot seek.
+    spool: Option<BufWriter<File>>,
     columns: usize,
     rows: u64,
     header_len: usize,
@@ -223,25 +245,37 @@ pub struct NpyRows {
 
 impl NpyRows {
     /// Starts the array in `file` (at its start).
-    pub fn new(file: File, columns: usize) -> Result<Self> {
+    pub fn new(mut file: OutFile, columns: usize) -> Result<Self> {
         // The header's size for the longest row count; every header is padded to it.
         let header_len = npy_header(u64::MAX, columns, 0).len();
+        let seekable = file.seekable();
         let mut out = BufWriter::with_capacity(1 << 16, Tally::new(file));
-        out.write_all(&npy_header(0, columns, header_len))?;
-        Ok(NpyRows { out, columns, rows: 0, header_len })
+        let spool = if seekable {
+            out.write_all(&npy_header(0, columns, header_len))?;
+            None
+        } else {
+            let spool = tempfile::tempfile()
+                .context("cannot spool the .npy rows for a FIFO in the temporary directory")?;
+            Some(BufWriter::with_capacity(1 << 16, spool))
+        };
+        Ok(NpyRows { out, spool, columns, rows: 0, header_len })
     }
 
     /// Continues an array of `rows` rows whose bytes so far `file` has counted.
-    fn resume(file: Tally<File>, columns: usize, rows: u64) -> Self {
+    fn resume(file: Tally<OutFile>, columns: usize, rows: u64) -> Self {
         let header_len = npy_header(u64::MAX, columns, 0).len();
-        NpyRows { out: BufWriter::with_capacity(1 << 16, file), columns, rows, header_len }
+        NpyRows { out: BufWriter::with_capacity(1 << 16, file), spool: None, columns, rows, header_len }
     }
 
     /// Appends one row of `columns` values.
     pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
+        let w: &mut dyn Write = match &mut self.spool {
+            Some(spool) => spool,
+            None => &mut self.out,
+        };
         let mut n = 0;
         for v in values {
-            self.out.write_all(&v.to_le_bytes())?;
+            w.write_all(&v.to_le_bytes())?;
             n += 1;
         }
         debug_assert_eq!(n, self.columns, "a row has one value per column");
@@ -251,10 +285,23 @@ impl NpyRows {
 
     /// Writes the header with the final shape.
     pub fn finish(self) -> Result<()> {
-        let mut file = self.out.into_inner().map_err(|e| e.into_error())?.inner;
-        file.seek(SeekFrom::Start(0))?;
-        file.write_all(&npy_header(self.rows, self.columns, self.header_len))?;
-        file.flush()?;
+        let header = npy_header(self.rows, self.columns, self.header_len);
+        let mut out = self.out;
+        match self.spool {
+            Some(spool) => {
+                let mut spool = spool.into_inner().map_err(|e| e.into_error())?;
+                spool.seek(SeekFrom::Start(0))?;
+                out.write_all(&header)?;
+                io::copy(&mut spool, &mut out)?;
+                out.flush()?;
+            }
+            None => {
+                let mut file = out.into_inner().map_err(|e| e.into_error())?.inner;
+                file.seek(SeekFrom::Start(0))?;
+                file.write_all(&header)?;
+                file.flush()?;
+            }
+        }
         Ok(())
     }
 }

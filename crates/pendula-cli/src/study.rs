@@ -4,14 +4,16 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::integrator::{self, METHODS, Method, Requirement};
 use pendula::system::{self, DynModel, Values};
 use pendula_viz::Figure;
 
-use crate::config::{f64_arg, parse_settings};
+use pendula::error::Short;
+
+use crate::config::{f64_arg, parse_count, parse_settings, positive_arg};
 
 /// `print!` for a command's human output, through its [`Summary`]: `say!(summary, "...")`.
 macro_rules! say {
@@ -22,7 +24,7 @@ macro_rules! say {
 macro_rules! sayln {
     ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
 }
-use crate::output::AtomicFile;
+use crate::output::{AtomicFile, CreatedDirs};
 
 /// Arguments every study command takes.
 #[derive(Debug, Clone, Args)]
@@ -37,6 +39,8 @@ pub struct Common {
     /// Write the headline numbers as JSON here (`-`: on stdout, and the tables on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// A geometric range of step sizes and an end time, as convergence and work-precision take
@@ -50,13 +54,14 @@ pub struct StepRange {
     /// Largest step size, s [default: 0.05 for convergence, 0.1 for work-precision].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt_max: Option<String>,
-    /// Number of step sizes, geometrically spaced [default: 5 for convergence, 7 for
+    /// Number of step sizes, geometrically spaced, 2 to 30 [default: 5 for convergence, 7 for
     /// work-precision].
     #[arg(long, value_name = "N")]
-    pub levels: Option<usize>,
+    pub levels: Option<String>,
     /// End time at which the error is measured, s [default: the system's study horizon, a
     /// few small-oscillation periods: 10 s for the oscillator and the pendulum, 2 s for the
-    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum].
+    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum]. Every run of
+    /// the study together takes at most 10^11 steps (--allow-large lifts it).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
 }
@@ -64,17 +69,19 @@ pub struct StepRange {
 impl StepRange {
     /// The steps, largest first, and the end time, validated.
     pub fn resolve(&self, default_max: f64, default_levels: usize) -> Result<(Vec<f64>, f64)> {
-        let levels = self.levels.unwrap_or(default_levels);
-        if levels < 2 {
-            bail!("invalid --levels {levels}: need at least 2 step sizes");
-        }
-        let dt_max = f64_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
+        let levels = match &self.levels {
+            Some(text) => parse_count("--levels", text, 2, crate::limits::MAX_LEVELS, "step sizes")? as usize,
+            None => default_levels,
+        };
+        let dt_max = positive_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
         let fallback = dt_max / 2f64.powi(levels as i32 - 1);
-        let dt_min = f64_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
+        let dt_min = positive_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), 10.0, "an end time in seconds")?;
-        if !(dt_min.is_finite() && dt_min > 0.0 && dt_max.is_finite() && dt_max > dt_min) {
+        if dt_max <= dt_min {
             bail!(
-                "invalid step range --dt-min {dt_min} --dt-max {dt_max}: need 0 < dt-min < dt-max, both finite"
+                "invalid step range --dt-min {} --dt-max {}: need 0 < dt-min < dt-max, both finite",
+                Short(dt_min),
+                Short(dt_max)
             );
         }
         let spec = pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) };
@@ -96,12 +103,76 @@ impl StepRange {
         use crate::commands::convergence::Ladder;
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
         if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
-            pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) }.schedule()?;
+            let spec = pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) };
+            crate::config::schedule(&spec, "--t-end", "--t-end")?;
             return Ok((Ladder::PerMethod, t_end));
         }
-        let with_t = StepRange { t_end: Some(t_end.to_string()), ..self.clone() };
+        // The end time as read (its shortest round-trip text), for `resolve` to read again.
+        let with_t = StepRange { t_end: Some(format!("{t_end:e}")), ..self.clone() };
         let (hs, t_end) = with_t.resolve(0.05, 5)?;
         Ok((Ladder::Given(hs), t_end))
+    }
+}
+
+/// What an accuracy study (convergence, work-precision) costs: its reference run to `t_end`
+/// (none where the model has an exact solution; else dop853 at tolerance 1e-14, at least
+/// [`crate::limits::ADAPTIVE_STEPS_PER_PERIOD`] steps a period) and `runs`, the steps of
+/// every method's runs. Refused over the limit unless `allow_large`.
+pub fn check_study(
+    command: &str,
+    allow_large: bool,
+    values: &Values,
+    t_end: f64,
+    runs: f64,
+    how: String,
+) -> Result<()> {
+    use crate::limits::{self, Cost, Estimate};
+    let model = values.build();
+    let y0 = values.initial_state();
+    let reference = if model.exact(t_end, y0).is_some() {
+        0.0
+    } else {
+        limits::adaptive_steps(t_end, limits::motion_period(&*model, y0), f64::INFINITY)
+    };
+    limits::check(
+        command,
+        allow_large,
+        &[Estimate::new(
+            Cost::Steps,
+            runs + reference,
+            format!("{how}, and {} for the reference run", limits::round(reference)),
+        )],
+    )
+}
+
+/// A failed reference run of an accuracy study: an error naming it (exit 1 for a numerical
+/// failure, through the library error it wraps).
+pub fn reference_failed(e: pendula::Error, t_end: f64) -> anyhow::Error {
+    anyhow::Error::new(e).context(format!(
+        "the reference run (dop853 at tolerance {:e} to t = {} s) failed",
+        pendula::analysis::REFERENCE_TOLERANCE,
+        Short(t_end)
+    ))
+}
+
+/// Whether a library error is a numerical failure (exit 1), not a refusal of the input.
+pub fn numerical(e: &pendula::Error) -> bool {
+    matches!(
+        e,
+        pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::StepSizeTooSmall { .. }
+    )
+}
+
+/// When no run of a study gave a result and one failed numerically: that failure, as the
+/// study's error (exit 1), instead of an empty figure.
+pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) -> Result<()> {
+    match first {
+        Some(e) if !produced && numerical(&e) => {
+            Err(anyhow::Error::new(e).context(format!("{command}: every run failed; the first")))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -160,14 +231,26 @@ pub fn methods(
     };
     match list {
         // A method asked for by name must apply: the library's refusal is the error.
-        Some(text) => text
-            .split(',')
-            .map(|name| {
-                let method = integrator::find(name.trim())?;
-                requirement_met(method, model, values)?;
-                Ok(method)
-            })
-            .collect(),
+        Some(text) => {
+            let methods = text
+                .split(',')
+                .map(|name| {
+                    let method = integrator::find(name.trim())?;
+                    requirement_met(method, model, values)?;
+                    Ok(method)
+                })
+                .collect::<Result<Vec<&'static Method>>>()?;
+            for (i, m) in methods.iter().enumerate() {
+                if methods[..i].iter().any(|n| n.name == m.name) {
+                    bail!(
+                        "invalid --methods `{}`: {} is listed twice; list each method once",
+                        crate::config::clip(text),
+                        m.name
+                    );
+                }
+            }
+            Ok(methods)
+        }
         None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values) && stable(m)).collect()),
     }
 }
@@ -189,39 +272,115 @@ fn requirement_met(method: &Method, model: &dyn DynModel, values: &Values) -> Re
     }
 }
 
-/// The output directory: created if needed; files appear whole (temporary name, then
-/// rename). A hidden manifest per command (`.pendula-<command>.files`) lists the files that
-/// command wrote there; when a run finishes, the files of the previous run's manifest that
-/// this run did not write are removed, so no figure of another system or method set stays
-/// beside the new ones. Only files named in a manifest are ever removed.
+/// The files each command writes in its study directory (`*` stands for any text: compare's
+/// phase portraits are named after the methods). A `--summary` or other output of the run
+/// that would be one of them is refused before the run, and so is a directory in their place.
+pub const FILES: &[(&str, &[&str])] = &[
+    (
+        "compare",
+        &[
+            "summary.csv",
+            "energy.png",
+            "energy.svg",
+            "trajectory.png",
+            "trajectory.svg",
+            "phase_*.png",
+            "phase_*.svg",
+        ],
+    ),
+    ("convergence", &["convergence.csv", "convergence.png", "convergence.svg"]),
+    ("stability", &["stability.csv", "stability.png", "stability.svg"]),
+    (
+        "work-precision",
+        &[
+            "work_precision.csv",
+            "work_precision_evals.png",
+            "work_precision_evals.svg",
+            "work_precision_time.png",
+            "work_precision_time.svg",
+        ],
+    ),
+    ("period", &["period.csv", "period.png", "period.svg", "period_error.png", "period_error.svg"]),
+    (
+        "oscillator-regimes",
+        &[
+            "transients.csv",
+            "resonance.csv",
+            "regimes.png",
+            "regimes.svg",
+            "resonance_amplitude.png",
+            "resonance_amplitude.svg",
+            "resonance_phase.png",
+            "resonance_phase.svg",
+        ],
+    ),
+    ("divergence", &["divergence.csv", "divergence.png", "divergence.svg"]),
+    ("lyapunov", &["lyapunov.csv", "lyapunov.png", "lyapunov.svg"]),
+    ("poincare", &["poincare.csv", "poincare.png", "poincare.svg"]),
+    ("bifurcation", &["bifurcation.csv", "bifurcation.png", "bifurcation.svg"]),
+    ("fractal", &["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"]),
+    ("report", &["report.html"]),
+    ("man", &["pendula*.1"]),
+];
+
+/// The output directory: created if needed (and removed again if the run fails or is refused
+/// before writing anything into it). Its files are written under temporary names as the run
+/// goes and renamed into place together when it ends ([`OutDir::finish`]): a failed run —
+/// also for want of disk space — replaces none of an earlier run's files. A hidden manifest per
+/// command (`.pendula-<command>.files`) lists the files that command wrote there; when a run
+/// finishes, the files of the previous run's manifest that this run did not write are
+/// removed, so no figure of another system or method set stays beside the new ones. Only
+/// files named in a manifest are ever removed.
 pub struct OutDir {
     path: PathBuf,
     manifest: String,
     /// Names in the previous run's manifest.
     previous: Vec<String>,
-    /// Names the manifest on disk lists now: the previous run's, and this run's so far.
-    listed: Vec<String>,
-    /// Names this run wrote.
-    written: Vec<String>,
+    /// This run's files, written and waiting for [`OutDir::finish`], by name.
+    pending: Vec<(String, AtomicFile)>,
+    /// The directory's id in the run's list of outputs.
+    id: u64,
+    /// Directories created for it, removed again unless the run finishes.
+    created: Option<CreatedDirs>,
 }
 
 impl OutDir {
-    /// `--out-dir`, or `pendula-out/<command>`.
+    /// `--out-dir`, or `pendula-out/<command>`: created, checked writable, and claimed with
+    /// the names the command writes there ([`FILES`]).
     pub fn new(dir: Option<&Path>, command: &str) -> Result<Self> {
         let path = dir.map_or_else(|| Path::new("pendula-out").join(command), Path::to_path_buf);
+        if path == Path::new("-") {
+            bail!("invalid --out-dir -: a directory of files cannot go to stdout; give a directory");
+        }
         if path.exists() && !path.is_dir() {
             bail!("cannot write --out-dir {}: it is a file, not a directory", path.display());
         }
-        std::fs::create_dir_all(&path)
-            .with_context(|| format!("cannot create --out-dir {}", path.display()))?;
+        let created = CreatedDirs::create(&path, "--out-dir")?;
         // Fail now, not after the work, if the directory cannot be written.
-        AtomicFile::create(&path.join(".pendula-probe"), "--out-dir")?;
+        crate::output::probe(&path, "--out-dir")?;
+        let names = FILES.iter().find(|(c, _)| *c == command).map_or(&[][..], |(_, n)| *n);
+        // A directory in the place of one of the command's files is refused now too.
+        if let Ok(entries) = std::fs::read_dir(&path) {
+            for entry in entries.flatten() {
+                let name = entry.file_name();
+                if entry.path().is_dir() && crate::output::matches(names, &name) {
+                    bail!(
+                        "cannot write --out-dir {}: {} is a directory where {command} writes a file; move it or choose another directory",
+                        path.display(),
+                        entry.path().display()
+                    );
+                }
+            }
+        }
         let manifest = format!(".pendula-{command}.files");
+        // The manifest is one of the directory's files too.
+        let claimed = names.iter().map(|n| (*n).to_owned()).chain([manifest.clone()]).collect();
+        let id = crate::output::claim_dir(&path, "--out-dir", command, claimed)?;
         // A missing or unreadable manifest means nothing to tidy.
         let previous: Vec<String> = std::fs::read_to_string(path.join(&manifest))
             .map(|text| text.lines().filter(|n| plain_name(n)).map(str::to_owned).collect())
             .unwrap_or_default();
-        Ok(OutDir { path, manifest, listed: previous.clone(), previous, written: Vec::new() })
+        Ok(OutDir { path, manifest, previous, pending: Vec::new(), id, created: Some(created) })
     }
 
     /// Where the files go.
@@ -231,46 +390,26 @@ impl OutDir {
 
     /// A file `name` in the directory, to be written and then given to [`OutDir::commit`].
     pub fn file(&self, name: &str) -> Result<AtomicFile> {
-        AtomicFile::create(&self.path.join(name), "--out-dir")
+        AtomicFile::create_in(&self.path.join(name), "--out-dir", Some(self.id))
     }
 
-    /// Renames finished files of this directory into place, all at once.
+    /// Hands over finished files of this directory, to be renamed into place together by
+    /// [`OutDir::finish`].
     pub fn commit(&mut self, files: Vec<AtomicFile>) -> Result<()> {
-        let names: Vec<String> = files
-            .iter()
-            .map(|f| f.path().file_name().expect("a file in the directory").to_string_lossy().into_owned())
-            .collect();
-        // A name new to the manifest goes into it before the file appears: an interrupted
-        // run's files are still tidied by the next one.
-        if !names.iter().all(|n| self.listed.contains(n)) {
-            for n in &names {
-                if !self.listed.contains(n) {
-                    self.listed.push(n.clone());
-                }
-            }
-            self.write_manifest(&self.listed)?;
-        }
-        AtomicFile::commit_all(files)?;
-        for n in names {
-            if !self.written.contains(&n) {
-                self.written.push(n);
-            }
+        for file in files {
+            let name =
+                file.path().file_name().expect("a file in the directory").to_string_lossy().into_owned();
+            // The same name written again: the later file wins.
+            self.pending.retain(|(n, _)| *n != name);
+            self.pending.push((name, file));
         }
         Ok(())
     }
 
-    fn write_manifest(&self, names: &[String]) -> Result<()> {
-        let file = self.file(&self.manifest)?;
-        let mut text = names.join("\n");
-        text.push('\n');
-        std::io::Write::write_all(&mut file.handle()?, text.as_bytes())?;
-        file.commit()
-    }
-
-    /// Writes `bytes` to `name` in the directory.
+    /// Writes `bytes` to `name` in the directory (in place when [`OutDir::finish`] runs).
     pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf> {
         let file = self.file(name)?;
-        std::io::Write::write_all(&mut file.handle()?, bytes)?;
+        file.write_all(bytes)?;
         let path = file.path().to_owned();
         self.commit(vec![file])?;
         Ok(path)
@@ -294,24 +433,84 @@ impl OutDir {
         Ok(())
     }
 
-    /// Ends a successful run: the manifest becomes this run's files, the previous run's
-    /// files that this one did not write are removed, and stderr is told.
+    /// A manifest listing `names`, written but not yet in place.
+    fn manifest_file(&self, names: &[&str]) -> Result<AtomicFile> {
+        let file = self.file(&self.manifest)?;
+        let mut text = names.join("\n");
+        text.push('\n');
+        file.write_all(text.as_bytes())?;
+        Ok(file)
+    }
+
+    /// Ends a successful run: this run's files are renamed into place together, with a
+    /// manifest that lists them and the previous run's (so that an interrupt between the two
+    /// steps leaves nothing untidied); then the previous run's files that this one did not
+    /// write are removed, the manifest becomes this run's files, and stderr is told.
     pub fn finish(self) -> Result<()> {
-        self.write_manifest(&self.written)?;
+        self.finish_inner(None, |_| Ok(()))
+    }
+
+    /// [`OutDir::finish`], with the run's summary: its file is renamed into place together
+    /// with the directory's files, and JSON for stdout is printed after them.
+    pub fn finish_with(self, summary: Summary, doc: &serde_json::Value) -> Result<()> {
+        self.finish_then(summary, doc, |_| Ok(()))
+    }
+
+    /// [`OutDir::finish_with`], and `also` in the step that renames the files into place
+    /// ([`AtomicFile::commit_with`]): a finished run's checkpoint removed.
+    pub fn finish_then(
+        self,
+        summary: Summary,
+        doc: &serde_json::Value,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
+        let (file, stdout) = summary.stage(doc)?;
+        self.finish_inner(file, also)?;
+        print_json(stdout)
+    }
+
+    fn finish_inner(
+        mut self,
+        summary: Option<AtomicFile>,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
+        let pending = std::mem::take(&mut self.pending);
+        let written: Vec<&str> = pending.iter().map(|(n, _)| n.as_str()).collect();
+        let mut listed = self.previous.iter().map(String::as_str).collect::<Vec<_>>();
+        listed.extend(written.iter().filter(|n| !self.previous.iter().any(|p| p == *n)));
+        // Every file is written before anything is renamed: a full disk fails here, with no
+        // earlier file replaced.
+        let during = self.manifest_file(&listed)?;
+        let after = self.manifest_file(&written)?;
+        let count = written.len();
+        let stale: Vec<String> =
+            self.previous.iter().filter(|n| !written.contains(&n.as_str())).cloned().collect();
+        let mut files = vec![during];
+        files.extend(pending.into_iter().map(|(_, f)| f));
+        files.extend(summary);
+        AtomicFile::commit_with(files, also)?;
+        if let Some(created) = self.created.take() {
+            created.keep();
+        }
         let mut removed = 0;
-        for name in self.previous.iter().filter(|n| !self.written.contains(n)) {
+        for name in &stale {
             let path = self.path.join(name);
-            // A file only: whatever else has taken the name is not ours.
-            if path.symlink_metadata().is_ok_and(|m| m.is_file()) && std::fs::remove_file(&path).is_ok() {
+            // A file only: whatever else has taken the name is not ours, nor is a file
+            // that another output of this run wrote.
+            if path.symlink_metadata().is_ok_and(|m| m.is_file())
+                && !crate::output::claimed_by_another(&path, self.id)
+                && std::fs::remove_file(&path).is_ok()
+            {
                 removed += 1;
             }
         }
+        after.commit()?;
         let stale = match removed {
             0 => String::new(),
             n => format!(" (removed {n} stale files of an earlier run)"),
         };
         if !QUIET.load(std::sync::atomic::Ordering::Relaxed) {
-            eprintln!("wrote {} files to {}{stale}", self.written.len(), self.path.display());
+            eprintln!("wrote {count} files to {}{stale}", self.path.display());
         }
         Ok(())
     }
@@ -345,7 +544,10 @@ impl Summary {
     pub fn open(path: Option<&Path>) -> Result<Self> {
         let target = match path {
             None => Target::None,
-            Some(p) if p == Path::new("-") => Target::Stdout,
+            Some(p) if p == Path::new("-") => {
+                crate::output::claim_stdout("--summary")?;
+                Target::Stdout
+            }
             Some(p) => Target::File(AtomicFile::create(p, "--summary")?),
         };
         Ok(Summary { target })
@@ -379,25 +581,57 @@ impl Summary {
         };
     }
 
-    /// Writes the JSON (a file is renamed into place).
-    pub fn write(self, doc: &serde_json::Value) -> Result<()> {
-        let write = |w: &mut dyn std::io::Write| -> Result<()> {
-            // Serialised through a buffer: a File takes one syscall per token.
-            let mut w = std::io::BufWriter::new(w);
-            serde_json::to_writer_pretty(&mut w, doc)?;
-            std::io::Write::write_all(&mut w, b"\n")?;
-            std::io::Write::flush(&mut w)?;
-            Ok(())
-        };
+    /// Writes the JSON, and renames it into place together with the run's `files`: all of
+    /// them appear, or none; then `also`, in the same step for an interrupt
+    /// ([`AtomicFile::commit_with`]): a checkpointing run's partial trajectory renamed into
+    /// place, its checkpoint removed. JSON for stdout is printed once the files are in place.
+    pub fn write_then(
+        self,
+        doc: &serde_json::Value,
+        mut files: Vec<AtomicFile>,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
+        let (file, stdout) = self.stage(doc)?;
+        files.extend(file);
+        AtomicFile::commit_with(files, also)?;
+        print_json(stdout)
+    }
+
+    /// The JSON, written into the summary file (not yet in place) or kept for stdout.
+    fn stage(self, doc: &serde_json::Value) -> Result<(Option<AtomicFile>, Option<Vec<u8>>)> {
+        let mut text = serde_json::to_vec_pretty(doc)?;
+        text.push(b'\n');
         match self.target {
-            Target::None => Ok(()),
-            Target::Stdout => write(&mut std::io::stdout().lock()),
+            Target::None => Ok((None, None)),
+            Target::Stdout => Ok((None, Some(text))),
             Target::File(file) => {
-                write(&mut file.handle()?)?;
-                file.commit()
+                file.write_all(&text)?;
+                Ok((Some(file), None))
             }
         }
     }
+}
+
+/// Prints a line for people once the summary is written: on stdout, or on stderr when stdout
+/// carried the JSON (`on_stdout`, from [`Summary::on_stdout`]), as [`Summary::say`] does.
+pub fn say_after(on_stdout: bool, text: &str) {
+    use std::io::Write as _;
+    if QUIET.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
+    let _ = if on_stdout {
+        writeln!(std::io::stderr().lock(), "{text}")
+    } else {
+        writeln!(std::io::stdout().lock(), "{text}")
+    };
+}
+
+/// Prints a staged summary on stdout.
+fn print_json(text: Option<Vec<u8>>) -> Result<()> {
+    if let Some(text) = text {
+        std::io::Write::write_all(&mut std::io::stdout().lock(), &text)?;
+    }
+    Ok(())
 }
 
 /// A progress bar on stderr for `n` units of work; invisible when stderr is not a terminal.

@@ -52,6 +52,34 @@ fn fast_rk4_path_agrees_with_the_c_reference() {
     assert!(de > 1e-9 && de < 1e-7, "{de}");
 }
 
+/// An angle far beyond the lanes' fast sine range, θ₁ = 1e17 rad, takes their exact reduction:
+/// the rk4 fast path integrates it (it failed as non-finite after one step) and lands within
+/// 1e-12 of mpmath's RK4 of the same run (`reference/huge_angle.py`: 1e17 cannot move in
+/// doubles, an ulp there being 16 rad, so the run holds sin θ₁ = sin(θ₁ − θ₂) = sin 1e17 and
+/// cos(θ₁ − θ₂) = cos 1e17 fixed; measured 4e-15 apart). The initial energy, through cos 1e17,
+/// agrees as well.
+#[test]
+fn rk4_integrates_a_huge_angle() {
+    let dir = TempDir::new().unwrap();
+    let out = pendula(dir.path())
+        .args(["simulate", "double", "--set", "theta1=1e17", "--method", "rk4", "--steps", "1000"])
+        .args(["--dt", "1e-3", "--summary", "-"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let s: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(s["final"]["theta1"].as_f64(), Some(1e17));
+    let reference = [0.0097752685823722570745, 3.9271890392764978593, -2.6229390247970755927];
+    for (name, want) in ["theta2", "omega1", "omega2"].iter().zip(reference) {
+        let got = s["final"][name].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-12, "{name}: {got} vs {want}");
+    }
+    let e0 = s["energy"]["initial"].as_f64().unwrap();
+    assert!((e0 - 7.7136707241497529614).abs() < 1e-13, "initial energy {e0}");
+}
+
 #[test]
 fn default_run_writes_trajectory_csv() {
     let dir = TempDir::new().unwrap();

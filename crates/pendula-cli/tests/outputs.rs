@@ -1,5 +1,6 @@
-//! Outputs end to end, on real processes: SIGINT, SIGTERM and SIGHUP leave no temporary file and an
-//! existing output intact; `.npy` trajectories stream to the same values as CSV; `--summary -`
+//! Outputs end to end, on real processes: SIGINT, SIGTERM and SIGHUP leave no temporary file, no
+//! directory made for the run and an existing output intact (simulate, sweep, fractal, animate
+//! and a study command); `.npy` trajectories stream to the same values as CSV; `--summary -`
 //! puts parseable JSON alone on stdout for every kind of command; a study directory re-run
 //! holds only the new run's files.
 
@@ -71,7 +72,9 @@ fn precious(dir: &Path, name: &str) -> PathBuf {
     path
 }
 
-const LONG_SIMULATE: [&str; 5] = ["simulate", "double", "--t-end", "100000", "--out"];
+// 10^8 rows, some 15 GB of CSV: over the output limit, asked for on purpose (it is
+// interrupted long before), hence --allow-large.
+const LONG_SIMULATE: [&str; 6] = ["simulate", "double", "--t-end", "100000", "--allow-large", "--out"];
 
 #[test]
 fn sigint_during_a_csv_simulate_leaves_the_existing_file_intact() {
@@ -120,6 +123,69 @@ fn sigterm_during_a_fractal_leaves_the_existing_picture_intact() {
     assert_eq!(interrupt(dir.path(), &args, "TERM"), Some(143));
     assert_eq!(tree(dir.path()), ["pendula-out/fractal/fractal.png"]);
     assert_eq!(std::fs::read(existing).unwrap(), PRECIOUS);
+}
+
+#[test]
+fn sigterm_during_a_sweep_shard_leaves_the_existing_array_and_description_intact() {
+    let dir = TempDir::new().unwrap();
+    let array = precious(dir.path(), "part.npy");
+    let description = precious(dir.path(), "part.npy.json");
+    let args = [
+        "sweep",
+        "--grid",
+        "theta1=-3:3:64",
+        "--t-end",
+        "100000",
+        "--threads",
+        "1",
+        "--shard",
+        "1/2",
+        "--out",
+        "part.npy",
+    ];
+    assert_eq!(interrupt(dir.path(), &args, "TERM"), Some(143));
+    assert_eq!(tree(dir.path()), ["part.npy", "part.npy.json"]);
+    assert_eq!(std::fs::read(array).unwrap(), PRECIOUS);
+    assert_eq!(std::fs::read(description).unwrap(), PRECIOUS);
+}
+
+/// The study directory the run created (two levels) goes with its temporary files.
+#[test]
+fn sigint_during_a_fractal_leaves_no_file_and_no_directory_it_made() {
+    let dir = TempDir::new().unwrap();
+    let args = [
+        "fractal",
+        "--grid",
+        "theta1=-3:3:64",
+        "--grid",
+        "theta2=-3:3:64",
+        "--t-max",
+        "100000",
+        "--out-dir",
+        "new/f",
+    ];
+    assert_eq!(interrupt(dir.path(), &args, "INT"), Some(130));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{:?}", tree(dir.path()));
+}
+
+const LONG_ANIMATE: [&str; 7] = ["animate", "pendulum", "--t-end", "100000", "--fps", "1", "--allow-large"];
+
+#[test]
+fn sigint_during_an_animation_leaves_the_existing_gif_intact() {
+    let dir = TempDir::new().unwrap();
+    let existing = precious(dir.path(), "a.gif");
+    let args = [&LONG_ANIMATE[..], &["--out", "a.gif"]].concat();
+    assert_eq!(interrupt(dir.path(), &args, "INT"), Some(130));
+    assert_eq!(tree(dir.path()), ["a.gif"]);
+    assert_eq!(std::fs::read(existing).unwrap(), PRECIOUS);
+}
+
+/// The default output's directory, made for the run, goes too.
+#[test]
+fn sigterm_during_an_animation_leaves_nothing() {
+    let dir = TempDir::new().unwrap();
+    assert_eq!(interrupt(dir.path(), &LONG_ANIMATE, "TERM"), Some(143));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{:?}", tree(dir.path()));
 }
 
 #[test]

@@ -129,7 +129,10 @@ pub(crate) fn run<M: Model>(
         if last {
             h = t_end - t;
         }
-        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs());
+        // Never below what the end time can resolve: a smaller step would need more than
+        // 1/(16 ε) ≈ 3·10¹⁴ steps to get there, and at t = 0 a floor of 16 ε |t| alone is 0,
+        // which let a rejected step shrink to 0 and the run stall for ever.
+        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs().max(t_end));
         if h < floor && !last {
             return Err(Error::StepSizeTooSmall { t, h });
         }

@@ -4,6 +4,10 @@
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
 
+/// The smallest relative tolerance: about 4.5 ε. Below it the error estimate is round-off,
+/// which no step size can bring under the tolerance.
+pub const MIN_RTOL: f64 = 1e-15;
+
 /// Tolerances and step bounds of an adaptive run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerances {
@@ -23,7 +27,12 @@ impl Tolerances {
         let check = |name: &str, v: f64, ok: bool, allowed| {
             if ok { Ok(()) } else { Err(Error::InvalidValue { name: name.to_owned(), value: v, allowed }) }
         };
-        check("rtol", self.rtol, self.rtol.is_finite() && self.rtol > 0.0, "must be finite and > 0")?;
+        check(
+            "rtol",
+            self.rtol,
+            (MIN_RTOL..=1.0).contains(&self.rtol),
+            "must be > 0, at least 1e-15 (a smaller relative tolerance is below round-off) and at most 1",
+        )?;
         check("atol", self.atol, self.atol.is_finite() && self.atol >= 0.0, "must be finite and >= 0")?;
         check("h-min", self.h_min, self.h_min.is_finite() && self.h_min >= 0.0, "must be finite and >= 0")?;
         check("h-max", self.h_max, self.h_max > self.h_min, "must be > h-min")

@@ -83,7 +83,7 @@ pub enum Error {
     },
     /// The step-size controller asked for a step below the minimum.
     #[error(
-        "the step size fell to h = {} s at t = {} s, below the minimum (loosen the tolerances or lower --h-min)",
+        "the step size fell to h = {} s at t = {} s, below the minimum (loosen the tolerances or lower the smallest step allowed)",
         Short(*.h),
         Short(*.t)
     )]

@@ -69,6 +69,9 @@ impl RunSpec {
                 if n == 0 {
                     return Err(invalid("steps", 0.0, "the number of steps must be >= 1"));
                 }
+                if n as f64 > MAX_STEPS {
+                    return Err(invalid("steps", n as f64, "the number of steps must be at most 10^13"));
+                }
                 Ok(Schedule { steps: n, last_h: h, t_end: self.t0 + n as f64 * h })
             }
             End::Time(t_end) => {

@@ -260,3 +260,46 @@ fn ref_embedded_pairs_need_no_more_evaluations_than_ode_solvers() {
 /// to 1.4e-11).
 const W2_REFERENCE: [f64; 4] =
     [-0.80261199632904428466, -2.4815018039174808687, -1.9522456761794939867, -2.3287508057048290787];
+
+/// A state at rest with atol = 0: every component's error is exactly 0 against a scale of
+/// 0. That meets the tolerance; before, 0/0 made every step a rejection and DOPRI5 never
+/// finished. Both pairs reach the end in a handful of growing steps.
+#[test]
+fn a_state_at_rest_with_zero_atol_reaches_the_end() {
+    let v = values("oscillator", &[("x", 0.0), ("v", 0.0)]);
+    let model = v.build();
+    let tol = Tolerances { rtol: 1e-6, atol: 0.0, h_min: 0.0, h_max: f64::INFINITY };
+    for method in [&DOPRI5, &DOP853] {
+        let r = model.solve_adaptive(method, v.initial_state(), 10.0, None, &tol, &mut Ignore).unwrap();
+        assert_eq!(r.outcome, Outcome::ReachedEnd { steps: r.outcome.steps(), t: 10.0 }, "{}", method.name);
+        assert!(r.outcome.steps() < 20 && r.steps_rejected == 0, "{}: {r:?}", method.name);
+        assert_eq!(r.state, [0.0, 0.0]);
+    }
+}
+
+/// The smallest step is bounded below by what the end time resolves (16 ε t_end), also at
+/// t = 0, where a floor relative to t alone is 0: an error that only a vanishing step meets
+/// (a spring of 1e300 N/m) fails at once with the step it asked for, instead of creeping on
+/// at steps of 1e-150 s.
+#[test]
+fn a_vanishing_step_at_the_start_is_an_error_not_a_stall() {
+    let v = values("oscillator", &[("k", 1e300)]);
+    let model = v.build();
+    let err =
+        model.solve_adaptive(&DOPRI5, v.initial_state(), 1.0, None, &tol(1e-6), &mut Ignore).unwrap_err();
+    let Error::StepSizeTooSmall { t, h } = err else { panic!("{err:?}") };
+    assert_eq!(t, 0.0);
+    assert!(h < 16.0 * f64::EPSILON, "h {h}");
+}
+
+/// A relative tolerance below round-off (about 4.5 ε) cannot be met by any step: refused,
+/// and so is one above 1; 1e-15 itself is allowed.
+#[test]
+fn relative_tolerance_is_bounded_by_round_off() {
+    for (rtol, ok) in [(1e-16, false), (1e-15, true), (1.0, true), (2.0, false)] {
+        let t = Tolerances { rtol, ..tol(1e-6) };
+        assert_eq!(t.validate().is_ok(), ok, "rtol {rtol}");
+    }
+    let err = Tolerances { rtol: 1e-300, ..tol(1e-6) }.validate().unwrap_err();
+    assert!(err.to_string().contains("round-off"), "{err}");
+}

@@ -75,3 +75,81 @@ fn same_samples_on_one_and_two_threads() {
     let (a, b) = (run(1), run(2));
     assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
 }
+
+/// Members started beyond the sine's fast range run their first period (before the wrap into
+/// [−π, π)) with the exact reduction, and their lane-group mates get the same bits as without
+/// them. In the period-1 regime their samples agree with the scalar RK4 (glibc), which keeps
+/// the angle unwrapped and so rounds it to ulp(θ₀) at every step: within 20 ulp(θ₀) (measured
+/// 10) for θ₀ = 2e6 and −1e7 rad. At θ₀ = 1e17 both paths hold θ at 1e17 for the first period
+/// (an ulp there is 16 rad), so its first sample agrees to rounding; later the scalar path
+/// stays there while the lanes wrap.
+#[test]
+fn huge_initial_angles_take_the_exact_reduction() {
+    let plain: Vec<DrivenMember> = (0..6).map(|i| member(0.9 + 0.01 * i as f64, 2.0 / 3.0, 0)).collect();
+    let mut huge = plain.clone();
+    let cases = [(1, 2e6), (2, -1e7), (4, 1e17)];
+    for &(k, angle) in &cases {
+        huge[k].state[0] = angle;
+    }
+    let samples = 30;
+    let spec = StroboSpec { steps_per_period: 120, samples };
+    let run = |members: &[DrivenMember]| {
+        let mut out = vec![0.0; members.len() * samples * 2];
+        stroboscopic(members, &spec, &mut out).unwrap();
+        out
+    };
+    let (before, after) = (run(&plain), run(&huge));
+    for k in [0, 3, 5] {
+        let rows = k * samples * 2..(k + 1) * samples * 2;
+        assert!(before[rows.clone()].iter().zip(&after[rows]).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+    for (k, angle) in cases {
+        let m = &huge[k];
+        let period = 2.0 * std::f64::consts::PI / m.pendulum.drive_frequency;
+        let rows = scalar(&m.pendulum as &dyn DynModel, &RK4, &m.state, period, 120, 0, samples).unwrap();
+        let (compared, tolerance) = if angle.abs() < 1e8 {
+            (samples, 20.0 * (angle.abs().next_up() - angle.abs()))
+        } else {
+            (1, 1e-12)
+        };
+        let mut worst = 0.0_f64;
+        for s in 0..compared {
+            let (lane, row) = (&after[(k * samples + s) * 2..][..2], &rows[s * 2..][..2]);
+            worst = worst.max((lane[0] - wrap_angle(row[0])).abs()).max((lane[1] - row[1]).abs());
+        }
+        eprintln!("θ₀ = {angle:e}: {worst:.2e} over {compared} samples");
+        assert!(worst < tolerance, "θ₀ = {angle:e}: {worst:e} from the scalar path");
+    }
+}
+
+/// A member whose angle starts small but whose speed carries it far beyond the sine's fast
+/// range within its first period (ω₀ = 2e12 rad/s: θ passes 4e12 rad, where the fast path's
+/// reduction is off by up to 2e-4) is caught by the kernel's bound on its angles and runs with
+/// the exact reduction: its first sample's ω is within 4 ulp of the scalar RK4's (glibc;
+/// measured 0, and 23 ulp when the fast path is forced), and its lane-group mates keep their
+/// bits.
+#[test]
+fn huge_velocities_take_the_exact_reduction() {
+    let plain: Vec<DrivenMember> = (0..3).map(|i| member(0.9 + 0.01 * i as f64, 2.0 / 3.0, 0)).collect();
+    let mut huge = plain.clone();
+    huge[1].state[1] = 2e12;
+    let samples = 3;
+    let spec = StroboSpec { steps_per_period: 120, samples };
+    let run = |members: &[DrivenMember]| {
+        let mut out = vec![0.0; members.len() * samples * 2];
+        stroboscopic(members, &spec, &mut out).unwrap();
+        out
+    };
+    let (before, after) = (run(&plain), run(&huge));
+    for k in [0, 2] {
+        let rows = k * samples * 2..(k + 1) * samples * 2;
+        assert!(before[rows.clone()].iter().zip(&after[rows]).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+    let m = &huge[1];
+    let period = 2.0 * std::f64::consts::PI / m.pendulum.drive_frequency;
+    let rows = scalar(&m.pendulum as &dyn DynModel, &RK4, &m.state, period, 120, 0, samples).unwrap();
+    let (lane, row) = (after[samples * 2 + 1], rows[1]);
+    let ulp = row.abs().next_up() - row.abs();
+    eprintln!("ω after one period: lanes {lane:e}, scalar {row:e}: {} ulp", (lane - row).abs() / ulp);
+    assert!((lane - row).abs() <= 4.0 * ulp, "lanes {lane:e}, scalar {row:e}");
+}

@@ -30,3 +30,4 @@ mod schedule;
 mod special;
 mod support;
 mod symplectic;
+mod trig;

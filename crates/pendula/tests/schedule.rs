@@ -42,6 +42,21 @@ fn invalid_specs_are_errors() {
     }
 }
 
+/// A count of steps beyond 10¹³ (days of work) is refused as a step count, as a horizon
+/// beyond 10¹³ steps already was: `End::Steps(u64::MAX)` used to start a run of 10¹⁹ steps.
+#[test]
+fn more_than_ten_trillion_steps_are_refused() {
+    let huge = RunSpec { t0: 0.0, h: 0.1, end: End::Steps(u64::MAX) };
+    match huge.schedule() {
+        Err(Error::InvalidValue { name, allowed, .. }) => {
+            assert_eq!(name, "steps");
+            assert!(allowed.contains("10^13"), "{allowed}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(RunSpec { t0: 0.0, h: 0.1, end: End::Steps(10_000_000_000_000) }.schedule().is_ok());
+}
+
 /// Explicit Euler on a stiff spring overflows; the error names the time it happened.
 #[test]
 fn non_finite_state_is_an_error_with_its_time() {

@@ -3,7 +3,7 @@
 //! sensitivity to initial conditions).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result, bail};
@@ -15,7 +15,7 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
 use crate::config::{f64_arg, parse_value};
-use crate::output::{AtomicFile, WatchedChild};
+use crate::output::{AtomicFile, CreatedDirs, WatchedChild};
 use crate::study;
 
 #[derive(Debug, Clone, Args)]
@@ -44,10 +44,12 @@ pub struct AnimateArgs {
     /// Frames per second of simulated time [default: 30]. A GIF plays 1 to 50 exactly (its
     /// delays are whole centiseconds, alternated, e.g. 3, 3, 4 cs for 30 fps); MP4 up to 240.
     #[arg(long, value_name = "N")]
-    pub fps: Option<u32>,
+    pub fps: Option<String>,
     /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
@@ -58,12 +60,17 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
     let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "a time in seconds")?;
-    let fps = args.fps.unwrap_or(30);
-    if fps == 0 || fps > 240 {
-        bail!("invalid --fps {fps}: must be 1 to 240 (1 to 50 for a GIF)");
-    }
+    let fps = match &args.fps {
+        Some(text) => {
+            crate::config::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32
+        }
+        None => 30,
+    };
     let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
+    if out == Path::new("-") {
+        bail!("invalid --out -: animate writes a GIF or MP4 file, not stdout; give FILE.gif or FILE.mp4");
+    }
     let mp4 = match out.extension().and_then(|e| e.to_str()) {
         Some("gif") => false,
         Some("mp4") => true,
@@ -88,10 +95,34 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         bail!("invalid --compare {d}: must be finite");
     }
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    spec.schedule()?;
-    if out.parent().is_some_and(|p| !p.as_os_str().is_empty()) && args.out.is_none() {
-        std::fs::create_dir_all(out.parent().expect("checked"))?;
-    }
+    let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
+    // What it costs: the runs, and the frames' bytes (GIF or MP4 keep the animation in
+    // memory until it is written): the default animation's GIF takes 0.03 bytes a pixel,
+    // counted here as 0.05.
+    let runs = if delta.is_some() { 2.0 } else { 1.0 };
+    let frames = (t_end * fps as f64).ceil() + 1.0;
+    let bytes = frames * size.0 as f64 * size.1 as f64 * 0.05;
+    let how = format!("{} frames of {}x{} pixels", crate::limits::round(frames), size.0, size.1);
+    crate::limits::check(
+        "animate",
+        args.allow_large,
+        &[
+            crate::limits::Estimate::new(
+                crate::limits::Cost::Steps,
+                runs * schedule.steps as f64,
+                format!("{runs} runs x {} steps", crate::limits::round(schedule.steps as f64)),
+            ),
+            crate::limits::Estimate::new(crate::limits::Cost::Output, bytes, how.clone()),
+            crate::limits::Estimate::new(crate::limits::Cost::Memory, bytes, how),
+        ],
+    )?;
+    // The default's directory is made for it, and removed again if the run fails.
+    let created = match out.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && args.out.is_none() => {
+            Some(CreatedDirs::create(dir, "--out")?)
+        }
+        _ => None,
+    };
     let file = AtomicFile::create(&out, "--out")?;
 
     // A frame too small for the text, the gauges and a pendulum is refused before the run.
@@ -138,9 +169,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     if mp4 {
         encode_mp4(&animation, &file)?;
     } else {
-        std::io::Write::write_all(&mut file.handle()?, &animation.gif()?)?;
+        file.write_all(&animation.gif()?)?;
     }
     file.commit()?;
+    if let Some(created) = created {
+        created.keep();
+    }
     eprintln!("wrote {} ({} frames, {}x{})", out.display(), animation.frames.len(), size.0, size.1);
     Ok(())
 }

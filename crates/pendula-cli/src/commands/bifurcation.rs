@@ -17,8 +17,9 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_u
 use rayon::prelude::*;
 use serde_json::json;
 
-use crate::commands::sweep::parse_axis;
-use crate::config::{f64_arg, parse_number};
+use crate::commands::sweep::{parse_axis, refuse_set_and_swept};
+use crate::config::{f64_arg, parse_count};
+use crate::limits::{self, Cost, Estimate};
 use crate::study::{self, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
@@ -35,16 +36,16 @@ pub struct BifurcationArgs {
     /// Time discarded before sampling, s, rounded up to whole drive periods [default: 1000].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub transient: Option<String>,
-    /// Samples (drive periods) per parameter value [default: 150].
+    /// Samples (drive periods) per parameter value, 1 to 10^6 [default: 150].
     #[arg(long, value_name = "N")]
     pub samples: Option<String>,
-    /// RK4 steps per drive period [default: 100].
+    /// RK4 steps per drive period, 4 to 10^6 [default: 100].
     #[arg(long, value_name = "M")]
     pub steps_per_period: Option<String>,
     /// The state variable plotted against the parameter [default: the first velocity].
     #[arg(long, value_name = "NAME")]
     pub variable: Option<String>,
-    /// Worker threads [default: all cores].
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     #[command(flatten)]
@@ -70,26 +71,61 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let axis =
         parse_axis(info, "--param", default_param.unwrap_or("drive_amplitude=0.9:1.5:400"), param_text)?;
     if !info.parameters.iter().any(|q| q.name == axis.name) {
-        bail!("invalid --param `{param_text}`: `{}` is not a parameter of {system}", axis.name);
-    }
-    let transient = f64_arg("--transient", args.transient.as_deref(), 1000.0, "a time in seconds")?;
-    if !(transient.is_finite() && transient >= 0.0) {
-        bail!("invalid --transient {transient}: must be finite and >= 0");
-    }
-    let samples: usize = match &args.samples {
-        Some(t) => parse_number("--samples", t, "a whole number >= 1")?,
-        None => 150,
-    };
-    let m: u32 = match &args.steps_per_period {
-        Some(t) => parse_number("--steps-per-period", t, "a whole number >= 4")?,
-        None => 100,
-    };
-    if samples == 0 || m < 4 {
         bail!(
-            "invalid --samples {samples} / --steps-per-period {m}: need >= 1 sample and >= 4 steps per period"
+            "invalid --param `{}`: `{}` is not a parameter of {system}",
+            crate::config::clip(param_text),
+            axis.name
         );
     }
-    let threads = crate::config::parse_threads(args.threads.as_deref())?;
+    refuse_set_and_swept(&args.common.set, &[param_text.to_owned()], std::slice::from_ref(&axis), "--param")?;
+    let transient = f64_arg("--transient", args.transient.as_deref(), 1000.0, "a time in seconds")?;
+    if transient < 0.0 {
+        bail!("invalid --transient {}: must be finite and >= 0", pendula::error::Short(transient));
+    }
+    let samples = match &args.samples {
+        Some(t) => parse_count("--samples", t, 1, limits::MAX_SAMPLES, "samples")? as usize,
+        None => 150,
+    };
+    let m = match &args.steps_per_period {
+        Some(t) => parse_count("--steps-per-period", t, 4, limits::MAX_STEPS_PER_PERIOD, "steps")? as u32,
+        None => 100,
+    };
+    let threads = limits::threads(args.threads.as_deref(), args.common.allow_large)?;
+    // What it costs, before the values are made: every value's transient and samples, at the
+    // fastest drive along the axis (its most periods), and its rows in memory and in the CSV.
+    let simd = system == "driven-pendulum";
+    let drive = |i: usize| {
+        let mut s = base.clone();
+        s.push((axis.name.clone(), axis.centre(i)));
+        info.values(&s).map(|v| v.get("drive_frequency"))
+    };
+    let w = drive(0)?.max(drive(axis.n - 1)?);
+    let periods = (transient * w / (2.0 * std::f64::consts::PI)).ceil() + samples as f64;
+    let n = axis.n as f64;
+    let rows = n * samples as f64;
+    let dim = info.state.len() as f64;
+    limits::check(
+        "bifurcation",
+        args.common.allow_large,
+        &[
+            Estimate::new(
+                if simd { Cost::LaneSteps } else { Cost::Steps },
+                n * periods * m as f64,
+                format!("{} values x {} drive periods x {m} steps", limits::round(n), limits::round(periods)),
+            ),
+            // Per sample: the state, its CSV row (a few strings) and the figure's point.
+            Estimate::new(
+                Cost::Memory,
+                rows * (dim * 8.0 + (2.0 + dim) * 56.0 + 16.0),
+                format!("{} samples", limits::round(rows)),
+            ),
+            Estimate::new(
+                Cost::Output,
+                rows * (2.0 + dim) * limits::CSV_BYTES_PER_VALUE,
+                format!("{} CSV rows", limits::round(rows)),
+            ),
+        ],
+    )?;
     // Every value's parameters, validated (a drive frequency > 0 included).
     let all: Vec<pendula::system::Values> = (0..axis.n)
         .map(|i| {
@@ -124,7 +160,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     if let Some(v) = all.iter().find(|v| v.get("drive_frequency") <= 0.0) {
         bail!(
             "invalid drive_frequency {}: a stroboscopic diagram needs a drive (set drive_frequency > 0)",
-            v.get("drive_frequency")
+            pendula::error::Short(v.get("drive_frequency"))
         );
     }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation")?;
@@ -133,7 +169,6 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let simd = system == "driven-pendulum";
     let data: Vec<f64> = pool.install(|| -> Result<Vec<f64>> {
         if simd {
             let members: Vec<DrivenMember> = all
@@ -150,7 +185,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
                 anyhow::Error::new(pendula::Error::NonFinite { t: e.t }).context(format!(
                     "{} = {}",
                     axis.name,
-                    axis.centre(e.member)
+                    pendula::error::Short(axis.centre(e.member))
                 ))
             })?;
             Ok(data)
@@ -218,12 +253,15 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         with_unit(transient, tu),
         if simd { "simd lanes (ensemble engine)" } else { "scalar RK4 per value" }
     );
-    summary.write(&json!({
-        "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
-        "transient": transient, "samples": samples, "steps_per_period": m,
-        "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
-        "threads": threads, "wall_s": wall,
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "param": {"name": axis.name, "lo": axis.lo, "hi": axis.hi, "n": axis.n},
+            "transient": transient, "samples": samples, "steps_per_period": m,
+            "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per value" },
+            "threads": threads, "wall_s": wall,
+        }),
+    )?;
     Ok(())
 }

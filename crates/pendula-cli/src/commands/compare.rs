@@ -10,7 +10,7 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
 use pendula::integrator::Method;
@@ -21,7 +21,10 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_un
 use rayon::prelude::*;
 use serde_json::json;
 
-use crate::config::f64_arg;
+use pendula::error::Short;
+
+use crate::config::positive_arg;
+use crate::limits::{self, Cost, Estimate, round};
 use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
@@ -76,6 +79,11 @@ pub struct Run {
     pub growth: Option<Growth>,
     /// Where it failed or was refused, if it did.
     pub failure: Option<String>,
+    /// `failed` (a numerical failure) or `refused` (the method does not run at this step)
+    /// when the run has no result: its counts and errors are then not numbers to show.
+    pub failed: Option<&'static str>,
+    /// The library's error of a failed run.
+    pub error: Option<pendula::Error>,
     /// (t, |relative error|) samples.
     pub energy: Vec<(f64, f64)>,
     /// Rows (t, state…) over the whole run, thinned to about [`SAMPLES`]: the phase portrait.
@@ -117,28 +125,48 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("double");
     let values = study::values(system, &args.common.set)?;
     let steps = match &args.dt {
-        Some(text) => Steps::Equal(f64_arg("--dt", Some(text), 0.0, "a step size in seconds")?),
-        None => {
-            let n = f64_arg(
-                "--evals-per-second",
-                args.evals_per_second.as_deref(),
-                DEFAULT_EVALS_PER_SECOND,
-                "a number of evaluations per second > 0",
-            )?;
-            if !(n.is_finite() && n > 0.0) {
-                bail!("invalid --evals-per-second {n}: must be finite and > 0");
-            }
-            Steps::EqualCost(n)
-        }
+        Some(text) => Steps::Equal(positive_arg("--dt", Some(text), 0.0, "a step size in seconds")?),
+        None => Steps::EqualCost(positive_arg(
+            "--evals-per-second",
+            args.evals_per_second.as_deref(),
+            DEFAULT_EVALS_PER_SECOND,
+            "a number of evaluations per second > 0",
+        )?),
     };
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
-    let h_check = match steps {
-        Steps::Equal(h) => h,
-        Steps::EqualCost(n) => 1.0 / n,
-    };
-    RunSpec { t0: 0.0, h: h_check, end: End::Time(t_end) }.schedule()?;
+    let t_end =
+        positive_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    // What it costs: at one step, every method's steps; at equal cost, every method's
+    // evaluations, each counted as a step (a step costs at least one).
+    let per_method = match steps {
+        Steps::Equal(h) => limits::steps(t_end, h),
+        Steps::EqualCost(n) => (t_end * n).ceil(),
+    };
+    let how = match steps {
+        Steps::Equal(h) => {
+            format!("{} methods x {} steps of {} s", methods.len(), round(per_method), Short(h))
+        }
+        Steps::EqualCost(n) => {
+            format!("{} methods x {} evaluations/s x {} s", methods.len(), Short(n), Short(t_end))
+        }
+    };
+    limits::check(
+        "compare",
+        args.common.allow_large,
+        &[Estimate::new(Cost::Steps, methods.len() as f64 * per_method, how)],
+    )?;
+    match steps {
+        Steps::Equal(h) => {
+            crate::config::schedule(&RunSpec { t0: 0.0, h, end: End::Time(t_end) }, "--dt", "--t-end")?;
+        }
+        Steps::EqualCost(n) if per_method > limits::MAX_STEPS as f64 => anyhow::bail!(
+            "invalid --t-end {}: at {} evaluations per second it is more than 10^13 steps",
+            Short(t_end),
+            Short(n)
+        ),
+        Steps::EqualCost(_) => {}
+    }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
 
@@ -153,6 +181,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     bar.finish_and_clear();
+    // Every method failed and one numerically: the run's failure (exit 1), not a table of
+    // failures with empty figures.
+    if runs.iter().all(|r| r.failed.is_some()) && runs.iter().any(|r| r.failed == Some("failed")) {
+        let first = runs.iter().find(|r| r.failed == Some("failed")).expect("one failed");
+        let context = format!("compare: every method failed; the first, {}", first.method);
+        return Err(match first.error.clone() {
+            Some(e) => anyhow::Error::new(e).context(context),
+            None => anyhow::anyhow!("{context}: {}", first.failure.as_deref().unwrap_or("")),
+        });
+    }
 
     let header = [
         "method",
@@ -170,17 +208,19 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let rows: Vec<Vec<String>> = runs
         .iter()
         .map(|r| {
+            // A failed run's counts are left empty and its growth says `failed`.
+            let count = |n: u64| if r.failed.is_some() { String::new() } else { n.to_string() };
             vec![
                 r.method.to_owned(),
                 num(r.h),
-                r.steps.to_string(),
-                r.rhs_evals.to_string(),
-                r.cost.to_string(),
+                count(r.steps),
+                count(r.rhs_evals),
+                count(r.cost),
                 num(r.wall_s),
                 num(r.max_rel_energy_error),
                 num(r.max_abs_energy_error),
                 num(r.drift_rate),
-                r.growth.map_or("", Growth::word).to_owned(),
+                r.failed.unwrap_or_else(|| r.growth.map_or("", Growth::word)).to_owned(),
                 r.failure.clone().unwrap_or_default(),
             ]
         })
@@ -207,11 +247,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             vec![
                 r.method.to_owned(),
                 short(r.h),
-                r.cost.to_string(),
+                if r.failed.is_some() { "-".to_owned() } else { r.cost.to_string() },
                 format!("{:.3}", r.wall_s),
                 short(r.max_rel_energy_error),
                 short(r.drift_rate),
-                r.growth.map_or("-", Growth::word).to_owned(),
+                r.failed.unwrap_or_else(|| r.growth.map_or("-", Growth::word)).to_owned(),
                 r.failure.clone().unwrap_or_default(),
             ]
         })
@@ -242,7 +282,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         "energy_scale": model_scale,
         "energy_scale_definition": info.energy_scale,
         "methods": runs.iter().map(|r| (r.method.to_owned(), json!({
-            "dt": r.h, "steps": r.steps, "rhs_evals": r.rhs_evals, "cost_evals": r.cost, "wall_s": r.wall_s,
+            "status": r.failed.unwrap_or("completed"),
+            "dt": r.h,
+            "steps": r.failed.is_none().then_some(r.steps),
+            "rhs_evals": r.failed.is_none().then_some(r.rhs_evals),
+            "cost_evals": r.failed.is_none().then_some(r.cost),
+            "wall_s": r.wall_s,
             "max_rel_energy_error": r.max_rel_energy_error, "max_abs_energy_error": r.max_abs_energy_error,
             "drift_rate": r.drift_rate, "growth": r.growth.map(Growth::word), "failure": r.failure,
         }))).collect::<serde_json::Map<_, _>>(),
@@ -251,8 +296,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "t_extrapolated": c.extrapolated(), "drift_rate": c.drift_rate,
         })).collect::<Vec<_>>(),
     });
-    summary.write(&doc)?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary, &doc)?;
     Ok(())
 }
 
@@ -413,13 +458,23 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         drift_rate: f64::NAN,
         growth: None,
         failure: Some(reason),
+        failed: Some("failed"),
+        error: None,
         energy: Vec::new(),
         trajectory: Vec::new(),
         early: Vec::new(),
     };
     let h = match h {
         Ok(h) => h,
-        Err(e) => return refusal(e).map(|reason| failed(f64::NAN, reason)),
+        Err(e) => {
+            let status = status(&e);
+            let error = e.downcast_ref::<pendula::Error>().cloned();
+            return refusal(e).map(|reason| Run {
+                failed: Some(status),
+                error,
+                ..failed(f64::NAN, format!("pilot run: {reason}"))
+            });
+        }
     };
     let model = values.build();
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
@@ -439,7 +494,6 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
     let wall_s = start.elapsed().as_secs_f64();
     let stopped_at = guard.stopped_at;
     let dim = values.initial_state().len();
-    let failed_run = result.is_err();
     let (steps, rhs_evals, cost, failure) = match result {
         Ok(report) => (
             report.outcome.steps(),
@@ -448,12 +502,16 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
             stopped_at
                 .map(|t| format!("stopped at t = {}: the energy error exceeded the energy scale", short(t))),
         ),
-        Err(e) => (0, 0, 0, Some(refusal(e.into())?)),
+        // A failed run has no result: it is reported as failed, with the library's reason
+        // and time, and no counts or errors that would read as one.
+        Err(e) => {
+            let error = Some(e.clone());
+            let e = anyhow::Error::new(e);
+            let status = status(&e);
+            return Ok(Run { wall_s, failed: Some(status), error, ..failed(h, refusal(e)?) });
+        }
     };
     let scale = energy.balance.scale;
-    if failed_run {
-        return Ok(Run { steps, rhs_evals, cost, wall_s, ..failed(h, failure.unwrap_or_default()) });
-    }
     Ok(Run {
         method: method.name,
         h,
@@ -467,6 +525,8 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         // A run stopped for its error has grown past everything else, whatever its shape.
         growth: if stopped_at.is_some() { Some(Growth::Growing) } else { growth(&energy.t, &energy.error) },
         failure,
+        failed: None,
+        error: None,
         energy: energy.t.iter().copied().zip(energy.error.iter().map(|e| e.abs())).collect(),
         trajectory: traj.inner.rows,
         early: early.inner.inner.rows,
@@ -485,6 +545,14 @@ impl<O: Observer> Observer for Until<O> {
             let _ = self.inner.observe(s);
         }
         ControlFlow::Continue(())
+    }
+}
+
+/// `failed` for a numerical failure, `refused` for a method that does not run there.
+fn status(e: &anyhow::Error) -> &'static str {
+    match e.downcast_ref::<pendula::Error>() {
+        Some(pendula::Error::InvalidValue { .. } | pendula::Error::UnmetRequirement { .. }) => "refused",
+        _ => "failed",
     }
 }
 

@@ -85,6 +85,24 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    let (runs, levels) = methods.iter().fold((0.0, 0), |(n, k), m| {
+        let hs = steps_for(&values, m, &ladder, t_end);
+        (n + hs.iter().map(|h| crate::limits::steps(t_end, *h)).sum::<f64>(), k + hs.len())
+    });
+    if levels == 0 {
+        anyhow::bail!(
+            "convergence: no step of the methods' default ladders fits --t-end {} within their cost caps (at most 2e6 steps a run); give a shorter --t-end, or the steps (--dt-min, --dt-max, --levels)",
+            short(t_end)
+        );
+    }
+    study::check_study(
+        "convergence",
+        args.common.allow_large,
+        &values,
+        t_end,
+        runs,
+        format!("{} runs of {} methods to t = {} s", levels, methods.len(), short(t_end)),
+    )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
 
@@ -115,10 +133,10 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         results.iter().map(|r| (r.method.to_owned(), json!(r.note()))).collect();
     let dts: serde_json::Map<String, serde_json::Value> =
         results.iter().map(|r| (r.method.to_owned(), json!(r.hs))).collect();
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
     )?;
-    out.finish()?;
     Ok(())
 }
 
@@ -147,10 +165,12 @@ pub fn study_orders(
     t_end: f64,
 ) -> Result<(Vec<MethodConvergence>, analysis::Reference)> {
     let model = values.build();
-    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)?;
+    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
+        .map_err(|e| study::reference_failed(e, t_end))?;
     let scale = reference.state.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
     let bar = study::progress(methods.len() as u64, "convergence");
     let mut results = Vec::new();
+    let mut first_failure = None;
     for method in methods {
         let (mut hs, mut errors, mut failure) = (Vec::new(), Vec::new(), None);
         for h in steps_for(values, method, ladder, t_end) {
@@ -167,7 +187,10 @@ pub fn study_orders(
                     errors.push(e[0]);
                 }
                 // Large steps may be refused or blow up where smaller ones work: keep going.
-                Err(e) => failure = Some(format!("at h = {}: {}", short(h), refusal(e.into())?)),
+                Err(e) => {
+                    first_failure.get_or_insert_with(|| e.clone());
+                    failure = Some(format!("at h = {}: {}", short(h), refusal(e.into())?));
+                }
             }
         }
         let estimate = estimate_order(&hs, &errors, scale, t_end);
@@ -175,6 +198,7 @@ pub fn study_orders(
         bar.inc(1);
     }
     bar.finish_and_clear();
+    study::all_failed("convergence", results.iter().any(|r| !r.hs.is_empty()), first_failure)?;
     Ok((results, reference))
 }
 

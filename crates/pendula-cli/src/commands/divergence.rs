@@ -10,6 +10,8 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with
 use serde_json::json;
 
 use crate::config::f64_arg;
+use pendula::error::Short;
+
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
@@ -43,12 +45,16 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let values = study::values(system, &args.common.set)?;
     let info = values.info();
     let delta = f64_arg("--delta", args.delta.as_deref(), 1e-9, "a separation")?;
-    if !(delta.is_finite() && delta != 0.0) {
-        bail!("invalid --delta {delta}: must be finite and not 0");
+    if delta == 0.0 {
+        bail!("invalid --delta 0: the two trajectories must start apart (a separation not 0)");
     }
     let saturation = f64_arg("--saturation", args.saturation.as_deref(), 1e-2, "a distance")?;
-    if !(saturation.is_finite() && saturation > delta.abs()) {
-        bail!("invalid --saturation {saturation}: must be finite and larger than |delta| = {}", delta.abs());
+    if saturation <= delta.abs() {
+        bail!(
+            "invalid --saturation {}: must be finite and larger than |delta| = {}",
+            Short(saturation),
+            Short(delta.abs())
+        );
     }
     let index = match &args.variable {
         None => 0,
@@ -56,11 +62,34 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             pendula::Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name))
         })?,
     };
+    // The separation must survive being added to the start: at a large value the floats
+    // are further apart than it, and the two runs would start (nearly) at the same state.
+    let start = values.initial_state()[index];
+    let moved = (start + delta) - start;
+    if (moved - delta).abs() > 1e-3 * delta.abs() {
+        let spacing = (start.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
+        bail!(
+            "invalid --delta {}: added to {} = {} it is lost in rounding (floats there are {} apart); use a larger --delta or a smaller start",
+            crate::limits::sci(delta),
+            info.state[index].name,
+            crate::limits::sci(start),
+            crate::limits::sci(spacing)
+        );
+    }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
     let t_end = f64_arg("--t-end", args.t_end.as_deref(), 30.0, "an end time in seconds")?;
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    let schedule = spec.schedule()?;
+    let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
+    crate::limits::check(
+        "divergence",
+        args.common.allow_large,
+        &[crate::limits::Estimate::new(
+            crate::limits::Cost::Steps,
+            2.0 * schedule.steps as f64,
+            format!("2 runs x {} steps", crate::limits::round(schedule.steps as f64)),
+        )],
+    )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
     let model = values.build();
@@ -122,12 +151,15 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         );
     }
     out.figure("divergence", &fig)?;
-    summary.write(&json!({
-        "system": system, "method": method.name, "dt": h, "t_end": t_end,
-        "delta": delta, "variable": variable, "saturation": saturation,
-        "growth_rate": fit.map(|f| f.rate),
-        "fit_window": fit.map(|f| [f.t_start, f.t_end]),
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "method": method.name, "dt": h, "t_end": t_end,
+            "delta": delta, "variable": variable, "saturation": saturation,
+            "growth_rate": fit.map(|f| f.rate),
+            "fit_window": fit.map(|f| [f.t_start, f.t_end]),
+        }),
+    )?;
     Ok(())
 }

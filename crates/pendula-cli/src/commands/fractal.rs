@@ -8,7 +8,6 @@
 //! two steps) and FILE-converged.png, in `--out-dir` (default `pendula-out/fractal/`, with
 //! FILE = fractal) or beside `--out FILE.npy`; all files appear whole or not at all.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -24,7 +23,10 @@ use serde_json::json;
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
 use crate::commands::sweep::{batch_method, parse_axis, write_npy};
-use crate::config::{f64_arg, parse_settings};
+use pendula::error::Short;
+
+use crate::config::{f64_arg, parse_settings, positive_arg};
+use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 use crate::study::{OutDir, Summary};
 
@@ -50,7 +52,8 @@ pub struct FractalArgs {
     /// Set a parameter (m1, m2, l1, l2, g); the pendulum starts at rest.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Worker threads [default: all cores]; the result does not depend on it.
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores]; the
+    /// result does not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     /// Directory for fractal.npy, fractal.png, fractal-converged.npy and fractal-converged.png
@@ -68,6 +71,8 @@ pub struct FractalArgs {
     /// chunks missing; both files are removed when the fractal is written.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// `dir/stem.npy` → `dir/stem{suffix}`.
@@ -115,17 +120,14 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         *target = GridAxis { lo: axis.lo, hi: axis.hi, n: axis.n };
         seen.push(axis.name);
     }
-    let t_max = f64_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
-    if !(t_max.is_finite() && t_max > 0.0) {
-        bail!("invalid --t-max {t_max}: must be finite and > 0");
-    }
-    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
-    if !(h.is_finite() && h > 0.0 && h <= t_max) {
-        bail!("invalid --dt {h}: must be finite, > 0 and at most --t-max {t_max}");
+    let t_max = positive_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
+    let h = positive_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    if h > t_max {
+        bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
     }
     let tolerance = f64_arg("--tolerance", args.tolerance.as_deref(), 0.01, "a time in seconds")?;
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        bail!("invalid --tolerance {tolerance}: must be finite and >= 0");
+    if tolerance < 0.0 {
+        bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
     }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let Some(batch) = batch_method(method) else {
@@ -137,7 +139,29 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     if let BatchMethod::Tao(scheme) = batch {
         integrator::tao::check_binding_step(&scheme, h)?;
     }
-    let threads = crate::config::parse_threads(args.threads.as_deref())?;
+    let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
+    if args.out.as_deref() == Some(Path::new("-")) {
+        bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");
+    }
+    // What it costs, before any of it: every pixel at dt and at dt/2 (the allowed ones stop
+    // at their first flip, so this is an upper estimate), and per pixel its flip times, flags
+    // and images in memory (some 64 bytes) and 9 bytes of .npy.
+    let pixels = theta1.n as f64 * theta2.n as f64;
+    let steps = limits::steps(t_max, h) + limits::steps(t_max, h / 2.0);
+    let grid = format!("{} x {} pixels", theta1.n, theta2.n);
+    limits::check(
+        "fractal",
+        args.allow_large,
+        &[
+            Estimate::new(
+                Cost::LaneSteps,
+                pixels * steps,
+                format!("{grid} x {} steps", limits::round(steps)),
+            ),
+            Estimate::new(Cost::Memory, pixels * 64.0, format!("{grid} x 64 bytes")),
+            Estimate::new(Cost::Output, pixels * 9.0, format!("{grid} x 9 bytes")),
+        ],
+    )?;
     if let Some(out) = &args.out
         && out.extension().and_then(|e| e.to_str()) != Some("npy")
     {
@@ -149,23 +173,36 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         Some(_) => None,
         None => Some(OutDir::new(args.out_dir.as_deref(), "fractal")?),
     };
-    let (out, flag) = match (&args.out, &dir) {
-        (Some(out), _) => (out.clone(), "--out"),
-        (None, Some(dir)) => (dir.path().join("fractal.npy"), "--out-dir"),
+    let names = ["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"];
+    let (paths, files): (Vec<PathBuf>, Vec<AtomicFile>) = match (&args.out, &dir) {
+        (Some(out), _) => {
+            let paths = [
+                out.clone(),
+                beside(out, ".png"),
+                beside(out, "-converged.npy"),
+                beside(out, "-converged.png"),
+            ];
+            let files = paths.iter().map(|p| AtomicFile::create(p, "--out")).collect::<Result<_>>()?;
+            (paths.to_vec(), files)
+        }
+        (None, Some(dir)) => {
+            let files: Vec<AtomicFile> = names.iter().map(|n| dir.file(n)).collect::<Result<_>>()?;
+            (names.iter().map(|n| dir.path().join(n)).collect(), files)
+        }
         (None, None) => unreachable!("a directory when there is no --out"),
     };
-    let paths =
-        [out.clone(), beside(&out, ".png"), beside(&out, "-converged.npy"), beside(&out, "-converged.png")];
+    let summary = Summary::open(args.summary.as_deref())?;
     let checkpoint = match &args.checkpoint {
         Some(c) => {
+            let flag = if dir.is_some() { "--out-dir" } else { "--out" };
             let mut outputs: Vec<(&str, &Path)> = paths.iter().map(|p| (flag, p.as_path())).collect();
             outputs.extend(args.summary.as_deref().map(|s| ("--summary", s)));
-            Some(crate::checkpoint::check_path(c, &outputs)?)
+            let path = crate::checkpoint::check_path(c, &outputs)?;
+            Chunks::claim(&path)?;
+            Some(path)
         }
         None => None,
     };
-    let files: Vec<AtomicFile> = paths.iter().map(|p| AtomicFile::create(p, flag)).collect::<Result<_>>()?;
-    let summary = Summary::open(args.summary.as_deref())?;
 
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     let pool =
@@ -180,8 +217,20 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
             bar.set_position(before + n);
         }
     };
+    // A non-finite state is a numerical failure (exit 1) at a pixel, as in sweep.
+    let pixel_error = |e| match e {
+        pendula::ensemble::EnsembleError::NonFinite(f) => {
+            let (i, j) = (f.member % theta1.n, f.member / theta1.n);
+            anyhow::Error::new(pendula::Error::NonFinite { t: f.t }).context(format!(
+                "fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {}",
+                Short(theta1.centre(i)),
+                Short(theta2.centre(j))
+            ))
+        }
+        other => anyhow::Error::new(other),
+    };
     let (fractal, chunks) = match checkpoint {
-        None => (pool.install(|| flip_fractal_with_progress(&spec, &tick))?, None),
+        None => (pool.install(|| flip_fractal_with_progress(&spec, &tick)).map_err(pixel_error)?, None),
         Some(path) => {
             let _registered = crate::output::Checkpointing::start();
             let pixels = theta1.n * theta2.n;
@@ -214,7 +263,8 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
                 }
             };
             let compute = |cells: std::ops::Range<usize>, values: &mut [f64]| -> Result<()> {
-                let (at_h, at_half) = pool.install(|| flip_times(&spec, cells, &tick))?;
+                let (at_h, at_half) =
+                    pool.install(|| flip_times(&spec, cells, &tick)).map_err(pixel_error)?;
                 for ((v, a), b) in values.chunks_exact_mut(2).zip(at_h).zip(at_half) {
                     v.copy_from_slice(&[a, b]);
                 }
@@ -271,7 +321,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
             }
             Err(e) => return Err(e.into()),
         };
-        file.handle()?.write_all(&bytes)?;
+        file.write_all(&bytes)?;
         Ok(())
     };
     write_png(&png, &picture)?;
@@ -290,7 +340,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
             pendula_viz::BLACK,
         )
     };
-    flags_png.handle()?.write_all(&flags_map.png()?)?;
+    flags_png.write_all(&flags_map.png()?)?;
     let doc = json!({
         "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
         "tolerance": tolerance,
@@ -305,18 +355,6 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         "threads": threads, "wall_s": wall,
         "files": paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
     });
-    // The four files appear together or not at all.
-    let files = vec![npy, png, flags_npy, flags_png];
-    match dir {
-        Some(mut dir) => {
-            dir.commit(files)?;
-            dir.finish()?;
-            if let Some(c) = chunks {
-                crate::output::together(|guard| c.finish(guard))?;
-            }
-        }
-        None => AtomicFile::commit_with(files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?,
-    }
     sayln!(
         summary,
         "fractal {n1}x{n2}, t-max {t_max} s, {} at dt = {h} s and {} s: {flipped} pixels flip, {} cannot (energy), {unconverged} unconverged ({:.2}%) [{wall:.1} s, {threads} threads]",
@@ -325,7 +363,20 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         fractal.forbidden,
         100.0 * share
     );
-    sayln!(summary, "wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
-    summary.write(&doc)?;
+    let wrote =
+        format!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+    let on_stdout = summary.on_stdout();
+    // The four files and the summary appear together or not at all, and a finished
+    // fractal's checkpoint goes in the same step.
+    let files = vec![npy, png, flags_npy, flags_png];
+    let finish = |guard: &mut crate::output::Guard<'_>| chunks.map_or(Ok(()), |c| c.finish(guard));
+    match dir {
+        Some(mut dir) => {
+            dir.commit(files)?;
+            dir.finish_then(summary, &doc, finish)?;
+        }
+        None => summary.write_then(&doc, files, finish)?,
+    }
+    crate::study::say_after(on_stdout, &wrote);
     Ok(())
 }

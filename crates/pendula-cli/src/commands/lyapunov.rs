@@ -10,7 +10,9 @@ use pendula::system::AsSystem;
 use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
-use crate::config::f64_arg;
+use crate::config::{f64_arg, positive_arg};
+use pendula::error::Short;
+
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
@@ -49,22 +51,70 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let info = values.info();
     let system = info.name;
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 200.0, "a time in seconds")?;
+    let h = positive_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
+    let t_end = positive_arg("--t-end", args.t_end.as_deref(), 200.0, "a time in seconds")?;
     let transient = f64_arg("--transient", args.transient.as_deref(), 10.0, "a time in seconds")?;
-    let renormalise = f64_arg("--renormalise", args.renormalise.as_deref(), 0.5, "a time in seconds")?;
+    if transient < 0.0 {
+        bail!("invalid --transient {}: must be finite and >= 0", Short(transient));
+    }
+    let renormalise = positive_arg("--renormalise", args.renormalise.as_deref(), 0.5, "a time in seconds")?;
     let dim = info.state.len();
     let count = if args.spectrum { dim } else { 1 };
     let spec = LyapunovSpec { h, transient, t_end, renormalise, count, blocks: 10 };
-    if (t_end / renormalise) < 20.0 {
+    // The step is checked first, so that a step longer than the interval is blamed on --dt
+    // (the library, seeing both, names the interval).
+    if h > renormalise {
         bail!(
-            "invalid --t-end {t_end}: at least 20 re-orthonormalisations (every --renormalise {renormalise} s) are needed for the uncertainty"
+            "invalid --dt {}: must be at most --renormalise {} s (the tangent vectors are re-orthonormalised that often, at whole steps)",
+            Short(h),
+            Short(renormalise)
         );
     }
-    let model = values.build();
-    let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)?;
+    if (t_end / renormalise) < 20.0 {
+        bail!(
+            "invalid --t-end {}: at least 20 re-orthonormalisations (every --renormalise {} s) are needed for the uncertainty",
+            Short(t_end),
+            Short(renormalise)
+        );
+    }
+    let names = [
+        ("dt", "--dt"),
+        ("t-end", "--t-end"),
+        ("transient", "--transient"),
+        ("renormalise", "--renormalise"),
+    ];
+    let whole = pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(transient + t_end) };
+    crate::config::schedule(&whole, "--dt", "--t-end")?;
+    // What it costs: the state and its `count` tangent vectors over the transient and the
+    // averaging time, and the running estimate's rows (one per re-orthonormalisation).
+    let steps = crate::limits::steps(transient + t_end, h) * (1 + count) as f64;
+    let rows = t_end / renormalise;
+    crate::limits::check(
+        "lyapunov",
+        args.common.allow_large,
+        &[
+            crate::limits::Estimate::new(
+                crate::limits::Cost::Steps,
+                steps,
+                format!(
+                    "{} tangent vectors and the state x {} steps",
+                    count,
+                    crate::limits::round(crate::limits::steps(transient + t_end, h))
+                ),
+            ),
+            crate::limits::Estimate::new(
+                crate::limits::Cost::Output,
+                rows * (1 + count) as f64 * crate::limits::CSV_BYTES_PER_VALUE,
+                format!("{} rows of the running estimate", crate::limits::round(rows)),
+            ),
+        ],
+    )?;
+    // The outputs before the work: a path that cannot be written fails first.
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
+    let model = values.build();
+    let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)
+        .map_err(|e| crate::config::flag_error(e, &names))?;
 
     let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
     let mut header = vec!["t"];
@@ -118,7 +168,8 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
         band(lambda - err),
     );
     out.figure("lyapunov", &fig)?;
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({
             "system": system, "method": method.name, "dt": h, "t_end": t_end,
             "transient": transient, "renormalise": renormalise,
@@ -128,6 +179,5 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             "spectrum_uncertainty": args.spectrum.then(|| result.uncertainty.clone()),
         }),
     )?;
-    out.finish()?;
     Ok(())
 }

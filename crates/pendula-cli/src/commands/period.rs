@@ -22,7 +22,9 @@ pub struct PeriodArgs {
     /// Step size, s [default: 0.001].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// Largest amplitude, degrees (< 180); amplitudes run in 5° steps up to it [default: 175].
+    /// Largest amplitude, degrees, from 5 to below 180 (a libration: at 180 the pendulum
+    /// balances upright and never swings back); amplitudes run in 5° steps up to it
+    /// [default: 175].
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub max_amplitude: Option<String>,
     #[command(flatten)]
@@ -40,14 +42,36 @@ pub struct PeriodRow {
 pub fn run(args: &PeriodArgs) -> Result<()> {
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
-    let max = f64_arg("--max-amplitude", args.max_amplitude.as_deref(), 175.0, "degrees")?;
-    if !(max > 0.0 && max < 180.0) {
-        anyhow::bail!("invalid --max-amplitude {max}: must be in (0, 180) degrees");
+    let text = args.max_amplitude.as_deref().unwrap_or("175");
+    let max = f64_arg("--max-amplitude", args.max_amplitude.as_deref(), 175.0, "degrees (5 to < 180)")?;
+    if !(5.0..180.0).contains(&max) {
+        anyhow::bail!(
+            "invalid --max-amplitude {}: must be from 5 (the first amplitude) to below 180 degrees; the period is of a libration, and at 180 the pendulum balances upright and never swings back",
+            crate::config::clip(text)
+        );
     }
+    crate::config::refuse_settings(
+        &args.common.set,
+        &["theta", "omega"],
+        "period releases the pendulum from rest at each amplitude (--max-amplitude); set its parameters only",
+    )?;
     crate::config::schedule(&pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }, "--dt", "--dt")?;
+    let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();
+    // What it costs: each amplitude runs 2.5 of its exact periods.
+    let pendulum = Pendulum::from_values(&study::values("pendulum", &args.common.set)?);
+    let steps: f64 =
+        amplitudes.iter().map(|a| crate::limits::steps(2.5 * pendulum.period(a.to_radians()), h)).sum();
+    crate::limits::check(
+        "period",
+        args.common.allow_large,
+        &[crate::limits::Estimate::new(
+            crate::limits::Cost::Steps,
+            steps,
+            format!("{} amplitudes x 2.5 periods at dt = {} s", amplitudes.len(), pendula::error::Short(h)),
+        )],
+    )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "period")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
-    let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();
     let rows = periods(&args.common.set, method, h, &amplitudes)?;
 
     let csv: Vec<Vec<String>> = rows
@@ -87,14 +111,14 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
         out.figure(name, &fig)?;
     }
     let worst = rows.iter().map(|r| (r.simulated / r.exact - 1.0).abs()).fold(0.0, f64::max);
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({
             "method": method.name, "dt": h,
             "max_rel_error_simulated": worst,
             "rows": rows.iter().map(|r| json!({"amplitude_deg": r.amplitude_deg, "simulated": r.simulated, "exact": r.exact, "small_angle": r.small_angle})).collect::<Vec<_>>(),
         }),
     )?;
-    out.finish()?;
     Ok(())
 }
 

@@ -38,10 +38,15 @@ pub struct PlotArgs {
     /// Output FILE.png or FILE.svg [default: the input's name with -plot.png].
     #[arg(long, value_name = "FILE.png")]
     pub out: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// Checks that `path` names a PNG or SVG file; `flag` names the option.
 pub fn check_image_path(path: &Path, flag: &str) -> Result<()> {
+    if path == Path::new("-") {
+        bail!("invalid {flag} -: a picture is written to a file, not stdout; give FILE.png or FILE.svg");
+    }
     match path.extension().and_then(|e| e.to_str()) {
         Some("png" | "svg") => Ok(()),
         _ => bail!("invalid {flag} `{}`: the format follows the extension; use .png or .svg", path.display()),
@@ -350,9 +355,22 @@ fn axes_of(doc: &serde_json::Value) -> Vec<(String, f64, f64, usize)> {
         .collect()
 }
 
-/// Reads a .npy of float64 or uint8 (the fractal's flags) as float64 with its shape.
-fn read_npy(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
+/// Reads a .npy of float64 or uint8 (the fractal's flags) as float64 with its shape, once
+/// its header's claim is checked against the file and the limits.
+fn read_npy(path: &Path, allow_large: bool) -> Result<(Vec<usize>, Vec<f64>)> {
     use ndarray_npy::ReadNpyExt;
+    let claim = crate::limits::npy_claim(path)?;
+    // The array as read, and the float64 copy drawn from.
+    let values = claim.len() as f64;
+    crate::limits::check(
+        "plot",
+        allow_large,
+        &[crate::limits::Estimate::new(
+            crate::limits::Cost::Memory,
+            values * (claim.item as f64 + 8.0),
+            format!("{} values of {:?}", crate::limits::round(values), claim.shape),
+        )],
+    )?;
     let open = || std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()));
     if let Ok(a) = ndarray::ArrayD::<f64>::read_npy(open()?) {
         return Ok((a.shape().to_vec(), a.iter().copied().collect()));
@@ -460,10 +478,11 @@ fn read(args: &PlotArgs) -> Result<Contents> {
                         "" => f64::NAN,
                         f => f.parse().map_err(|_| {
                             anyhow!(
-                                "{} row {} column {}: `{f}` is not a number (plot draws numeric columns)",
+                                "{} row {} column {}: `{}` is not a number (plot draws numeric columns)",
                                 path.display(),
                                 r + 1,
-                                names.get(c).map_or("?", String::as_str)
+                                crate::config::clip(names.get(c).map_or("?", String::as_str)),
+                                crate::config::clip(f)
                             )
                         })?,
                     };
@@ -476,7 +495,7 @@ fn read(args: &PlotArgs) -> Result<Contents> {
             Ok(Contents::Table(Trajectory::new(title, names, rows, system)))
         }
         Some("npy") => {
-            let (shape, values) = read_npy(path)?;
+            let (shape, values) = read_npy(path, args.allow_large)?;
             if values.is_empty() {
                 bail!("{} has no values to draw", path.display());
             }
@@ -581,6 +600,16 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     if !args.file.exists() {
         bail!("cannot read {}: no such file", args.file.display());
     }
+    // The file is read whole: its size is checked first.
+    let size = std::fs::metadata(&args.file).map(|m| m.len()).unwrap_or(0) as f64;
+    crate::limits::check(
+        "plot",
+        args.allow_large,
+        &[crate::limits::Estimate::new(crate::limits::Cost::Input, size, args.file.display().to_string())],
+    )?;
+    // The picture may not replace what it is drawn from.
+    crate::output::claim_input(&args.file, "input file")?;
+    let file = AtomicFile::create(&out, "--out")?;
     let contents = read(args)?;
     let bytes = match contents {
         Contents::Table(t) => {
@@ -620,8 +649,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             map.png()?
         }
     };
-    let file = AtomicFile::create(&out, "--out")?;
-    std::io::Write::write_all(&mut file.handle()?, &bytes)?;
+    file.write_all(&bytes)?;
     file.commit()?;
     eprintln!("wrote {}", out.display());
     Ok(())

@@ -12,7 +12,8 @@ use pendula::integrator::{self, Scheme};
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
-use crate::config::{f64_arg, parse_number, parse_value};
+use crate::config::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
+use crate::limits::{self, Cost, Estimate};
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
@@ -22,7 +23,7 @@ pub struct PoincareArgs {
     /// Energy of every orbit, J [default: -15, regular and chaotic orbits side by side].
     #[arg(long, value_name = "E", allow_hyphen_values = true)]
     pub energy: Option<String>,
-    /// Number of orbits [default: 30].
+    /// Number of orbits, 1 to 10000 [default: 30].
     #[arg(long, value_name = "N")]
     pub count: Option<String>,
     /// The section, an angle and its value (deg accepted); crossings count when that angle
@@ -39,7 +40,8 @@ pub struct PoincareArgs {
     /// Fixed step size, s (required by fixed-step methods).
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// Relative and absolute tolerance of adaptive methods [default: 1e-10].
+    /// Relative and absolute tolerance of adaptive methods, 1e-15 (round-off) to 1 [default:
+    /// 1e-10].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub tol: Option<String>,
     #[command(flatten)]
@@ -50,60 +52,96 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("double");
     let values = study::values(system, &args.common.set)?;
     let info = values.info();
+    let state: Vec<&str> = info.state.iter().map(|q| q.name).collect();
+    refuse_settings(
+        &args.common.set,
+        &state,
+        "poincare starts every orbit on the section at the energy --energy; set parameters only",
+    )?;
     let model = values.build();
     // The system first: a section of a system without an energy surface is no question of
     // which section.
     pendula::analysis::poincare::check_system(&*model)?;
     let energy = f64_arg("--energy", args.energy.as_deref(), -15.0, "an energy in J")?;
-    if !energy.is_finite() {
-        bail!("invalid --energy {energy}: must be finite");
-    }
-    let count: usize = match &args.count {
-        Some(t) => parse_number("--count", t, "a whole number of orbits >= 1")?,
+    let count = match &args.count {
+        Some(t) => parse_count("--count", t, 1, limits::MAX_ORBITS, "orbits")? as usize,
         None => 30,
     };
-    if count == 0 {
-        bail!("invalid --count 0: need at least 1 orbit");
-    }
     let section_text = args.section.as_deref().unwrap_or("theta1=0");
     let (name, value) = section_text.split_once('=').ok_or_else(|| {
-        anyhow::anyhow!("invalid --section `{section_text}`: expected NAME=VALUE, e.g. theta1=0")
+        anyhow::anyhow!("invalid --section `{}`: expected NAME=VALUE, e.g. theta1=0", clip(section_text))
     })?;
     let name = name.trim();
     let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
     let Some(section) = info.state.iter().position(|q| q.name == name && q.is_angle()) else {
         bail!(
-            "invalid --section `{section_text}`: `{name}` is not an angle of {system}{}; valid: {}",
+            "invalid --section `{}`: `{}` is not an angle of {system}{}; valid: {}",
+            clip(section_text),
+            clip(name),
             did_you_mean(&suggestions(name, angles.iter().copied())),
             angles.join(", ")
         );
     };
     let value = parse_value(name, value, Some(&info.state[section]))?;
-    if !value.is_finite() {
-        bail!("invalid --section `{section_text}`: the value must be finite");
-    }
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 300.0, "a time in seconds")?;
-    if !(t_end.is_finite() && t_end > 0.0) {
-        bail!("invalid --t-end {t_end}: must be finite and > 0");
-    }
+    let t_end = crate::config::positive_arg("--t-end", args.t_end.as_deref(), 300.0, "a time in seconds")?;
     let method = integrator::find(args.method.as_deref().unwrap_or("dop853"))?;
     let stepping = match (&args.dt, method.scheme) {
         (Some(text), _) => {
-            let h: f64 = parse_number("--dt", text, "a step size in seconds")?;
-            if !(h.is_finite() && h > 0.0 && h <= t_end) {
-                bail!("invalid --dt {h}: must be finite, > 0 and at most --t-end");
+            let h = parse_float("--dt", text, "a step size in seconds")?;
+            if !(h > 0.0 && h <= t_end) {
+                bail!("invalid --dt {}: must be finite, > 0 and at most --t-end", clip(text));
             }
             Stepping::Fixed(h)
         }
         (None, Scheme::Embedded(_)) => {
             let tol = f64_arg("--tol", args.tol.as_deref(), 1e-10, "a tolerance")?;
             let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
-            tol.validate()?;
+            tol.validate()
+                .map_err(|e| crate::config::flag_error(e, &[("rtol", "--tol"), ("atol", "--tol")]))?;
             Stepping::Adaptive(tol)
         }
         (None, _) => bail!("--method {} takes fixed steps: give --dt", method.name),
     };
+    // What it costs: every orbit's steps. Adaptive steps follow the motion: at an energy K
+    // above the potential's minimum, the motion is faster than small oscillations by about
+    // sqrt(K / scale) (scale: the system's energy scale at rest).
+    let rest = vec![0.0; info.state.len()];
+    let scale = model.energy_scale(&rest);
+    let kinetic = (energy - model.energy(0.0, &rest)).max(scale);
+    let period = model.time_scale() * (scale / kinetic).sqrt();
+    let (steps, how) = match stepping {
+        Stepping::Fixed(h) => (limits::steps(t_end, h), format!("steps of {} s", pendula::error::Short(h))),
+        Stepping::Adaptive(_) => (
+            limits::adaptive_steps(t_end, period, f64::INFINITY),
+            format!(
+                "adaptive steps, at least {} per period of {} s",
+                limits::ADAPTIVE_STEPS_PER_PERIOD,
+                pendula::error::Short(period)
+            ),
+        ),
+    };
+    let crossings = count as f64 * (t_end / period).max(1.0);
+    limits::check(
+        "poincare",
+        args.common.allow_large,
+        &[
+            Estimate::new(
+                Cost::Steps,
+                count as f64 * steps,
+                format!("{count} orbits x {} {how}", limits::round(steps)),
+            ),
+            // About one crossing per period, and its CSV row, kept until written.
+            Estimate::new(
+                Cost::Output,
+                crossings * 6.0 * limits::CSV_BYTES_PER_VALUE,
+                format!("about {} crossings", limits::round(crossings)),
+            ),
+        ],
+    )?;
     let spec = PoincareSpec { energy, count, section, value, t_end };
+    // The outputs before the work: a path that cannot be written fails first.
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
+    let summary = Summary::open(args.common.summary.as_deref())?;
     let orbits = poincare(&*model, method, stepping, &spec)?;
 
     let other = 1 - section;
@@ -140,8 +178,6 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     if total == 0 {
         bail!("no orbit crossed the section in {t_end} s: raise --t-end or change --energy");
     }
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
     let p_section = format!("p{}", &name[5..]);
     out.csv("poincare.csv", &["orbit", "t", q_name, &p_name, name, &p_section], &rows)?;
     out.figure("poincare", &fig)?;
@@ -152,13 +188,16 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
         with_unit(t_end, info.time_unit()),
         with_unit(format!("{worst_energy:.2e}"), info.energy_unit())
     );
-    summary.write(&json!({
-        "system": system, "method": method.name, "energy": energy, "count": count,
-        "section": {"name": name, "value": value, "direction": "rising"},
-        "t_end": t_end, "crossings": total,
-        "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
-        "max_energy_error": worst_energy,
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "system": system, "method": method.name, "energy": energy, "count": count,
+            "section": {"name": name, "value": value, "direction": "rising"},
+            "t_end": t_end, "crossings": total,
+            "crossings_per_orbit": orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>(),
+            "max_energy_error": worst_energy,
+        }),
+    )?;
     Ok(())
 }

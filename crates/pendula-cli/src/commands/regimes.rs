@@ -11,6 +11,8 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, palette};
 use serde_json::json;
 
+use pendula::error::Short;
+
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
@@ -45,7 +47,56 @@ fn oscillator(set: &[String], extra: &[String]) -> Result<(pendula::system::Valu
     Ok((values, o))
 }
 
+/// The fastest natural frequency the study's fixed RK4 step resolves, rad/s: at ω₀ H = 0.1
+/// the fastest drive (3 ω₀) still gets 20 steps a period, and RK4's error stays below
+/// 10⁻⁶ of the amplitude; beyond it the simulated curves stop meaning anything (at ω₀ H ≈ 2.8
+/// RK4 is not even stable).
+const MAX_NATURAL_FREQUENCY: f64 = 0.1 / H;
+
+/// Checks that the study means something for these parameters: ω₀ = √(k/m) resolved by the
+/// step, and the runs (each waits 25 e-folds of its transient, 500/ω₀ s at ζ = 0.05) within
+/// the limits.
+fn check(args: &RegimesArgs) -> Result<()> {
+    crate::config::refuse_settings(
+        &args.common.set,
+        &["x", "v", "c", "drive_amplitude", "drive_frequency"],
+        "oscillator-regimes sets the start, the damping and the drive itself; set k and m only",
+    )?;
+    let (_, o) = oscillator(&args.common.set, &[])?;
+    let w0 = o.natural_frequency();
+    if w0 > MAX_NATURAL_FREQUENCY {
+        anyhow::bail!(
+            "oscillator-regimes: w0 = sqrt(k/m) = {} rad/s (k = {} N/m, m = {} kg) is too fast for the study's fixed RK4 step of {H} s, which resolves up to {MAX_NATURAL_FREQUENCY} rad/s: its simulated curves would be meaningless; lower k or raise m",
+            Short(w0),
+            Short(o.k),
+            Short(o.m)
+        );
+    }
+    let ratios: Vec<f64> = (1..=15).map(|k| 0.2 * k as f64).collect();
+    let transient = |zeta: f64| 25.0 / (zeta * w0);
+    let window = |ratio: f64| 10.0 * std::f64::consts::TAU / (ratio * w0);
+    let mut steps: f64 = REGIMES.iter().map(|_| 3.0 * std::f64::consts::TAU / w0 / H).sum();
+    for zeta in RESONANCE {
+        steps += ratios.iter().map(|r| (transient(zeta) + window(*r)) / H).sum::<f64>();
+        steps += (transient(zeta) + window(1.0)) / H;
+    }
+    crate::limits::check(
+        "oscillator-regimes",
+        args.common.allow_large,
+        &[crate::limits::Estimate::new(
+            crate::limits::Cost::Steps,
+            steps,
+            format!(
+                "{} runs at w0 = {} rad/s, each past 25 e-folds of its transient",
+                3 + 16 * RESONANCE.len(),
+                Short(w0)
+            ),
+        )],
+    )
+}
+
 pub fn run(args: &RegimesArgs) -> Result<()> {
+    check(args)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "oscillator-regimes")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
     let (transients, transient_rows) = transients(&args.common.set)?;
@@ -93,16 +144,19 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
     for (name, fig) in resonance_figures(&points) {
         out.figure(name, &fig)?;
     }
-    summary.write(&json!({
-        "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4",
-        "resonance_peaks": RESONANCE.iter().zip(&peaks).map(|(&zeta, p)| json!({
-            "zeta": zeta,
-            "drive_ratio": p.as_ref().map(|p| p.ratio),
-            "amplitude_exact": p.as_ref().map(|p| p.amplitude_exact),
-            "amplitude_simulated": p.as_ref().map(|p| p.amplitude_simulated),
-        })).collect::<Vec<_>>(),
-    }))?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(
+        summary,
+        &json!({
+            "max_rel_amplitude_error": worst_amp, "max_phase_error": worst_phase, "dt": H, "method": "rk4",
+            "resonance_peaks": RESONANCE.iter().zip(&peaks).map(|(&zeta, p)| json!({
+                "zeta": zeta,
+                "drive_ratio": p.as_ref().map(|p| p.ratio),
+                "amplitude_exact": p.as_ref().map(|p| p.amplitude_exact),
+                "amplitude_simulated": p.as_ref().map(|p| p.amplitude_simulated),
+            })).collect::<Vec<_>>(),
+        }),
+    )?;
     Ok(())
 }
 
@@ -188,11 +242,12 @@ fn point(set: &[String], zeta: f64, ratio: f64) -> Result<ResonancePoint> {
     // Transients decay as e^{−ζ ω₀ t}: wait 25 e-folds, then fit 10 drive periods.
     let transient = 25.0 / (zeta * w0);
     let window = 10.0 * std::f64::consts::TAU / w;
-    let mut rec = Recorder::default();
+    // The fit's sums are kept, not the run: a slow oscillator waits millions of steps.
+    let mut fit = HarmonicFit { w, from: transient, sums: [0.0; 5] };
     let model = values.build();
     let spec = RunSpec { t0: 0.0, h: H, end: End::Time(transient + window) };
-    model.solve(&RK4, values.initial_state(), &spec, &mut rec)?;
-    let (a, b) = fit_harmonic(rec.rows.chunks(3).filter(|r| r[0] >= transient).map(|r| (r[0], r[1])), w);
+    model.solve(&RK4, values.initial_state(), &spec, &mut fit)?;
+    let (a, b) = fit.solve();
     let scale = o.drive_amplitude / o.k;
     Ok(ResonancePoint {
         zeta,
@@ -204,19 +259,34 @@ fn point(set: &[String], zeta: f64, ratio: f64) -> Result<ResonancePoint> {
     })
 }
 
-/// Least-squares (a, b) in x(t) ≈ a cos(ω t) + b sin(ω t).
-fn fit_harmonic(samples: impl Iterator<Item = (f64, f64)>, w: f64) -> (f64, f64) {
-    let (mut cc, mut ss, mut cs, mut xc, mut xs) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (t, x) in samples {
-        let (s, c) = (w * t).sin_cos();
-        cc += c * c;
-        ss += s * s;
-        cs += c * s;
-        xc += x * c;
-        xs += x * s;
+/// Least-squares (a, b) in x(t) ≈ a cos(ω t) + b sin(ω t) over the samples from t = `from`
+/// on, accumulated as they come.
+struct HarmonicFit {
+    w: f64,
+    from: f64,
+    /// Σ cos², Σ sin², Σ cos sin, Σ x cos, Σ x sin.
+    sums: [f64; 5],
+}
+
+impl pendula::observe::Observer for HarmonicFit {
+    fn observe(&mut self, sample: &pendula::observe::Sample<'_>) -> std::ops::ControlFlow<()> {
+        if sample.t >= self.from {
+            let (s, c) = (self.w * sample.t).sin_cos();
+            let x = sample.y[0];
+            for (sum, v) in self.sums.iter_mut().zip([c * c, s * s, c * s, x * c, x * s]) {
+                *sum += v;
+            }
+        }
+        std::ops::ControlFlow::Continue(())
     }
-    let det = cc * ss - cs * cs;
-    ((xc * ss - xs * cs) / det, (xs * cc - xc * cs) / det)
+}
+
+impl HarmonicFit {
+    fn solve(&self) -> (f64, f64) {
+        let [cc, ss, cs, xc, xs] = self.sums;
+        let det = cc * ss - cs * cs;
+        ((xc * ss - xs * cs) / det, (xs * cc - xc * cs) / det)
+    }
 }
 
 /// Amplitude and phase curves: exact lines, simulated markers, one colour per ζ.

@@ -273,7 +273,8 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
     let (mut bounded, mut growing, mut failed) = (Vec::new(), Vec::new(), Vec::new());
     let mut rows = Vec::new();
     for (name, m) in methods {
-        let growth = m["growth"].as_str().unwrap_or("-");
+        // A failed run has no growth: its status (`failed`, `refused`) is shown instead.
+        let growth = m["growth"].as_str().or(m["status"].as_str()).unwrap_or("-");
         match growth {
             "bounded" => bounded.push(name.clone()),
             "growing" => growing.push(name.clone()),
@@ -282,7 +283,7 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
         rows.push(vec![
             name.clone(),
             short(f(&m["dt"])),
-            m["cost_evals"].to_string(),
+            m["cost_evals"].as_u64().map_or_else(|| "-".to_owned(), |c| c.to_string()),
             short(f(&m["max_rel_energy_error"])),
             short(f(&m["drift_rate"])),
             growth.to_owned(),
@@ -561,7 +562,8 @@ fn build(page: &mut Page) -> Result<()> {
 
 /// Regenerates the README gallery into `dir`.
 fn gallery(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create --gallery {}", dir.display()))?;
+    let created = crate::output::CreatedDirs::create(dir, "--gallery")?;
+    crate::output::probe(dir, "--gallery")?;
     let work = tempfile::tempdir()?;
     let _quiet = Quiet::on();
     let mut done: Vec<&str> = Vec::new();
@@ -577,9 +579,10 @@ fn gallery(dir: &Path) -> Result<()> {
         }
         let bytes = std::fs::read(&from)?;
         let file = crate::output::AtomicFile::create(&dir.join(entry.name), "--gallery")?;
-        std::io::Write::write_all(&mut file.handle()?, &bytes)?;
+        file.write_all(&bytes)?;
         file.commit()?;
     }
+    created.keep();
     drop(_quiet);
     println!("gallery: {} pictures in {}", GALLERY.len(), dir.display());
     Ok(())

@@ -20,6 +20,11 @@ pub struct ResumeArgs {
     /// Write the JSON summary here instead of where the run would have (`-`: on stdout).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    /// Run even where the saved arguments are over this machine's limits (more threads than
+    /// its cores, say); the run was checked against them where it started. The saved
+    /// arguments' own --allow-large holds without it.
+    #[arg(long)]
+    pub allow_large: bool,
 }
 
 pub fn run(args: &ResumeArgs) -> Result<()> {
@@ -39,6 +44,7 @@ pub fn run(args: &ResumeArgs) -> Result<()> {
             let mut a: crate::cli::SimulateArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
             a.summary = summary.or(a.summary);
+            a.allow_large |= args.allow_large;
             let resumed = crate::run_state::Resumed::load(checkpoint)?;
             crate::simulate::execute(&a, Some(resumed))
         }
@@ -46,12 +52,14 @@ pub fn run(args: &ResumeArgs) -> Result<()> {
             let mut a: super::sweep::SweepArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
             a.summary = summary.or(a.summary);
+            a.allow_large |= args.allow_large;
             super::sweep::execute(&a, Some(checkpoint))
         }
         "fractal" => {
             let mut a: super::fractal::FractalArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
             a.summary = summary.or(a.summary);
+            a.allow_large |= args.allow_large;
             super::fractal::execute(&a, Some(checkpoint))
         }
         other => bail!(

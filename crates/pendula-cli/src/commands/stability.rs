@@ -6,7 +6,8 @@ use pendula::analysis::{StabilityCriterion, largest_stable_step};
 use pendula_viz::{Bar, Bars, Figure, Scale, axis_label, method_color, with_unit};
 use serde_json::json;
 
-use crate::config::f64_arg;
+use crate::config::{f64_arg, positive_arg};
+use crate::limits::{self, Cost, Estimate};
 use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
@@ -30,14 +31,31 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let system = args.system.as_deref().unwrap_or("pendulum");
     let values = study::values(system, &args.common.set)?;
     let t_end = f64_arg("--t-end", args.t_end.as_deref(), 20.0, "a time in seconds")?;
-    let bound = f64_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
-    if !(bound.is_finite() && bound > 0.0) {
-        anyhow::bail!("invalid --max-energy-error {bound}: must be finite and > 0");
-    }
+    let bound =
+        positive_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
     crate::config::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    // What it costs, at most: per method, the bisection's runs (both ends of the range, then
+    // halvings of log h to 1%), each as long as a run at the smallest step.
+    let runs = 2.0 + ((H_RANGE.1 / H_RANGE.0).ln() / 1.01f64.ln()).log2().ceil();
+    let per_run = limits::steps(t_end, H_RANGE.0);
+    limits::check(
+        "stability",
+        args.common.allow_large,
+        &[Estimate::new(
+            Cost::Steps,
+            methods.len() as f64 * runs * per_run,
+            format!(
+                "{} methods x {runs} runs of up to {} steps (h down to {} s over {} s)",
+                methods.len(),
+                limits::round(per_run),
+                H_RANGE.0,
+                pendula::error::Short(t_end)
+            ),
+        )],
+    )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "stability")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
     let criterion = StabilityCriterion { t_end, max_rel_energy_error: bound };
@@ -72,10 +90,10 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
         results.iter().map(|(m, h)| ((*m).to_owned(), json!(h))).collect();
     let note_map: serde_json::Map<String, serde_json::Value> =
         results.iter().zip(&notes).map(|((m, _), n)| ((*m).to_owned(), json!(n))).collect();
-    summary.write(
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary,
         &json!({ "system": system, "criterion": { "t_end": t_end, "max_rel_energy_error": bound }, "largest_stable_dt": map, "notes": note_map }),
     )?;
-    out.finish()?;
     Ok(())
 }
 

@@ -23,7 +23,8 @@ use serde_json::json;
 
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
-use crate::config::{f64_arg, parse_number, parse_settings, parse_value};
+use crate::config::{clip, f64_arg, parse_count, parse_settings, parse_value};
+use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
@@ -44,7 +45,8 @@ pub struct SweepArgs {
     /// Step size, s [default: 0.01].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// Number of steps.
+    /// Number of steps, 1 to 10^13 (the sweep's cells x steps at most 10^13 on the SIMD
+    /// engine, 10^11 on the scalar path, without --allow-large).
     #[arg(long, value_name = "N", conflicts_with = "t_end")]
     pub steps: Option<String>,
     /// End time, s [default: 10].
@@ -58,7 +60,7 @@ pub struct SweepArgs {
     /// `energy-error` (E_end − E_0, J) [default: final].
     #[arg(long, value_name = "LIST")]
     pub record: Option<String>,
-    /// Worker threads [default: all cores].
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<String>,
     /// Compute only shard K of N (K = 1 … N): a contiguous slice of the cells, written with a
@@ -76,6 +78,8 @@ pub struct SweepArgs {
     /// chunks missing; both files are removed when the sweep ends.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }
 
 /// One axis of the grid.
@@ -141,8 +145,9 @@ impl Sweep {
     /// Cells [start, end) of this shard: N contiguous slices as equal as possible.
     fn range(&self) -> (usize, usize) {
         let (k, n) = self.shard;
-        let cells = self.cells();
-        ((k - 1) * cells / n, k * cells / n)
+        // In u128: k × cells overflows usize for large grids cut in many shards.
+        let (k, n, cells) = (k as u128, n as u128, self.cells() as u128);
+        (((k - 1) * cells / n) as usize, (k * cells / n) as usize)
     }
 
     /// A digest of everything that determines the full array, so that `merge` refuses
@@ -179,19 +184,19 @@ pub(crate) fn grid_example(info: &SystemInfo) -> String {
 /// Parses an axis `NAME=LO:HI:N` given to `flag` (`--grid`, or bifurcation's `--param`);
 /// `example` shows the form in the error.
 pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, text: &str) -> Result<Axis> {
-    let bad = || anyhow!("invalid {flag} `{text}`: expected NAME=LO:HI:N, e.g. {example}");
+    let bad = || anyhow!("invalid {flag} `{}`: expected NAME=LO:HI:N, e.g. {example}", clip(text));
     let (name, range) = text.split_once('=').ok_or_else(bad)?;
     let name = name.trim();
     let q = info.quantity(name)?;
     let parts: Vec<&str> = range.split(':').collect();
     let [lo, hi, n] = parts[..] else { return Err(bad()) };
     let (lo, hi) = (parse_value(name, lo, Some(q))?, parse_value(name, hi, Some(q))?);
-    let n: usize = parse_number(flag, n, "a whole number of cells >= 1")?;
+    let n = parse_count(flag, n, 0, limits::MAX_AXIS_CELLS, "cells")? as usize;
     if n == 0 {
-        bail!("invalid {flag} `{text}`: the number of cells must be >= 1");
+        bail!("invalid {flag} `{}`: the number of cells must be >= 1", clip(text));
     }
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        bail!("invalid {flag} `{text}`: need finite LO < HI (got {} and {})", Short(lo), Short(hi));
+        bail!("invalid {flag} `{}`: need finite LO < HI (got {} and {})", clip(text), Short(lo), Short(hi));
     }
     Ok(Axis { name: name.to_owned(), lo, hi, n })
 }
@@ -224,18 +229,34 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             bail!("invalid --grid: `{}` is given twice", a.name);
         }
     }
+    refuse_set_and_swept(&args.set, &args.grids, &axes, "--grid")?;
+    // The cell count must be a number the sweep can index (its work and bytes are checked
+    // below): 10^15 cells are 8 PB of results.
+    let cells: f64 = axes.iter().map(|a| a.n as f64).product();
+    if cells > 1e15 {
+        bail!(
+            "sweep: the grid has {} cells ({}), more than any machine can hold; use fewer cells",
+            limits::round(cells),
+            axes.iter().map(|a| a.n.to_string()).collect::<Vec<_>>().join(" x ")
+        );
+    }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
     if matches!(method.scheme, integrator::Scheme::Embedded(_)) {
         bail!("sweep takes fixed steps: {} runs here as a fixed-step method only with --dt", method.name);
     }
     let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
     let end = match &args.steps {
-        Some(text) => End::Steps(parse_number("--steps", text, "a whole number of steps >= 1")?),
+        Some(text) => End::Steps(parse_count("--steps", text, 1, limits::MAX_STEPS, "steps")?),
         None => End::Time(f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?),
     };
-    let schedule = RunSpec { t0: 0.0, h, end }.schedule()?;
+    let end_flag = if args.steps.is_some() { "--steps" } else { "--t-end" };
+    let schedule = crate::config::schedule(&RunSpec { t0: 0.0, h, end }, "--dt", end_flag)?;
     if schedule.last_h != h {
-        bail!("invalid --t-end {}: it must be a whole number of steps of --dt {h}", schedule.t_end);
+        bail!(
+            "invalid --t-end {}: it must be a whole number of steps of --dt {}",
+            Short(schedule.t_end),
+            Short(h)
+        );
     }
     let until_flip = match args.until.as_deref() {
         None => false,
@@ -292,14 +313,41 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
     // domains are intervals): check both corners now, before any work.
     sweep.values(0)?;
     sweep.values(sweep.cells() - 1)?;
+    // What it costs, before any of it: the steps of every cell of this shard, and the array
+    // (held whole in memory, then written).
+    let (start, end) = sweep.range();
+    let cells = (end - start) as f64;
+    let bytes = cells * sweep.columns.len() as f64 * 8.0;
+    let how = format!("{} cells x {} bytes", limits::round(cells), sweep.columns.len() * 8);
+    limits::check(
+        "sweep",
+        args.allow_large,
+        &[
+            Estimate::new(
+                if lanes(&sweep) { Cost::LaneSteps } else { Cost::Steps },
+                cells * sweep.steps as f64,
+                format!("{} cells x {} steps", limits::round(cells), limits::round(sweep.steps as f64)),
+            ),
+            Estimate::new(Cost::Output, bytes, how.clone()),
+            Estimate::new(Cost::Memory, bytes, how),
+        ],
+    )?;
     // A method that needs what the system lacks is refused now, on one step of one cell.
     let probe = sweep.values(0)?;
-    probe.build().solve(
-        method,
-        probe.initial_state(),
-        &RunSpec { t0: 0.0, h, end: End::Steps(1) },
-        &mut pendula::observe::Ignore,
-    )?;
+    probe
+        .build()
+        .solve(
+            method,
+            probe.initial_state(),
+            &RunSpec { t0: 0.0, h, end: End::Steps(1) },
+            &mut pendula::observe::Ignore,
+        )
+        // A numerical failure in that step is the first cell's, and named so (exit 1).
+        .map_err(|e| {
+            let numerical = crate::study::numerical(&e);
+            let e = anyhow::Error::new(e);
+            if numerical { e.context("cell 0 of the sweep") } else { e }
+        })?;
     Ok(sweep)
 }
 
@@ -345,8 +393,11 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 /// Runs a sweep from the start, or `resumed` from its checkpoint (`pendula resume`).
 pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<()> {
     let sweep = parse(args)?;
-    let threads = crate::config::parse_threads(args.threads.as_deref())?;
+    let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
+    if out_path == Path::new("-") {
+        bail!("invalid --out -: sweep writes a .npy file, not stdout; give FILE.npy");
+    }
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
     }
@@ -365,20 +416,23 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let side_file =
         if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
     let summary = crate::study::Summary::open(args.summary.as_deref())?;
+    if let Some(c) = &checkpoint {
+        Chunks::claim(c)?;
+    }
 
     let (start, end) = sweep.range();
     let cols = sweep.columns.len();
-    let mut data = vec![0.0_f64; (end - start) * cols];
+    // Its size was checked against the limits (or allowed); a failed allocation is an error,
+    // not an abort.
+    let mut data = Vec::new();
+    data.try_reserve_exact((end - start) * cols).map_err(|_| {
+        anyhow!("cannot allocate {} for the sweep's array", limits::bytes(((end - start) * cols * 8) as f64))
+    })?;
+    data.resize((end - start) * cols, 0.0_f64);
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    // The lane kernels implement the free double pendulum: any damping or drive, in the base
-    // values or along an axis, takes the scalar path.
-    let forcing = ["damping", "drive_amplitude"];
-    let forced = sweep.info.name == "double"
-        && (forcing.iter().any(|n| sweep.info.values(&sweep.base).is_ok_and(|v| v.get(n) != 0.0))
-            || sweep.axes.iter().any(|a| forcing.contains(&a.name.as_str())));
-    let simd = sweep.info.name == "double" && batch_method(sweep.method).is_some() && !forced;
+    let simd = lanes(&sweep);
     let progress = Progress::new((end - start) as u64);
     let compute = |cells: std::ops::Range<usize>, data: &mut [f64]| {
         pool.install(|| {
@@ -430,9 +484,9 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     if sharded {
         shape = vec![end - start, cols];
     }
-    write_npy(&out_file, &shape, &data)?;
+    let written = write_npy(&out_file, &shape, &data)?;
     let description = json!({
-        "pendula_sweep": 1,
+        "pendula_sweep": SHARD_FORMAT,
         "system": sweep.info.name,
         "method": sweep.method.name,
         "dt": sweep.h,
@@ -445,6 +499,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         "offset": start,
         "count": end - start,
         "fingerprint": sweep.fingerprint(),
+        "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
         "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per cell" },
         "threads": threads,
         "wall_s": wall_s,
@@ -454,10 +509,9 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         write_json(&f, &description)?;
         files.push(f);
     }
-    // The array and its shard description appear together or not at all, and a finished
-    // sweep's checkpoint goes in the same step.
-    AtomicFile::commit_with(files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
-    summary.write(&description)?;
+    // The array, its shard description and the summary appear together or not at all, and
+    // a finished sweep's checkpoint goes in the same step.
+    summary.write_then(&description, files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
         sweep.info.name,
@@ -474,6 +528,39 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         shape,
         if sharded { format!(" and {}", side_path.display()) } else { String::new() },
     );
+    Ok(())
+}
+
+/// Whether the sweep runs on the ensemble engine's lanes. They implement the free double
+/// pendulum: any damping or drive, in the base values or along an axis, takes the scalar
+/// path.
+fn lanes(sweep: &Sweep) -> bool {
+    let forcing = ["damping", "drive_amplitude"];
+    let forced = sweep.info.name == "double"
+        && (forcing.iter().any(|n| sweep.info.values(&sweep.base).is_ok_and(|v| v.get(n) != 0.0))
+            || sweep.axes.iter().any(|a| forcing.contains(&a.name.as_str())));
+    sweep.info.name == "double" && batch_method(sweep.method).is_some() && !forced
+}
+
+/// Refuses a quantity both set (`--set NAME=…`) and swept (`flag NAME=…`), naming both: the
+/// axis would override the setting without a word.
+pub(crate) fn refuse_set_and_swept(
+    set: &[String],
+    swept: &[String],
+    axes: &[Axis],
+    flag: &str,
+) -> Result<()> {
+    for (axis, text) in axes.iter().zip(swept) {
+        if let Some(item) = set.iter().find(|i| i.split_once('=').is_some_and(|(n, _)| n.trim() == axis.name))
+        {
+            bail!(
+                "`{}` is both set and swept: --set {} and {flag} {}; give one",
+                axis.name,
+                clip(item),
+                clip(text)
+            );
+        }
+    }
     Ok(())
 }
 
@@ -609,19 +696,67 @@ fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress
     })
 }
 
+/// The format of a shard's description (FILE.npy.json), in `pendula_sweep`. Format 2 added
+/// `data` (the .npy file's length and CRC-32, which `merge` checks); readers ignore keys they
+/// do not know, so adding one needs no new format, and changing one does.
+pub const SHARD_FORMAT: u64 = 2;
+
+/// What [`write_npy`] wrote: the file's length and CRC-32.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Written {
+    pub bytes: u64,
+    pub crc32: u32,
+}
+
+/// A writer that counts and checksums what passes through it.
+struct Checksummed<W> {
+    inner: W,
+    crc: crc32fast::Hasher,
+    bytes: u64,
+}
+
+impl<W: std::io::Write> std::io::Write for Checksummed<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The length and CRC-32 of what `reader` holds, read to its end.
+pub(crate) fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
+    let mut sink = Checksummed { inner: std::io::sink(), crc: crc32fast::Hasher::new(), bytes: 0 };
+    std::io::copy(&mut reader, &mut sink)?;
+    Ok(Written { bytes: sink.bytes, crc32: sink.crc.finalize() })
+}
+
+/// Writes `data` as a .npy array of `shape` into `file`; its length and checksum.
 pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
     file: &AtomicFile,
     shape: &[usize],
     data: &[T],
-) -> Result<()> {
+) -> Result<Written> {
     use ndarray_npy::WriteNpyExt;
     use std::io::Write;
     let array =
         ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
-    let mut w = std::io::BufWriter::new(file.handle()?);
-    array.write_npy(&mut w)?;
+    let mut w = Checksummed {
+        inner: std::io::BufWriter::new(file.handle()?),
+        crc: crc32fast::Hasher::new(),
+        bytes: 0,
+    };
+    array.write_npy(&mut w).map_err(|e| match e {
+        // The file's own error, which names it.
+        ndarray_npy::WriteNpyError::Io(io) => anyhow::Error::new(io),
+        other => anyhow::Error::new(other),
+    })?;
     w.flush()?;
-    Ok(())
+    Ok(Written { bytes: w.bytes, crc32: w.crc.finalize() })
 }
 
 pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {

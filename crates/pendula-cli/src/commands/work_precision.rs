@@ -9,7 +9,7 @@ use pendula_viz::{Figure, Kind, Scale, method_style, with_unit};
 use serde_json::json;
 
 use crate::commands::compare::refusal;
-use crate::config::f64_arg;
+use crate::config::{f64_arg, parse_count};
 use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
 use pendula::integrator::Scheme;
 
@@ -25,26 +25,39 @@ pub struct WorkPrecisionArgs {
     /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853) [default: 1e-3].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_max: Option<String>,
-    /// Tightest tolerance for the adaptive methods [default: 1e-12].
+    /// Tightest tolerance for the adaptive methods, at least 1e-15 (round-off) [default:
+    /// 1e-12].
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_min: Option<String>,
-    /// Number of tolerances, geometrically spaced [default: 10].
+    /// Number of tolerances, geometrically spaced, 2 to 30 [default: 10].
     #[arg(long, value_name = "N")]
-    pub tol_levels: Option<usize>,
+    pub tol_levels: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
 
 /// The tolerances, loosest first, validated.
 fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
-    let levels = args.tol_levels.unwrap_or(10);
-    if levels < 2 {
-        bail!("invalid --tol-levels {levels}: need at least 2 tolerances");
-    }
+    let levels = match &args.tol_levels {
+        Some(text) => parse_count("--tol-levels", text, 2, crate::limits::MAX_LEVELS, "tolerances")? as usize,
+        None => 10,
+    };
     let hi = f64_arg("--tol-max", args.tol_max.as_deref(), 1e-3, "a tolerance in (0, 1)")?;
     let lo = f64_arg("--tol-min", args.tol_min.as_deref(), 1e-12, "a tolerance in (0, 1)")?;
     if !(lo > 0.0 && lo < hi && hi < 1.0) {
-        bail!("invalid tolerance range --tol-min {lo} --tol-max {hi}: need 0 < tol-min < tol-max < 1");
+        bail!(
+            "invalid tolerance range --tol-min {} --tol-max {}: need 0 < tol-min < tol-max < 1",
+            short(lo),
+            short(hi)
+        );
+    }
+    // Below round-off no step meets the tolerance (the library's bound on rtol).
+    if lo < pendula::control::MIN_RTOL {
+        bail!(
+            "invalid --tol-min {}: must be at least {:e}; a smaller tolerance is below round-off",
+            short(lo),
+            pendula::control::MIN_RTOL
+        );
     }
     // The ends exactly as given; the levels between them geometric.
     Ok((0..levels)
@@ -60,13 +73,47 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let tols = tolerances(args)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    // Fixed-step methods run their steps; the adaptive ones are estimated per tolerance.
+    let period = crate::limits::motion_period(&*model, values.initial_state());
+    let runs: f64 = methods
+        .iter()
+        .map(|m| match m.scheme {
+            Scheme::Embedded(_) => {
+                tols.len() as f64 * crate::limits::adaptive_steps(t_end, period, f64::INFINITY)
+            }
+            _ => crate::commands::convergence::steps_for(&values, m, &ladder, t_end)
+                .iter()
+                .map(|h| crate::limits::steps(t_end, *h))
+                .sum(),
+        })
+        .sum();
+    let any = methods.iter().any(|m| {
+        matches!(m.scheme, Scheme::Embedded(_))
+            || !crate::commands::convergence::steps_for(&values, m, &ladder, t_end).is_empty()
+    });
+    if !any {
+        bail!(
+            "work-precision: no step of the methods' default ladders fits --t-end {} within their cost caps (at most 2e6 steps a run); give a shorter --t-end, or the steps (--dt-min, --dt-max, --levels)",
+            short(t_end)
+        );
+    }
+    study::check_study(
+        "work-precision",
+        args.common.allow_large,
+        &values,
+        t_end,
+        runs,
+        format!("the runs of {} methods to t = {} s", methods.len(), short(t_end)),
+    )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
     let summary = Summary::open(args.common.summary.as_deref())?;
-    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)?;
+    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
+        .map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "work-precision");
     let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
     // Per method: why some runs are missing (the library's reason), if any are.
     let mut notes: Vec<Option<String>> = Vec::new();
+    let mut first_failure = None;
     for method in &methods {
         let y0 = values.initial_state();
         let (mut points, mut note) = (Vec::new(), None);
@@ -89,6 +136,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             match point {
                 Ok(p) => points.extend(p),
                 Err(e) => {
+                    first_failure.get_or_insert_with(|| e.clone());
                     let what = if adaptive { "tol" } else { "h" };
                     note = Some(format!("at {what} = {}: {}", short(x), refusal(e.into())?));
                 }
@@ -99,6 +147,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    study::all_failed("work-precision", results.iter().any(|(_, p)| !p.is_empty()), first_failure)?;
 
     let mut rows = Vec::new();
     for (m, points) in &results {
@@ -180,7 +229,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             "dt": p.h, "tol": p.tol, "error": p.error, "rhs_evals": p.rhs_evals, "wall_s": p.wall_s
         })).collect::<Vec<_>>()))).collect::<serde_json::Map<_, _>>(),
     });
-    summary.write(&doc)?;
-    out.finish()?;
+    // The summary and the files appear together or not at all.
+    out.finish_with(summary, &doc)?;
     Ok(())
 }

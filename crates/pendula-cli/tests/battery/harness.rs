@@ -16,6 +16,11 @@ pub const TIME_LIMIT: Duration = Duration::from_secs(5);
 pub const MEMORY_LIMIT_KB: u64 = 200 * 1024;
 
 type DirFn = Box<dyn Fn(&Path) + Send + Sync>;
+type BytesFn = Box<dyn Fn(&[u8]) + Send + Sync>;
+
+/// What the runner writes into a FIFO it reads once the case has exited, so that it knows
+/// it has read everything the case wrote.
+const FIFO_END: &[u8] = b"\n--end of the battery's FIFO--\n";
 
 /// One request and what must come of it.
 pub struct Case {
@@ -26,9 +31,16 @@ pub struct Case {
     pub exit: i32,
     pub says: Vec<String>,
     /// Files (relative paths) the run may create or change; everything else must be as the
-    /// setup left it.
+    /// setup left it. A path ending in `/` stands for everything under it.
     pub creates: Vec<String>,
     pub after: Option<DirFn>,
+    /// FIFOs (relative paths, made by the setup) the runner reads while the case runs, and
+    /// the check of what the case wrote into each.
+    pub fifos: Vec<(String, BytesFn)>,
+    /// Whether the case needs root (mknod); without it the case is skipped, and says so.
+    pub root: bool,
+    /// The most bytes stderr may hold (a message must not echo megabytes of input).
+    pub max_stderr: Option<usize>,
 }
 
 impl Case {
@@ -43,6 +55,9 @@ impl Case {
             says: Vec::new(),
             creates: Vec::new(),
             after: None,
+            fifos: Vec::new(),
+            root: false,
+            max_stderr: None,
         }
     }
 
@@ -82,6 +97,25 @@ impl Case {
         self
     }
 
+    /// Reads the FIFO `path` (made by the setup) while the case runs, as a reader would, and
+    /// checks what the case wrote into it.
+    pub fn reads_fifo(mut self, path: &str, check: impl Fn(&[u8]) + Send + Sync + 'static) -> Self {
+        self.fifos.push((path.to_owned(), Box::new(check)));
+        self
+    }
+
+    /// The case needs root (its setup makes device nodes with mknod); it is skipped otherwise.
+    pub fn needs_root(mut self) -> Self {
+        self.root = true;
+        self
+    }
+
+    /// At most `bytes` on stderr.
+    pub fn brief(mut self, bytes: usize) -> Self {
+        self.max_stderr = Some(bytes);
+        self
+    }
+
     /// Bytes on stdin.
     pub fn stdin(mut self, bytes: impl Into<Vec<u8>>) -> Self {
         self.stdin = Some(bytes.into());
@@ -114,6 +148,22 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     out
 }
 
+/// A failed check's message.
+fn panic_text(e: &(dyn std::any::Any + Send)) -> String {
+    e.downcast_ref::<String>()
+        .cloned()
+        .or_else(|| e.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+        .unwrap_or_default()
+}
+
+/// Whether `creates` (a path, or a directory ending in `/`) allows `path`.
+fn created(creates: &str, path: &Path) -> bool {
+    match creates.strip_suffix('/') {
+        Some(dir) => path.starts_with(dir),
+        None => Path::new(creates) == path,
+    }
+}
+
 /// Peak resident memory of a running process, kB (0 once it is gone).
 fn peak_kb(pid: u32) -> u64 {
     std::fs::read_to_string(format!("/proc/{pid}/status"))
@@ -126,13 +176,62 @@ fn peak_kb(pid: u32) -> u64 {
         .unwrap_or(0)
 }
 
+/// Whether the tests run as root (`id -u` is 0): unsafe code, which geteuid needs, is denied.
+pub fn is_root() -> bool {
+    static ROOT: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ROOT.get_or_init(|| {
+        Command::new("id").arg("-u").output().is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+    })
+}
+
+/// A reader of a FIFO: opened read-write, so that neither the case's open nor this one
+/// blocks, and drained on a thread until the end marker that [`FifoReader::finish`] writes.
+struct FifoReader {
+    marker: std::fs::File,
+    thread: std::thread::JoinHandle<Vec<u8>>,
+}
+
+impl FifoReader {
+    fn open(path: &Path) -> Self {
+        let file = std::fs::OpenOptions::new().read(true).write(true).open(path).unwrap();
+        let marker = file.try_clone().unwrap();
+        let thread = std::thread::spawn(move || {
+            let mut file = file;
+            let mut got = Vec::new();
+            let mut buf = [0; 1 << 16];
+            while !got.ends_with(FIFO_END) {
+                match file.read(&mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => got.extend_from_slice(&buf[..n]),
+                }
+            }
+            got.truncate(got.len().saturating_sub(FIFO_END.len()));
+            got
+        });
+        FifoReader { marker, thread }
+    }
+
+    /// What the case wrote, once it has exited.
+    fn finish(mut self) -> Vec<u8> {
+        self.marker.write_all(FIFO_END).unwrap();
+        self.thread.join().unwrap()
+    }
+}
+
 /// Runs one case; the failure's description, or `None` when it passed.
 pub fn run_one(case: &Case) -> Option<String> {
+    if case.root && !is_root() {
+        // CI runs as root; a developer's run without it says what it left out.
+        eprintln!("skipped {} (needs root, for mknod)", case.name);
+        return None;
+    }
     let dir = tempfile::TempDir::new().unwrap();
     if let Some(setup) = &case.setup {
         setup(dir.path());
     }
     let before = snapshot(dir.path());
+    let readers: Vec<FifoReader> =
+        case.fifos.iter().map(|(p, _)| FifoReader::open(&dir.path().join(p))).collect();
     let mut child = Command::new(env!("CARGO_BIN_EXE_pendula"))
         .args(&case.args)
         .current_dir(dir.path())
@@ -175,6 +274,12 @@ pub fn run_one(case: &Case) -> Option<String> {
     let _stdout = out_thread.join().unwrap();
     let stderr = String::from_utf8_lossy(&err_thread.join().unwrap()).into_owned();
     let mut problems = Vec::new();
+    for (reader, (path, check)) in readers.into_iter().zip(&case.fifos) {
+        let got = reader.finish();
+        if let Err(e) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| check(&got))) {
+            problems.push(format!("FIFO {path}: check failed: {}", panic_text(&*e)));
+        }
+    }
     match status {
         None => problems.push(format!("still running after {TIME_LIMIT:?}")),
         Some(s) if s.code() != Some(case.exit) => {
@@ -190,12 +295,17 @@ pub fn run_one(case: &Case) -> Option<String> {
             problems.push(format!("stderr lacks {fragment:?}"));
         }
     }
+    if let Some(max) = case.max_stderr
+        && stderr.len() > max
+    {
+        problems.push(format!("stderr holds {} bytes, more than {max}", stderr.len()));
+    }
     if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
         problems.push("panicked".into());
     }
     let after = snapshot(dir.path());
     for (path, contents) in &after {
-        let allowed = case.creates.iter().any(|c| Path::new(c) == path);
+        let allowed = case.creates.iter().any(|c| created(c, path));
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         if name.starts_with(".pendula-") && name.ends_with(".part") {
             problems.push(format!("temporary file {} left", path.display()));
@@ -208,7 +318,7 @@ pub fn run_one(case: &Case) -> Option<String> {
         }
     }
     for path in before.keys() {
-        if !after.contains_key(path) && !case.creates.iter().any(|c| Path::new(c) == path) {
+        if !after.contains_key(path) && !case.creates.iter().any(|c| created(c, path)) {
             problems.push(format!("{} lost", path.display()));
         }
     }
@@ -216,7 +326,7 @@ pub fn run_one(case: &Case) -> Option<String> {
         && let Some(check) = &case.after
         && let Err(e) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| check(dir.path())))
     {
-        problems.push(format!("check failed: {e:?}"));
+        problems.push(format!("check failed: {}", panic_text(&*e)));
     }
     (!problems.is_empty()).then(|| {
         format!(

@@ -1,4 +1,7 @@
-//! Battery cases: ambiguous or out-of-range input (see main.rs).
+//! Battery cases: ambiguous or out-of-range input (see main.rs). A name given twice, a
+//! float beyond f64 (read as inf, a subnormal or 0), a huge integer, a mass of 1e300, an
+//! amplitude a command cannot mean: refused (exit 2) with the text as typed, the flag the
+//! user gave, and what is allowed.
 
 use crate::harness::Case;
 
@@ -7,6 +10,100 @@ pub fn cases() -> Vec<Case> {
     vec![
         Case::new("zero step", "simulate --dt 0").says("--dt"),
         Case::new("unknown system", "simulate pendulm").says("pendulum"),
+        // A name set twice, or set and swept.
+        Case::new("a name set twice", "simulate --set theta1=1 --set theta1=2")
+            .says("`theta1` is set twice")
+            .says("--set theta1=1")
+            .says("--set theta1=2"),
+        Case::new("a name set twice in a study", "compare --set m2=2 --set m2=3").says("set twice"),
+        Case::new("a name set twice in animate", "animate --set theta1=1 --set theta1=2").says("set twice"),
+        Case::new("set and swept in sweep", "sweep --set theta1=1 --grid theta1=0:1:4")
+            .says("both set and swept")
+            .says("--set theta1=1")
+            .says("--grid theta1=0:1:4"),
+        Case::new(
+            "set and swept in bifurcation",
+            "bifurcation --set drive_amplitude=1.2 --param drive_amplitude=1:1.5:10",
+        )
+        .says("both set and swept")
+        .says("--param drive_amplitude=1:1.5:10"),
+        Case::new("a fractal axis twice", "fractal --grid theta1=0:1:4 --grid theta1=0:1:8")
+            .says("given twice"),
+        Case::new("a method twice", "compare --methods rk4,verlet,rk4").says("rk4 is listed twice"),
+        Case::new("a method twice in convergence", "convergence --methods verlet,verlet")
+            .says("listed twice"),
+        Case::new("an event twice", "simulate --event flip --event flip").says("--event flip").says("twice"),
+        Case::new(
+            "a scenario value overridden by a flag is allowed",
+            "simulate --scenario s.toml --set theta1=1 --steps 1 --every 0",
+        )
+        .setup(|d| std::fs::write(d.join("s.toml"), "[set]\ntheta1 = \"30deg\"\n").unwrap())
+        .exit(0)
+        .says("double with rk4"),
+        // Floats beyond f64, as typed.
+        Case::new("a subnormal step", "simulate --dt=1e-320")
+            .says("`1e-320`")
+            .says("smallest normal")
+            .brief(300),
+        Case::new("a step that underflows to 0", "simulate --dt 1e-400").says("`1e-400`"),
+        Case::new("a step that overflows", "simulate --dt 1e400").says("`1e400`").says("largest float"),
+        Case::new("an end that overflows", "simulate --t-end 1e400").says("`1e400`").says("--t-end"),
+        Case::new("an angle that overflows", "simulate --set theta1=1e400").says("`1e400`").says("`theta1`"),
+        Case::new("a binding that overflows", "simulate --method tao-2 --binding 1e400").says("--binding"),
+        Case::new("an infinite atol", "simulate --method dopri5 --atol inf").says("`inf`").says("finite"),
+        Case::new("a NaN step", "animate --dt nan").says("NaN"),
+        Case::new("a subnormal smallest step", "convergence --dt-min 1e-320")
+            .says("`1e-320`")
+            .says("--dt-min"),
+        Case::new("an evaluation rate that underflows", "compare --evals-per-second 1e-320")
+            .says("--evals-per-second"),
+        Case::new("a separation that overflows", "divergence --delta 1e400").says("`1e400`").says("--delta"),
+        Case::new("an energy that overflows", "poincare --energy 1e400").says("`1e400`"),
+        Case::new("a tolerance below round-off", "poincare --tol 1e-300").says("--tol").says("round-off"),
+        Case::new("a zero energy bound", "stability --max-energy-error 0")
+            .says("--max-energy-error")
+            .says("> 0"),
+        // Huge integers, with the range.
+        Case::new("a huge step count", "simulate --steps 99999999999999999999").says("<= 10^13"),
+        Case::new("a float for a count", "simulate --every 1e3").says("`1e3`").says("--every"),
+        Case::new("a huge cell count", "sweep --grid theta1=0:1:99999999999999999999").says("cells"),
+        Case::new("no cells", "bifurcation --param drive_amplitude=1:1.5:0").says(">= 1"),
+        Case::new("too few tolerances", "work-precision --tol-levels 1").says(">= 2"),
+        Case::new("levels blamed on --levels", "convergence --levels 1000").says("--levels").says("<= 30"),
+        Case::new("a huge orbit count", "poincare --count 99999999999999999999999").says("orbits"),
+        // Physical values out of range.
+        Case::new("a mass of 1e300", "simulate --set m1=1e300").says("`m1`").says("10^12").brief(400),
+        Case::new("a length of 1e-13", "simulate pendulum --set l=1e-13").says("length"),
+        Case::new("a scenario mass of 1e300", "simulate --scenario s.toml")
+            .setup(|d| std::fs::write(d.join("s.toml"), "[set]\nm2 = 1e300\n").unwrap())
+            .says("`m2`"),
+        Case::new("an amplitude past the libration", "period --max-amplitude 200").says("below 180"),
+        Case::new("an amplitude below the first", "period --max-amplitude 3").says("from 5"),
+        Case::new("period's own angle", "period --set theta=1").says("from rest"),
+        Case::new("oscillator-regimes' own damping", "oscillator-regimes --set c=1").says("set k and m only"),
+        Case::new("poincare's own start", "poincare --set theta1=1").says("set parameters only"),
+        Case::new("fractal's own start", "fractal --set theta1=1").says("set parameters only"),
+        Case::new("a step longer than the interval", "lyapunov --dt 100").says("invalid --dt 100"),
+        Case::new("a separation lost in rounding", "divergence --set theta1=1e10")
+            .says("lost in rounding")
+            .says("--delta"),
+        // The report's folder must be one.
+        Case::new("a report into a file", "report --out-dir f")
+            .setup(|d| std::fs::write(d.join("f"), "precious").unwrap())
+            .says("--out-dir f"),
+        Case::new("a gallery into a file", "report --gallery f")
+            .setup(|d| std::fs::write(d.join("f"), "precious").unwrap())
+            .says("--gallery f"),
+        // Echoes stay short.
+        Case::new("a plot of a CSV with a 100 kB field", "plot t.csv")
+            .setup(|d| std::fs::write(d.join("t.csv"), format!("t,x\n0,{}\n", "z".repeat(100_000))).unwrap())
+            .says("is not a number")
+            .says("bytes in all")
+            .brief(400),
+        Case::new("a 100 kB --set", "simulate")
+            .arg(format!("--set=theta1={}", "9".repeat(100_000)))
+            .says("`theta1`")
+            .brief(400),
     ]
 }
 

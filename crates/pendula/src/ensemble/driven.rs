@@ -107,10 +107,21 @@ fn run_group(
     let per_member = spec.samples * 2;
     let last_period = group.iter().map(|g| g.transient_periods).max().unwrap_or(0) + spec.samples as u64;
     for period in 0..last_period {
-        if has_fma() {
-            period_kernel::<true>(&mut lanes, drive);
+        let before = (lanes.theta, lanes.omega);
+        let fast = if has_fma() {
+            period_kernel::<true, false>(&mut lanes, drive)
         } else {
-            period_kernel::<false>(&mut lanes, drive);
+            period_kernel::<false, false>(&mut lanes, drive)
+        };
+        if !fast {
+            // An angle was beyond the sine's fast range (rare: the first period, before any
+            // wrap, or an enormous ω): the period again, reducing such angles exactly.
+            (lanes.theta, lanes.omega) = before;
+            if has_fma() {
+                period_kernel::<true, true>(&mut lanes, drive);
+            } else {
+                period_kernel::<false, true>(&mut lanes, drive);
+            }
         }
         for (i, member) in group.iter().enumerate() {
             let (theta, omega) = (lanes.theta[i], lanes.omega[i]);
@@ -134,7 +145,11 @@ fn run_group(
     Ok(())
 }
 
-/// One drive period of RK4 steps for every lane.
+/// One drive period of RK4 steps for every lane. Not `WIDE`: the fast sine alone, tracking per
+/// lane the largest |ω| at the steps' starts (data flow only: a branch in the loop would slow
+/// it), and whether that proves every sine's argument was in the fast range
+/// ([`stayed_fast`]) — if not, the results may be wrong. `WIDE`: angles beyond the fast range
+/// reduced exactly, per lane (true); the others get the same bits.
 #[multiversion::multiversion(targets(
     "x86_64+avx512f+avx512dq+avx2+fma",
     "x86_64+avx2+fma",
@@ -143,12 +158,17 @@ fn run_group(
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-fn period_kernel<const FMA: bool>(lanes: &mut Lanes, drive: &[f64]) {
+fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[f64]) -> bool {
     let steps = (drive.len() - 1) / 2;
     let Lanes { theta, omega, h, damping, amplitude } = lanes;
     let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
-        -w * damping - trig::sin_with::<FMA>(th) + amplitude * c
+        -w * damping - trig::sin_with::<FMA, WIDE>(th) + amplitude * c
     };
+    // max(x, r) by a comparison, not f64::max: one instruction, and a NaN x (which either path
+    // turns into NaN) leaves r as it was.
+    let max = |x: f64, r: f64| if x > r { x } else { r };
+    let start = *theta;
+    let mut fastest = [0.0; LANES];
     for k in 0..steps {
         let (c0, c_half, c1) = (drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]);
         for i in 0..LANES {
@@ -161,9 +181,32 @@ fn period_kernel<const FMA: bool>(lanes: &mut Lanes, drive: &[f64]) {
             let k3 = accel(th3, w3, b, a, c_half);
             let (th4, w4) = (th + h * w3, w + h * k3);
             let k4 = accel(th4, w4, b, a, c1);
+            if !WIDE {
+                fastest[i] = max(w.abs(), fastest[i]);
+            }
             let h6 = h / 6.0;
             theta[i] = th + h6 * (w + 2.0 * w2 + 2.0 * w3 + w4);
             omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
         }
     }
+    WIDE || (0..LANES).all(|i| stayed_fast(start[i], fastest[i], h[i], damping[i], amplitude[i], steps))
+}
+
+/// Whether every sine argument of a lane's period was within the fast range, given |θ₀| at the
+/// period's start, the largest |ω| at its steps' starts (V), and the lane's step h, damping b
+/// and amplitude A. While the arguments are in range the sine is at most 1, so every slope
+/// k = −bω − sin θ + A cos(…) has |k| ≤ |b||ω| + B, B = 1 + |A|, and the stage velocities of a
+/// step from ω (ω₂ = ω + hk₁/2, ω₃ = ω + hk₂/2, ω₄ = ω + hk₃) differ from ω by at most
+/// X/2, X/2 (1 + h|b|/2) and X (1 + h|b|/2 (1 + h|b|/2)) ≤ X (1 + h|b| + (h|b|)²), with
+/// X = h(|b|V + B): all within S = V + X (1 + h|b| + (h|b|)²). Every argument (θ + hω/2,
+/// θ + hω₂/2, θ + hω₃) and every step of θ then moves at most hS, so by induction over the
+/// steps all arguments lie within |θ₀| + M h S, M steps; rounding adds at most ulp(2²⁰) per
+/// step, well inside the margin of 10⁻⁹ rad per step allowed here. NaN passes (either path
+/// gives NaN).
+fn stayed_fast(theta0: f64, fastest: f64, h: f64, b: f64, a: f64, steps: usize) -> bool {
+    let hb = h * b.abs();
+    let x = h * (b.abs() * fastest + 1.0 + a.abs());
+    let s = fastest + x * (1.0 + hb + hb * hb);
+    let bound = theta0.abs() + steps as f64 * (h * s + 1e-9);
+    bound <= trig::FAST_RANGE || bound.is_nan()
 }

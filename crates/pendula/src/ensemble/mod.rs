@@ -243,18 +243,46 @@ fn flip_time(lanes: &Lanes, i: usize, h: f64) -> f64 {
     step * h + first * h
 }
 
-/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
-/// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC), with the branch-free sine and
-/// cosine (θ' = ω needs no work).
+/// Half the trigonometry's fast range: while |θ₁| and |θ₂| are within it, so are θ₁, θ₂ and
+/// θ₁ − θ₂, and the fast path serves every sine and cosine the kernels take.
+const HALF_FAST: f64 = 0.5 * trig::FAST_RANGE;
+
+/// max(x, r) by a comparison, not `f64::max`: one vector instruction, and a NaN x (which either
+/// path turns into NaN) leaves r as it was.
 #[inline(always)]
-fn accelerations<const FMA: bool>(p: &[V; 7], th1: &V, th2: &V, w1: &V, w2: &V, a1: &mut V, a2: &mut V) {
+fn max_of(x: f64, r: f64) -> f64 {
+    if x > r { x } else { r }
+}
+
+/// Whether some lane's `reach` is beyond [`HALF_FAST`]: then a fast kernel run is wrong.
+#[inline(always)]
+fn beyond_half_fast(reach: &V) -> bool {
+    reach.iter().fold(false, |beyond, &r| beyond | (r > HALF_FAST))
+}
+
+/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
+/// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC) (θ' = ω needs no work). Not `WIDE`:
+/// the branch-free sine and cosine, and `reach` = max(reach, |θ₁|, |θ₂|) per lane, data flow
+/// only (a test and branch per stage instead cost the W3 sweep 12–17%, its AVX-512 kernel
+/// spilling a third more). `WIDE`: angles beyond the fast range reduced exactly, per lane.
+#[inline(always)]
+fn accelerations<const FMA: bool, const WIDE: bool>(
+    p: &[V; 7],
+    [th1, th2]: [&V; 2],
+    [w1, w2]: [&V; 2],
+    [a1, a2]: [&mut V; 2],
+    reach: &mut V,
+) {
     for i in 0..LANES {
+        if !WIDE {
+            reach[i] = max_of(th2[i].abs(), max_of(th1[i].abs(), reach[i]));
+        }
         // The parameter products that do not change, computed once per lane group in the same
         // grouping as the scalar expressions: m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g.
         let (m11, m2l2, neg_m2l2, m12g, l1, l2, g) =
             (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i]);
-        let (sd, cd) = trig::sin_cos_with::<FMA>(th1[i] - th2[i]);
-        let (s1, s2) = (trig::sin_with::<FMA>(th1[i]), trig::sin_with::<FMA>(th2[i]));
+        let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(th1[i] - th2[i]);
+        let (s1, s2) = (trig::sin_with::<FMA, WIDE>(th1[i]), trig::sin_with::<FMA, WIDE>(th2[i]));
         let m12 = m2l2 * cd;
         let m21 = l1 * cd;
         let m22 = l2;
@@ -294,19 +322,30 @@ pub fn has_fma() -> bool {
     }
 }
 
-/// RK4 steps for a lane group, with the kernel for this CPU.
+/// RK4 steps for a lane group, with the kernel for this CPU: the fast one, and if it gave up
+/// (an angle beyond [`HALF_FAST`]; `lanes` are left as they were) the wide one.
 fn rk4_lanes(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool, track: bool) {
-    match (has_fma(), track) {
-        (true, true) => rk4_kernel::<true, true>(lanes, h, steps, stop_at_flip),
-        (true, false) => rk4_kernel::<true, false>(lanes, h, steps, stop_at_flip),
-        (false, true) => rk4_kernel::<false, true>(lanes, h, steps, stop_at_flip),
-        (false, false) => rk4_kernel::<false, false>(lanes, h, steps, stop_at_flip),
+    let done = match (has_fma(), track) {
+        (true, true) => rk4_kernel::<true, true, false>(lanes, h, steps, stop_at_flip),
+        (true, false) => rk4_kernel::<true, false, false>(lanes, h, steps, stop_at_flip),
+        (false, true) => rk4_kernel::<false, true, false>(lanes, h, steps, stop_at_flip),
+        (false, false) => rk4_kernel::<false, false, false>(lanes, h, steps, stop_at_flip),
+    };
+    if !done {
+        match (has_fma(), track) {
+            (true, true) => rk4_kernel::<true, true, true>(lanes, h, steps, stop_at_flip),
+            (true, false) => rk4_kernel::<true, false, true>(lanes, h, steps, stop_at_flip),
+            (false, true) => rk4_kernel::<false, true, true>(lanes, h, steps, stop_at_flip),
+            (false, false) => rk4_kernel::<false, false, true>(lanes, h, steps, stop_at_flip),
+        };
     }
 }
 
 /// RK4 steps for a lane group, compiled for several instruction sets and chosen at run time.
 /// Branch-free per lane: retired lanes keep computing but their state is not updated; a
-/// flip's step is recorded, and its time interpolated once at the end.
+/// flip's step is recorded, and its time interpolated once at the end. Not `WIDE`, the fast
+/// trigonometry alone: false, with `lanes` untouched, after the first step in which an angle
+/// was beyond [`HALF_FAST`]; `WIDE`, every angle (true).
 #[multiversion::multiversion(targets(
     "x86_64+avx512f+avx512dq+avx2+fma",
     "x86_64+avx2+fma",
@@ -315,7 +354,12 @@ fn rk4_lanes(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool, track: b
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, steps: u64, stop_at_flip: bool) {
+fn rk4_kernel<const FMA: bool, const TRACK: bool, const WIDE: bool>(
+    lanes: &mut Lanes,
+    h: f64,
+    steps: u64,
+    stop_at_flip: bool,
+) -> bool {
     use std::f64::consts::PI;
     let p = lanes.params;
     let [mut th1, mut th2, mut w1, mut w2] = lanes.state;
@@ -331,12 +375,13 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
     let mut flip_step = [-1.0; LANES];
     let [mut before, mut after] = [[z; 4]; 2];
     let mut failed_step = [-1.0; LANES];
+    let mut reach = z;
     for step in 0..steps {
         u1[0] = w1;
         u2[0] = w2;
         let (b1, b2) = a1.split_at_mut(1);
         let (c1, c2) = a2.split_at_mut(1);
-        accelerations::<FMA>(&p, &th1, &th2, &w1, &w2, &mut b1[0], &mut c1[0]);
+        accelerations::<FMA, WIDE>(&p, [&th1, &th2], [&w1, &w2], [&mut b1[0], &mut c1[0]], &mut reach);
         for (s, factor) in [(1, hh), (2, hh), (3, h)] {
             let (prev_a1, prev_a2) = if s == 1 { (&b1[0], &c1[0]) } else { (&b2[s - 2], &c2[s - 2]) };
             axpy::<FMA>(&mut t1, &th1, factor, &u1[s - 1]);
@@ -346,7 +391,7 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
             u1[s] = v1;
             u2[s] = v2;
             let (x1, x2) = (&mut b2[s - 1], &mut c2[s - 1]);
-            accelerations::<FMA>(&p, &t1, &t2, &v1, &v2, x1, x2);
+            accelerations::<FMA, WIDE>(&p, [&t1, &t2], [&v1, &v2], [x1, x2], &mut reach);
         }
         let step_f = step as f64;
         for i in 0..LANES {
@@ -385,6 +430,9 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
                 active[i] &= finite;
             }
         }
+        if !WIDE && beyond_half_fast(&reach) {
+            return false;
+        }
         if TRACK && !active.iter().any(|&a| a) {
             break;
         }
@@ -397,23 +445,34 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool>(lanes: &mut Lanes, h: f64, ste
     lanes.flip_step = flip_step;
     lanes.flip_ends = [before, after];
     lanes.state = [th1, th2, w1, w2];
+    true
 }
 
 /// The gradient (∂H/∂q₁, ∂H/∂q₂, ∂H/∂p₁, ∂H/∂p₂) of the double pendulum's Hamiltonian at
 /// (q, p) for every lane, in the expressions of `DoublePendulumForm`'s `dh_dq` and `dh_dp`
-/// (raw parameters m₁, m₂, l₁, l₂, g per lane).
+/// (raw parameters m₁, m₂, l₁, l₂, g per lane); the trigonometry and `reach` as in
+/// [`accelerations`].
 #[inline(always)]
-fn gradient<const FMA: bool>(raw: &[V; 5], q1: &V, q2: &V, p1: &V, p2: &V, out: &mut [V; 4]) {
+fn gradient<const FMA: bool, const WIDE: bool>(
+    raw: &[V; 5],
+    [q1, q2]: [&V; 2],
+    [p1, p2]: [&V; 2],
+    out: &mut [V; 4],
+    reach: &mut V,
+) {
     for i in 0..LANES {
+        if !WIDE {
+            reach[i] = max_of(q2[i].abs(), max_of(q1[i].abs(), reach[i]));
+        }
         let (m1, m2, l1, l2, g) = (raw[0][i], raw[1][i], raw[2][i], raw[3][i], raw[4][i]);
-        let (s, c) = trig::sin_cos_with::<FMA>(q1[i] - q2[i]);
+        let (s, c) = trig::sin_cos_with::<FMA, WIDE>(q1[i] - q2[i]);
         let d = m1 + m2 * s * s;
         let (a, b) = (p1[i], p2[i]);
         let bracket = m2 * c / (l1 * l1) * a * a - (m2 * c * c + (m1 + m2)) / (l1 * l2) * a * b
             + (m1 + m2) * c / (l2 * l2) * b * b;
         let coupling = s / (d * d) * bracket;
-        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA>(q1[i]);
-        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA>(q2[i]);
+        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA, WIDE>(q1[i]);
+        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA, WIDE>(q2[i]);
         let det = m2 * l1 * l1 * l2 * l2 * d;
         let bc = m2 * l1 * l2 * c;
         out[2][i] = (m2 * l2 * l2 * a - bc * b) / det;
@@ -446,10 +505,19 @@ fn tao_lanes(
             [d.m1, d.m2, d.l1, d.l2, d.g][k]
         })
     });
-    if has_fma() {
-        tao_kernel::<true>(lanes, &raw, &mut z, scheme, h, steps, stop_at_flip);
+    // The fast kernel, and if it gave up (`lanes` and `z` left as they were), the wide one.
+    let run = (h, steps);
+    let done = if has_fma() {
+        tao_kernel::<true, false>(lanes, &raw, &mut z, scheme, run, stop_at_flip)
     } else {
-        tao_kernel::<false>(lanes, &raw, &mut z, scheme, h, steps, stop_at_flip);
+        tao_kernel::<false, false>(lanes, &raw, &mut z, scheme, run, stop_at_flip)
+    };
+    if !done {
+        if has_fma() {
+            tao_kernel::<true, true>(lanes, &raw, &mut z, scheme, run, stop_at_flip);
+        } else {
+            tao_kernel::<false, true>(lanes, &raw, &mut z, scheme, run, stop_at_flip);
+        }
     }
     // The flipped lanes' rates θ' = ∂H/∂p at both ends of the flip's step, for the Hermite
     // interpolant (scalar, once per flipped member: the loop above stays branch-free).
@@ -477,7 +545,10 @@ fn tao_lanes(
     }
 }
 
-/// The Tao map for a lane group on (q, p) in `z`, with the copies (x, y) kept here.
+/// The Tao map for a lane group on (q, p) in `z`, with the copies (x, y) kept here, `steps`
+/// steps of size `h`. Not `WIDE`, the fast trigonometry alone: false, with `lanes` and `z`
+/// untouched, after the first step in which an angle was beyond [`HALF_FAST`]; `WIDE`, every
+/// angle (true).
 #[multiversion::multiversion(targets(
     "x86_64+avx512f+avx512dq+avx2+fma",
     "x86_64+avx2+fma",
@@ -486,15 +557,14 @@ fn tao_lanes(
     "x86_64+sse4.1",
     "aarch64+neon"
 ))]
-fn tao_kernel<const FMA: bool>(
+fn tao_kernel<const FMA: bool, const WIDE: bool>(
     lanes: &mut Lanes,
     raw: &[V; 5],
     z: &mut [V; 4],
     scheme: crate::integrator::tao::TaoScheme,
-    h: f64,
-    steps: u64,
+    (h, steps): (f64, u64),
     stop_at_flip: bool,
-) {
+) -> bool {
     use std::f64::consts::PI;
     let [mut q1, mut q2, mut p1, mut p2] = *z;
     let (mut x1, mut x2, mut y1, mut y2) = (q1, q2, p1, p2);
@@ -503,6 +573,7 @@ fn tao_kernel<const FMA: bool>(
     let mut flip_step = [-1.0; LANES];
     let [mut before, mut after] = [[[0.0; LANES]; 4]; 2];
     let mut failed_step = [-1.0; LANES];
+    let mut reach = [0.0; LANES];
     for step in 0..steps {
         let old = [q1, q2, p1, p2];
         let (old_x, old_y) = ([x1, x2], [y1, y2]);
@@ -512,7 +583,7 @@ fn tao_kernel<const FMA: bool>(
             for phase in 0..5 {
                 match phase {
                     0 | 4 => {
-                        gradient::<FMA>(raw, &q1, &q2, &y1, &y2, &mut grad);
+                        gradient::<FMA, WIDE>(raw, [&q1, &q2], [&y1, &y2], &mut grad, &mut reach);
                         for i in 0..LANES {
                             p1[i] -= half * grad[0][i];
                             p2[i] -= half * grad[1][i];
@@ -521,7 +592,7 @@ fn tao_kernel<const FMA: bool>(
                         }
                     }
                     1 | 3 => {
-                        gradient::<FMA>(raw, &x1, &x2, &p1, &p2, &mut grad);
+                        gradient::<FMA, WIDE>(raw, [&x1, &x2], [&p1, &p2], &mut grad, &mut reach);
                         for i in 0..LANES {
                             q1[i] += half * grad[2][i];
                             q2[i] += half * grad[3][i];
@@ -547,6 +618,9 @@ fn tao_kernel<const FMA: bool>(
                     }
                 }
             }
+        }
+        if !WIDE && beyond_half_fast(&reach) {
+            return false;
         }
         let step_f = step as f64;
         for i in 0..LANES {
@@ -590,4 +664,5 @@ fn tao_kernel<const FMA: bool>(
     lanes.flip_step = flip_step;
     lanes.flip_ends = [before, after];
     *z = [q1, q2, p1, p2];
+    true
 }

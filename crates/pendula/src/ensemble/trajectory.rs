@@ -125,10 +125,24 @@ pub fn rk4_trajectory_resumable(
 }
 
 /// The trigonometry of a state: (sin, cos) of θ₁ − θ₂, θ₁ and θ₂ — what both the
-/// accelerations and the energy need, computed once per step.
+/// accelerations and the energy need, computed once per step (one test of the angles picks
+/// the fast path for all three, or the path for every angle).
 #[inline(always)]
 fn trig_of<const FMA: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
-    [trig::sin_cos_with::<FMA>(y[0] - y[1]), trig::sin_cos_with::<FMA>(y[0]), trig::sin_cos_with::<FMA>(y[1])]
+    if fast_pair(y[0], y[1]) { trig_of_with::<FMA, false>(y) } else { trig_of_with::<FMA, true>(y) }
+}
+
+/// Whether the fast trigonometry serves a, b and a − b ([`trig::is_fast`]).
+#[inline(always)]
+fn fast_pair(a: f64, b: f64) -> bool {
+    trig::is_fast(a) & trig::is_fast(b) & trig::is_fast(a - b)
+}
+
+/// [`trig_of`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn trig_of_with<const FMA: bool, const WIDE: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
+    let sc = trig::sin_cos_with::<FMA, WIDE>;
+    [sc(y[0] - y[1]), sc(y[0]), sc(y[1])]
 }
 
 /// The energy T + V of one double pendulum (the expressions of `DoublePendulum::energy`)
@@ -166,11 +180,22 @@ fn accelerations_from<const FMA: bool>(
     [y[2], y[3], m(r1, m22, -(m12 * r2)) * inverse, m(m11, r2, -(m21 * r1)) * inverse]
 }
 
-/// The accelerations of one double pendulum at y.
+/// The accelerations of one double pendulum at y (as [`trig_of`], one test of the angles).
 #[inline(always)]
 fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
-    let (sd, cd) = trig::sin_cos_with::<FMA>(y[0] - y[1]);
-    accelerations_from::<FMA>(p, y, sd, cd, trig::sin_with::<FMA>(y[0]), trig::sin_with::<FMA>(y[1]))
+    if fast_pair(y[0], y[1]) {
+        accelerations_one_with::<FMA, false>(p, y)
+    } else {
+        accelerations_one_with::<FMA, true>(p, y)
+    }
+}
+
+/// [`accelerations_one`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
+#[inline(always)]
+fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
+    let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(y[0] - y[1]);
+    let s = trig::sin_with::<FMA, WIDE>;
+    accelerations_from::<FMA>(p, y, sd, cd, s(y[0]), s(y[1]))
 }
 
 #[multiversion::multiversion(targets(

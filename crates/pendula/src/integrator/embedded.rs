@@ -503,6 +503,13 @@ impl EmbeddedRk {
                 .zip(&self.candidate)
                 .zip(errors)
                 .map(|((a, b), e)| {
+                    // An error of exactly zero meets any tolerance, even a zero one: without
+                    // this, a component at rest with atol = 0 gives 0/0 = NaN, every step is
+                    // rejected, and the run never ends. A non-zero error against a zero scale
+                    // is infinite: rejected, as it must be.
+                    if *e == 0.0 {
+                        return 0.0;
+                    }
                     let scale = atol + rtol * a.abs().max(b.abs());
                     (e / scale) * (e / scale)
                 })

@@ -1,0 +1,353 @@
+//! What a request costs, estimated before any work, and the limits beyond which a command
+//! refuses it (exit 2) unless `--allow-large` is given. Every limit is stated here once; the
+//! README's table and `--help` say the same.
+//!
+//! The unit of work is the pendulum-step: one step of one state (a sweep's cell, a fractal's
+//! pixel, a Lyapunov run's state or tangent vector), whatever the method. Two limits, because
+//! the two engines differ a hundredfold in speed: the ensemble engine's SIMD lanes do some
+//! 10⁹ pendulum-steps a second on a laptop's cores, the scalar integrators some 10⁷ (RK4 on
+//! the double pendulum; implicit methods several times fewer). Both limits are about an
+//! hour of a laptop's time. Bytes are counted as written: .npy at 8 bytes a value, CSV at
+//! 25 (ryu's shortest round-trip form is at most 24 characters, and a separator).
+
+use anyhow::{Result, bail};
+
+/// Pendulum-steps on the ensemble engine (fractal, sweep of the free double pendulum with
+/// rk4 or Tao's maps, bifurcation of the driven pendulum).
+pub const MAX_LANE_STEPS: f64 = 1e13;
+/// Pendulum-steps on the scalar integrators (every other run).
+pub const MAX_SCALAR_STEPS: f64 = 1e11;
+/// Bytes of output files one command writes.
+pub const MAX_OUTPUT_BYTES: f64 = (1u64 << 30) as f64;
+/// Bytes of results one command holds in memory at once.
+pub const MAX_MEMORY_BYTES: f64 = (2u64 << 30) as f64;
+/// Bytes of an input file (`plot`, `merge`).
+pub const MAX_INPUT_BYTES: f64 = (1u64 << 30) as f64;
+/// Bytes of a scenario file: a scenario is a few lines, and it is read whole.
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+/// Nesting of arrays and tables in a scenario file (the parser recurses on it).
+pub const MAX_SCENARIO_DEPTH: usize = 16;
+/// Step sizes of a convergence or work-precision study, and tolerances of work-precision:
+/// 30 halvings span nine decades, more than double precision can resolve.
+pub const MAX_LEVELS: u64 = 30;
+/// Orbits of a Poincaré section: more are not told apart on the figure.
+pub const MAX_ORBITS: u64 = 10_000;
+/// Stroboscopic samples per parameter value of a bifurcation diagram.
+pub const MAX_SAMPLES: u64 = 1_000_000;
+/// RK4 steps per drive period of a bifurcation diagram.
+pub const MAX_STEPS_PER_PERIOD: u64 = 1_000_000;
+/// Cells along one axis of a grid (sweep, fractal, bifurcation): the grid's size is limited
+/// by its work and its bytes; this only keeps the product representable.
+pub const MAX_AXIS_CELLS: u64 = 1_000_000_000;
+/// Threads, even with `--allow-large`.
+pub const MAX_THREADS: usize = 1024;
+/// Steps of a fixed-step run (the library's own bound: 10¹³ steps take days).
+pub const MAX_STEPS: u64 = 10_000_000_000_000;
+/// A lower estimate of an adaptive run's steps per small-oscillation period
+/// (`Model::time_scale`): DOP853 takes about 40 at tolerance 1e-6 on the chaotic double
+/// pendulum and 100 at 1e-10, DOPRI5 300 at 1e-10. A lower estimate refuses only runs
+/// that are surely too large.
+pub const ADAPTIVE_STEPS_PER_PERIOD: f64 = 20.0;
+/// Bytes of a CSV value (at most 24 characters and a separator).
+pub const CSV_BYTES_PER_VALUE: f64 = 25.0;
+
+/// The flag that lifts the limits, as help texts and messages name it.
+pub const ALLOW_LARGE_HELP: &str = "Run even when the estimate exceeds the limits (10^13 \
+pendulum-steps on the ensemble engine, 10^11 on the scalar integrators, 1 GiB of output, \
+2 GiB of memory, as many threads as cores).";
+
+/// What an estimate counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// Pendulum-steps on the ensemble engine's SIMD lanes.
+    LaneSteps,
+    /// Pendulum-steps on the scalar integrators.
+    Steps,
+    /// Bytes written to files.
+    Output,
+    /// Bytes held in memory at once.
+    Memory,
+    /// Bytes read from an input file.
+    Input,
+}
+
+impl Cost {
+    /// The limit, and why it is there.
+    pub fn limit(self) -> (f64, &'static str) {
+        match self {
+            Cost::LaneSteps => (MAX_LANE_STEPS, "about an hour of a laptop's cores on the ensemble engine"),
+            Cost::Steps => (MAX_SCALAR_STEPS, "about an hour of a laptop's cores on the scalar integrators"),
+            Cost::Output => (MAX_OUTPUT_BYTES, "of output files"),
+            Cost::Memory => (MAX_MEMORY_BYTES, "of memory"),
+            Cost::Input => (MAX_INPUT_BYTES, "of input read"),
+        }
+    }
+
+    fn amount(self, x: f64) -> String {
+        match self {
+            Cost::LaneSteps | Cost::Steps => format!("{} pendulum-steps", round(x)),
+            Cost::Output | Cost::Memory | Cost::Input => bytes(x),
+        }
+    }
+}
+
+/// An estimate of one cost of a request, and how it was reckoned.
+#[derive(Debug, Clone)]
+pub struct Estimate {
+    pub cost: Cost,
+    pub amount: f64,
+    /// The factors, for the message: `512 x 512 pixels x 30000 steps`.
+    pub how: String,
+}
+
+impl Estimate {
+    pub fn new(cost: Cost, amount: f64, how: impl Into<String>) -> Self {
+        Estimate { cost, amount, how: how.into() }
+    }
+}
+
+/// Refuses the request when an estimate exceeds its limit and `allow_large` is not set;
+/// even with it, memory beyond the machine's (an allocation that would abort the process).
+pub fn check(command: &str, allow_large: bool, estimates: &[Estimate]) -> Result<()> {
+    for e in estimates {
+        let (limit, why) = e.cost.limit();
+        // A NaN estimate (from a NaN input that slipped through) is refused too.
+        if (e.amount.is_nan() || e.amount > limit) && !allow_large {
+            bail!(
+                "{command}: refusing a request of about {} ({}), over the limit of {} ({why}); give --allow-large to run it anyway",
+                e.cost.amount(e.amount),
+                e.how,
+                e.cost.amount(limit),
+            );
+        }
+        if e.cost == Cost::Memory
+            && let Some(total) = physical_memory()
+            && (e.amount.is_nan() || e.amount > total)
+        {
+            bail!(
+                "{command}: the request needs about {} of memory ({}), more than this machine's {}, even with --allow-large",
+                bytes(e.amount),
+                e.how,
+                bytes(total)
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The machine's memory, bytes (Linux: /proc/meminfo), if known.
+fn physical_memory() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kb: f64 =
+        text.lines().find(|l| l.starts_with("MemTotal:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
+/// The machine's cores (1 when unknown).
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `--threads`: a whole number from 1 to the machine's cores (to [`MAX_THREADS`] with
+/// `--allow-large`), or every core when not given.
+pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
+    let cores = cores();
+    let Some(text) = text else { return Ok(cores) };
+    let n = crate::config::parse_count("--threads", text, 1, u64::MAX, "threads")?;
+    if n > cores as u64 && !allow_large {
+        bail!(
+            "invalid --threads {}: this machine has {cores} cores, and more threads than cores only take turns; give 1 to {cores}, or --allow-large to insist (up to {MAX_THREADS})",
+            round(n as f64)
+        );
+    }
+    if n > MAX_THREADS as u64 {
+        bail!(
+            "invalid --threads {}: at most {MAX_THREADS}, even with --allow-large (this machine has {cores} cores)",
+            round(n as f64)
+        );
+    }
+    Ok(n as usize)
+}
+
+/// A count for people: whole numbers up to 10⁶ in full, larger ones as `1.2e14`.
+pub fn round(x: f64) -> String {
+    if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
+}
+
+/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
+pub fn sci(x: f64) -> String {
+    if !x.is_finite() {
+        return "unboundedly many".to_owned();
+    }
+    let text = format!("{x:.3e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let mantissa =
+        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+    format!("{mantissa}e{exponent}")
+}
+
+/// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
+pub fn bytes(x: f64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = x;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    let shown = if !v.is_finite() || v >= 1e6 {
+        sci(v)
+    } else if v.fract() == 0.0 || v >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        // Three significant digits: 29.8 GiB, 1.5 KiB.
+        let decimals = if v >= 10.0 { 1 } else { 2 };
+        format!("{v:.decimals$}").trim_end_matches('0').trim_end_matches('.').to_owned()
+    };
+    format!("{shown} {}", UNITS[unit])
+}
+
+/// Steps of a run of `span` seconds at step `h`, at least 1 (as [`pendula::RunSpec::schedule`]
+/// counts them, without its checks: for estimates of validated values).
+pub fn steps(span: f64, h: f64) -> f64 {
+    (span / h).ceil().max(1.0)
+}
+
+/// A lower estimate of an adaptive run's steps over `span` on a model of small-oscillation
+/// period `period`, no fewer than `span / h_max`.
+pub fn adaptive_steps(span: f64, period: f64, h_max: f64) -> f64 {
+    // A period of 0 (a start whose energy overflows) is unboundedly many steps.
+    let by_period = if period > 0.0 { span / period * ADAPTIVE_STEPS_PER_PERIOD } else { f64::INFINITY };
+    by_period.max(span / h_max).max(1.0)
+}
+
+/// The period of the motion from `y0`, s, for estimates of adaptive steps: the model's
+/// small-oscillation period, shortened for a start with more energy than the system's
+/// scale at rest — the motion is then faster by about the square root of the ratio (a
+/// pendulum spun up to K joules turns at a rate ∝ √K).
+pub fn motion_period(model: &dyn pendula::system::DynModel, y0: &[f64]) -> f64 {
+    let rest = vec![0.0; y0.len()];
+    let ratio = model.energy_scale(&rest) / model.energy_scale(y0);
+    // NaN: a start whose energy overflows, whose motion has no period to speak of.
+    model.time_scale() * if ratio.is_nan() { 0.0 } else { ratio.min(1.0).sqrt() }
+}
+
+/// What a .npy file's header says it holds, checked against the file's length before
+/// anything is allocated: a reader allocates what the header claims, and a header that
+/// claims 10¹⁵ values would abort the process.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyClaim {
+    pub shape: Vec<usize>,
+    /// Bytes per value (8 for float64, 1 for uint8).
+    pub item: usize,
+}
+
+impl NpyClaim {
+    /// The number of values.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+}
+
+/// Reads and checks the header of the .npy at `path` (format 1, 2 or 3): the values its
+/// shape and type claim must be what the file holds after the header.
+pub fn npy_claim(path: &std::path::Path) -> Result<NpyClaim> {
+    use std::io::Read;
+    let name = path.display();
+    let mut file = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?;
+    let length = file.metadata().map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?.len();
+    let bad = |why: &str| anyhow::anyhow!("{name} is not a valid .npy file: {why}");
+    let mut head = [0u8; 12];
+    file.read_exact(&mut head[..10]).map_err(|_| bad("too short for a header"))?;
+    if &head[..6] != b"\x93NUMPY" {
+        return Err(bad("no NUMPY magic"));
+    }
+    let (header_len, prefix) = match head[6] {
+        1 => (u16::from_le_bytes([head[8], head[9]]) as u64, 10),
+        2 | 3 => {
+            file.read_exact(&mut head[10..12]).map_err(|_| bad("too short for a header"))?;
+            (u32::from_le_bytes([head[8], head[9], head[10], head[11]]) as u64, 12)
+        }
+        v => return Err(bad(&format!("unknown format version {v}"))),
+    };
+    if prefix + header_len > length || header_len > 1 << 20 {
+        return Err(bad("its header is longer than the file"));
+    }
+    let mut header = vec![0u8; header_len as usize];
+    file.read_exact(&mut header).map_err(|_| bad("its header is cut short"))?;
+    let header = String::from_utf8_lossy(&header);
+    let field = |key: &str| -> Option<String> {
+        let at = header.find(&format!("'{key}'"))? + key.len() + 2;
+        let rest = header[at..].trim_start().strip_prefix(':')?.trim_start();
+        Some(rest.to_owned())
+    };
+    let descr = field("descr").ok_or_else(|| bad("no 'descr' in its header"))?;
+    let descr = descr.trim_start_matches(['\'', '"']);
+    let descr: String = descr.chars().take_while(|c| !matches!(c, '\'' | '"')).collect();
+    let item: usize = descr
+        .trim_start_matches(|c: char| !c.is_ascii_digit())
+        .parse()
+        .map_err(|_| bad(&format!("unknown value type `{}`", crate::config::clip(&descr))))?;
+    let shape_text = field("shape").ok_or_else(|| bad("no 'shape' in its header"))?;
+    let inner = shape_text
+        .strip_prefix('(')
+        .and_then(|r| r.split(')').next())
+        .ok_or_else(|| bad("no shape tuple"))?;
+    let shape = inner
+        .split(',')
+        .map(str::trim)
+        .filter(|d| !d.is_empty())
+        .map(|d| d.parse::<usize>().map_err(|_| bad(&format!("shape entry `{}`", crate::config::clip(d)))))
+        .collect::<Result<Vec<usize>>>()?;
+    let values = shape.iter().try_fold(1u128, |n, &d| n.checked_mul(d as u128));
+    let data = length - prefix - header_len;
+    match values.and_then(|v| v.checked_mul(item as u128)) {
+        Some(bytes) if bytes == data as u128 => Ok(NpyClaim { shape, item }),
+        Some(bytes) => Err(bad(&format!(
+            "its header claims {shape:?} values of {item} bytes ({}), but the file holds {} after the header",
+            self::bytes(bytes as f64),
+            self::bytes(data as f64)
+        ))),
+        None => Err(bad(&format!("its header claims a shape {shape:?} beyond counting"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bytes_read_well() {
+        assert_eq!(bytes(512.0), "512 B");
+        assert_eq!(bytes(1536.0), "1.5 KiB");
+        assert_eq!(bytes(MAX_OUTPUT_BYTES), "1 GiB");
+        assert_eq!(bytes(8e15), "7276 TiB");
+        assert_eq!(bytes(3.2e10), "29.8 GiB");
+        assert_eq!(round(12345.0), "12345");
+        assert_eq!(round(1e14), "1e14");
+        assert_eq!(round(7.86432e19), "7.864e19");
+        assert_eq!(sci(1e-12), "1e-12");
+    }
+
+    #[test]
+    fn an_estimate_over_its_limit_is_refused_unless_allowed() {
+        let big = [Estimate::new(Cost::Steps, 1e12, "10 x 1e11")];
+        let err = check("simulate", false, &big).unwrap_err().to_string();
+        for needle in ["1e12 pendulum-steps", "10 x 1e11", "1e11", "--allow-large"] {
+            assert!(err.contains(needle), "`{needle}` not in {err}");
+        }
+        assert!(check("simulate", true, &big).is_ok());
+        assert!(check("simulate", false, &[Estimate::new(Cost::Steps, 1e11, "")]).is_ok());
+        // NaN is no estimate to run on.
+        assert!(check("simulate", false, &[Estimate::new(Cost::Output, f64::NAN, "")]).is_err());
+    }
+
+    #[test]
+    fn memory_beyond_the_machine_is_refused_even_when_allowed() {
+        let huge = [Estimate::new(Cost::Memory, 1e30, "a lot")];
+        if physical_memory().is_some() {
+            let err = check("fractal", true, &huge).unwrap_err().to_string();
+            assert!(err.contains("this machine's"), "{err}");
+        }
+    }
+}
