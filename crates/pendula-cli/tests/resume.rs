@@ -358,12 +358,15 @@ fn resumed_grids_terminal_events_and_plots_match() {
 fn sweeps_and_fractals_resume_to_the_same_bytes() {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
+    // 256 x 256 cells in 64 chunks, some 1 s (sweep) and 2.5 s (fractal) on one thread: the
+    // signal lands between chunks also on a fast machine (at 64 x 64, 4 chunks ran in less
+    // than the 150 ms the signal waits, and the run had ended before it came).
     fn sweep(out: &str) -> Vec<String> {
-        let args = "sweep --grid theta1=-pi:pi:64 --grid theta2=-pi:pi:64 --steps 2000 --threads 1 --record final,flip-time";
+        let args = "sweep --grid theta1=-pi:pi:256 --grid theta2=-pi:pi:256 --steps 2000 --threads 1 --record final,flip-time";
         args.split(' ').map(str::to_owned).chain(["--out".into(), out.to_owned()]).collect()
     }
     fn fractal(out: &str) -> Vec<String> {
-        let args = "fractal --grid theta1=-pi:pi:64 --grid theta2=-pi:pi:64 --t-max 30 --threads 1";
+        let args = "fractal --grid theta1=-pi:pi:256 --grid theta2=-pi:pi:256 --t-max 30 --threads 1";
         args.split(' ').map(str::to_owned).chain(["--out".into(), out.to_owned()]).collect()
     }
     type Make = fn(&str) -> Vec<String>;
@@ -499,8 +502,11 @@ fn a_numerical_failure_on_resume_is_exit_1_naming_the_time() {
         "oscillator",
         "--method",
         "euler",
+        // 0.02 s: the state overflows after some 3.5 million steps (0.1 s), so that the
+        // interrupt lands before the failure (at 0.1 s it came within milliseconds of the
+        // partial file appearing, and the interrupt often came too late).
         "--dt",
-        "0.1",
+        "0.02",
         "--steps",
         "100000000",
         "--every",
