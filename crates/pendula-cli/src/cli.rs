@@ -15,9 +15,10 @@ pub struct Cli {
 pub const EXIT_CODES: &str = "Exit codes: 0 success; 1 the run failed (non-finite state, implicit \
 step did not converge, adaptive step fell below its minimum) or its environment did (a full disk, \
 quota or I/O error while writing; the message names the path, and no earlier file is replaced); 2 \
-invalid input (arguments, values, scenario file, shards, an output path that cannot be written or \
-that is another output's, a request over the limits without --allow-large); 130, 143, 129 \
-interrupted by SIGINT, SIGTERM, SIGHUP (unfinished files removed).";
+invalid input (arguments, values, scenario file, shards, a checkpoint that is missing, corrupt or \
+for another request, an output path that cannot be written or that is another output's, a request \
+over the limits without --allow-large); 130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP \
+(unfinished files removed; with --checkpoint, the checkpoint written first, for `pendula resume`).";
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -66,6 +67,9 @@ pub enum Command {
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.
     Merge(Box<crate::commands::merge::MergeArgs>),
+    /// Continue a run of simulate, sweep or fractal from its --checkpoint FILE: the outputs
+    /// are byte-identical to an uninterrupted run's.
+    Resume(Box<crate::commands::resume::ResumeArgs>),
     /// Plot a pendula CSV or .npy file: time series, a phase portrait, the energy error, or
     /// a heat map of a sweep or fractal grid.
     Plot(Box<crate::commands::plot::PlotArgs>),
@@ -122,7 +126,7 @@ pub enum ListWhat {
     Presets,
 }
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SimulateArgs {
     /// System to integrate (see `pendula list systems`) [default: double].
     pub system: Option<String>,
@@ -203,6 +207,15 @@ pub struct SimulateArgs {
     /// End the run at the first event.
     #[arg(long)]
     pub stop_on_event: bool,
+    /// Write the run's whole state to FILE every --checkpoint-every seconds of simulated
+    /// time and when interrupted (SIGINT, SIGTERM, SIGHUP), so that `pendula resume FILE`
+    /// continues it to the same bits; meanwhile the trajectory is written to OUT.partial,
+    /// and both are removed when the run ends.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Simulated seconds between checkpoints [default: only when interrupted].
+    #[arg(long, value_name = "T", allow_hyphen_values = true, requires = "checkpoint")]
+    pub checkpoint_every: Option<String>,
     #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
     pub allow_large: bool,
 }

@@ -51,6 +51,17 @@ pub struct SimulateConfig {
     pub grid: Option<pendula::observe::Grid>,
     /// Draw the run into this PNG or SVG (`--plot`).
     pub plot: Option<PathBuf>,
+    /// Write checkpoints (`--checkpoint`, `--checkpoint-every`).
+    pub checkpoint: Option<Checkpoints>,
+}
+
+/// Where and how often a run writes checkpoints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoints {
+    /// The checkpoint file, as given (`pendula resume` gives it from the root).
+    pub path: PathBuf,
+    /// Simulated seconds between checkpoints; `None`: only when interrupted.
+    pub every: Option<f64>,
 }
 
 /// A scenario file: the same names as the flags.
@@ -752,6 +763,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         args.allow_large,
         &simulate_estimates(&values, &spec, &tolerances, every, &grid, &out, plot.is_some())?,
     )?;
+    let checkpoint = checkpoints(args, out.as_ref(), summary.as_deref(), plot.as_deref())?;
     Ok(SimulateConfig {
         values,
         method,
@@ -763,7 +775,54 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         summary,
         grid,
         plot,
+        checkpoint,
     })
+}
+
+/// `--checkpoint FILE` and `--checkpoint-every T`, checked against the outputs.
+fn checkpoints(
+    args: &SimulateArgs,
+    out: Option<&Output>,
+    summary: Option<&Path>,
+    plot: Option<&Path>,
+) -> Result<Option<Checkpoints>> {
+    let Some(file) = &args.checkpoint else { return Ok(None) };
+    let every = match &args.checkpoint_every {
+        Some(text) => {
+            // NaN, 1e400 and the like are refused as every float is; infinity as a time.
+            let t = match float(text) {
+                Err(Unusable::Infinite) => f64::INFINITY,
+                _ => parse_float("--checkpoint-every", text, "a time in seconds")?,
+            };
+            if !(t.is_finite() && t > 0.0) {
+                bail!(
+                    "invalid --checkpoint-every {}: must be finite and > 0 (simulated seconds between checkpoints)",
+                    clip(text.trim())
+                );
+            }
+            Some(t)
+        }
+        None => None,
+    };
+    let mut outputs: Vec<(&str, PathBuf)> = Vec::new();
+    match out {
+        Some(Output::Stdout) => bail!(
+            "--checkpoint needs the trajectory in a file: rows written to stdout cannot be taken back on resume; give --out FILE.csv or FILE.npy"
+        ),
+        Some(Output::Csv(p) | Output::Npy(p)) => {
+            outputs.push(("--out", p.clone()));
+            outputs.push(("--out partial (OUT.partial)", crate::output::PartialFile::path_of(p)));
+        }
+        None if plot.is_some() => bail!(
+            "--plot with --checkpoint draws from the trajectory file, and --every 0 writes none: drop --every 0, or draw the finished run with `pendula plot`"
+        ),
+        None => {}
+    }
+    outputs.extend(summary.filter(|s| *s != Path::new("-")).map(|s| ("--summary", s.to_owned())));
+    outputs.extend(plot.map(|p| ("--plot", p.to_owned())));
+    let named: Vec<(&str, &Path)> = outputs.iter().map(|(f, p)| (*f, p.as_path())).collect();
+    let path = crate::checkpoint::check_path(file, &named)?;
+    Ok(Some(Checkpoints { path, every }))
 }
 
 /// What a `simulate` run costs: its steps (for an adaptive run a lower estimate), the bytes

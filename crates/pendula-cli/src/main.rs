@@ -4,6 +4,8 @@
 #[macro_use]
 mod study;
 
+mod checkpoint;
+mod chunks;
 mod cli;
 mod commands;
 mod config;
@@ -13,7 +15,10 @@ mod generate;
 mod limits;
 mod list;
 mod output;
+mod run_state;
 mod simulate;
+mod sink;
+mod watch;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -35,6 +40,11 @@ fn main() -> ExitCode {
         Err(err) => {
             if is_broken_pipe(&err) {
                 return ExitCode::SUCCESS;
+            }
+            // Stopped by an interrupt after writing its checkpoint: not a failure of the run.
+            if let Some(i) = err.downcast_ref::<output::Interrupted>() {
+                let _ = writeln!(std::io::stderr(), "{i}");
+                return ExitCode::from(u8::try_from(128 + i.signal).unwrap_or(130));
             }
             let _ = writeln!(std::io::stderr(), "error: {}", message(&err));
             ExitCode::from(exit_code(&err))
@@ -63,6 +73,7 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Bifurcation(args) => commands::bifurcation::run(args),
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
+        Command::Resume(args) => commands::resume::run(args),
         Command::Plot(args) => commands::plot::run(args),
         Command::List { what } => list::run(*what),
         Command::Completions { shell } => generate::completions(*shell),

@@ -23,22 +23,30 @@
 //! into those files (ffmpeg), removes the files and the directories left empty, and exits
 //! with 128 + the signal's number. Registering, renaming into place and cleaning up all hold
 //! the list's lock, so an interrupt sees a file either before its rename (and removes it) or
-//! after (and leaves the finished file alone). Trajectories stream to disk as CSV or .npy, so
-//! memory does not grow with the run's length.
+//! after (and leaves the finished file alone). Trajectories stream to disk as CSV or .npy
+//! ([`crate::sink`]), so memory does not grow with the run's length.
+//!
+//! A run that writes checkpoints (`--checkpoint`) registers itself ([`Checkpointing`]): the
+//! first interrupt then only sets [`pause_flag`], which the run loop polls at every step;
+//! the run writes its checkpoint and ends with [`Interrupted`] (exit 128 + the signal), its
+//! partial trajectory ([`PartialFile`], visible as `OUT.partial`) kept for `pendula resume`.
+//! A second interrupt ends the process at once, as without checkpoints: the checkpoint on
+//! disk is then the last complete one, and a partial trajectory no checkpoint refers to yet
+//! is removed. The checkpoint, the partial trajectory and a grid's `FILE.chunks` are claimed
+//! like every other output ([`claim_regular`]): they must be regular files, and none of them
+//! may be another output of the run.
 
 use std::ffi::OsString;
 use std::fs::{File, OpenOptions};
-use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::io::{self, Seek, SeekFrom, Write};
 use std::os::unix::ffi::OsStrExt;
 use std::os::unix::fs::{FileTypeExt, MetadataExt, OpenOptionsExt, PermissionsExt};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, ExitStatus};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use anyhow::{Context, Result, bail};
-
-use crate::config::Output;
 
 /// What an interrupt must clean up.
 struct Live {
@@ -65,9 +73,73 @@ impl Live {
     }
 }
 
+/// Whether a run that writes checkpoints is going ([`Checkpointing`]).
+static CHECKPOINTING: AtomicBool = AtomicBool::new(false);
+/// Set by the first interrupt during such a run: pause at the next step and checkpoint.
+static PAUSE: AtomicBool = AtomicBool::new(false);
+/// The signal that set [`PAUSE`].
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
+
+/// The flag a checkpointing run polls at every step (a relaxed load: nothing measurable).
+pub fn pause_flag() -> &'static AtomicBool {
+    &PAUSE
+}
+
+/// The signal that asked a checkpointing run to stop, if one did.
+pub fn interrupted_by() -> Option<i32> {
+    PAUSE.load(Ordering::SeqCst).then(|| SIGNAL.load(Ordering::SeqCst))
+}
+
+/// While it lives, the first interrupt asks the run to pause and checkpoint instead of
+/// ending the process.
+pub struct Checkpointing(());
+
+impl Checkpointing {
+    /// Registers the run.
+    pub fn start() -> Self {
+        CHECKPOINTING.store(true, Ordering::SeqCst);
+        Checkpointing(())
+    }
+}
+
+impl Drop for Checkpointing {
+    fn drop(&mut self) {
+        CHECKPOINTING.store(false, Ordering::SeqCst);
+    }
+}
+
+/// The end of a run that an interrupt stopped after writing its checkpoint: exit 128 +
+/// the signal, with a message saying how to continue.
+#[derive(Debug)]
+pub struct Interrupted {
+    /// The signal's number.
+    pub signal: i32,
+    /// What was kept and how to continue.
+    pub message: String,
+}
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "interrupted by {}: {}", signal_name(self.signal), self.message)
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+fn signal_name(signal: i32) -> &'static str {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    match signal {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "SIGHUP",
+    }
+}
+
 /// Starts the thread that turns SIGINT, SIGTERM and SIGHUP (the terminal closed) into a clean
-/// exit: children killed, temporary files and the directories created for them removed, exit status 130, 143 or 129 (128 + the
-/// signal, as shells report it).
+/// exit: children killed, temporary files and the directories created for them removed, exit
+/// status 130, 143 or 129 (128 + the signal, as shells report it). During a checkpointing run
+/// the first signal asks the run to pause and checkpoint instead ([`Checkpointing`]); a
+/// second one exits at once.
 pub fn on_interrupt() -> Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
@@ -75,7 +147,19 @@ pub fn on_interrupt() -> Result<()> {
     std::thread::Builder::new()
         .name("interrupt".into())
         .spawn(move || {
-            if let Some(signal) = signals.forever().next() {
+            // Clear a progress bar's line first when one may be drawn.
+            let clear = if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };
+            for signal in signals.forever() {
+                if CHECKPOINTING.load(Ordering::SeqCst) && !PAUSE.load(Ordering::SeqCst) {
+                    SIGNAL.store(signal, Ordering::SeqCst);
+                    PAUSE.store(true, Ordering::SeqCst);
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "{clear}{}: finishing the step (or chunk) in progress to write a checkpoint (interrupt again to stop at once)",
+                        signal_name(signal)
+                    );
+                    continue;
+                }
                 // Held until the process ends: no file is created or renamed after this.
                 let mut live = live();
                 for (_, child) in &mut live.children {
@@ -90,14 +174,7 @@ pub fn on_interrupt() -> Result<()> {
                 for dir in live.dirs.iter().rev() {
                     let _ = std::fs::remove_dir(dir);
                 }
-                let name = match signal {
-                    SIGINT => "SIGINT",
-                    SIGTERM => "SIGTERM",
-                    _ => "SIGHUP",
-                };
-                // Clear a progress bar's line first when one may be drawn.
-                let clear =
-                    if std::io::IsTerminal::is_terminal(&std::io::stderr()) { "\r\x1b[2K" } else { "" };
+                let name = signal_name(signal);
                 let _ = writeln!(std::io::stderr(), "{clear}interrupted by {name}: unfinished files removed");
                 std::process::exit(128 + signal);
             }
@@ -161,7 +238,8 @@ pub struct WriteError {
 }
 
 impl WriteError {
-    fn new(flag: &str, path: &Path, source: io::Error) -> Self {
+    /// The failed write of `path`, the output of option `flag`.
+    pub fn new(flag: &str, path: &Path, source: io::Error) -> Self {
         WriteError { flag: flag.to_owned(), path: path.to_owned(), source: bare(source) }
     }
 
@@ -662,9 +740,25 @@ impl AtomicFile {
     /// The output `path` of option `flag`; `owner`: the id of the study directory it belongs
     /// to ([`claim_dir`]), whose names it may take.
     pub fn create_in(path: &Path, flag: &str, owner: Option<u64>) -> Result<Self> {
-        let Resolved { target, special } = resolve(path, flag)?;
-        let place = Place::of(&target).map_err(|e| WriteError::new(flag, path, e))?;
+        let resolved = resolve(path, flag)?;
+        let place = Place::of(&resolved.target).map_err(|e| WriteError::new(flag, path, e))?;
         claim(Claim { held: Held::File { place, owner }, flag: flag.to_owned(), path: path.to_owned() })?;
+        Self::open(path, flag, resolved)
+    }
+
+    /// A new version of the regular file `path`, which the run claimed with
+    /// [`claim_regular`] (a checkpoint, rewritten at every pause): written under a temporary
+    /// name and renamed into place as [`AtomicFile::create`]'s, without claiming it again.
+    pub fn recreate(path: &Path, flag: &str) -> Result<Self> {
+        let resolved = resolve(path, flag)?;
+        if let Some(kind) = resolved.special {
+            bail!("cannot write {flag} {}: it is a {kind} now; give a regular file", path.display());
+        }
+        Self::open(path, flag, resolved)
+    }
+
+    /// Opens the resolved output `path` of `flag`.
+    fn open(path: &Path, flag: &str, Resolved { target, special }: Resolved) -> Result<Self> {
         let wrap = |e: io::Error| anyhow::Error::new(WriteError::new(flag, path, e));
         if let Some(kind) = special {
             // In place. A FIFO is opened when it is written, where it waits for its reader:
@@ -736,10 +830,23 @@ impl AtomicFile {
 
     /// Renames several finished files into place as one step for an interrupt: all of them
     /// or none.
-    pub fn commit_all(mut files: Vec<AtomicFile>) -> Result<()> {
+    pub fn commit_all(files: Vec<AtomicFile>) -> Result<()> {
+        Self::commit_with(files, |_| Ok(()))
+    }
+
+    /// [`AtomicFile::commit_all`], then, once all are in place, `also` (which may rename a
+    /// [`PartialFile`] into place or remove a finished run's checkpoint), as one step for an
+    /// interrupt.
+    pub fn commit_with(
+        mut files: Vec<AtomicFile>,
+        also: impl FnOnce(&mut Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
         let result = {
             let mut live = live();
-            files.iter_mut().try_for_each(|f| f.rename(&mut live))
+            match files.iter_mut().try_for_each(|f| f.rename(&mut live)) {
+                Ok(()) => also(&mut Guard(live)),
+                Err(e) => Err(e),
+            }
         };
         // Outside the lock: those not renamed remove their temporary files.
         drop(files);
@@ -767,8 +874,8 @@ impl Drop for AtomicFile {
     }
 }
 
-/// A handle on an [`AtomicFile`]: its write errors are [`WriteError`]s, which name the output.
-/// Handles share the file's position (a FIFO's each open it anew).
+/// A handle on an [`AtomicFile`] (or a [`PartialFile`]): its write errors are [`WriteError`]s,
+/// which name the output. Handles share the file's position (a FIFO's each open it anew).
 pub struct OutFile {
     file: File,
     flag: String,
@@ -776,6 +883,27 @@ pub struct OutFile {
 }
 
 impl OutFile {
+    /// `file`, the output `path` of option `flag`.
+    pub fn new(file: File, flag: &str, path: &Path) -> Self {
+        OutFile { file, flag: flag.to_owned(), path: path.to_owned() }
+    }
+
+    /// Writes the file's contents to the disk (a checkpoint never refers to bytes that a
+    /// crash could lose).
+    pub fn sync_data(&self) -> io::Result<()> {
+        self.file.sync_data().map_err(|e| self.annotate(e))
+    }
+
+    /// Cuts the file to `len` bytes.
+    pub fn set_len(&self, len: u64) -> io::Result<()> {
+        self.file.set_len(len).map_err(|e| self.annotate(e))
+    }
+
+    /// Whether it can seek (a FIFO cannot).
+    pub fn seekable(&mut self) -> bool {
+        self.file.stream_position().is_ok()
+    }
+
     fn annotate(&self, e: io::Error) -> io::Error {
         if e.get_ref().is_some_and(|r| r.is::<WriteError>()) {
             return e;
@@ -800,160 +928,179 @@ impl Seek for OutFile {
     }
 }
 
-/// Where trajectory rows go.
-pub enum Sink {
-    /// Nowhere (`--every 0`).
-    Discard,
-    /// CSV rows, streamed.
-    Csv(Box<csv::Writer<Box<dyn Write>>>),
-    /// Rows of a 2-D float64 .npy array, streamed.
-    Npy(NpyRows),
-}
+/// The interrupt list, locked: what is done through it is one step for an interrupt.
+pub struct Guard<'a>(MutexGuard<'a, Live>);
 
-impl Sink {
-    /// A sink for `output` with these column names; `file` is the open output file.
-    pub fn new(output: Option<&Output>, file: Option<&AtomicFile>, columns: &[&str]) -> Result<Self> {
-        let writer: Box<dyn Write> = match output {
-            None => return Ok(Sink::Discard),
-            Some(Output::Npy(_)) => {
-                let file = file.expect("a .npy output has a file").handle()?;
-                return Ok(Sink::Npy(NpyRows::new(file, columns.len())?));
-            }
-            Some(Output::Stdout) => Box::new(std::io::stdout().lock()),
-            Some(Output::Csv(_)) => Box::new(file.expect("a CSV file output has a file").handle()?),
-        };
-        let mut csv = csv::WriterBuilder::new().buffer_capacity(1 << 16).from_writer(writer);
-        csv.write_record(columns).map_err(csv_error)?;
-        Ok(Sink::Csv(Box::new(csv)))
+impl Guard<'_> {
+    /// Takes `path` off the list: an interrupt no longer removes it.
+    pub fn forget(&mut self, path: &Path) {
+        self.0.forget(path);
     }
 
-    /// Writes one row.
-    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
-        match self {
-            Sink::Discard => {}
-            Sink::Npy(npy) => npy.row(values)?,
-            Sink::Csv(w) => {
-                let mut buf = ryu::Buffer::new();
-                for v in values {
-                    w.write_field(buf.format(v)).map_err(csv_error)?;
-                }
-                w.write_record(None::<&[u8]>).map_err(csv_error)?;
-            }
+    /// Creates (or empties) `path`, which an interrupt removes until it is forgotten.
+    pub fn create_listed(&mut self, path: &Path) -> std::io::Result<File> {
+        let file = File::options().read(true).write(true).create(true).truncate(true).open(path)?;
+        self.0.temps.push(path.to_owned());
+        Ok(file)
+    }
+}
+
+/// Runs `f` as one step for an interrupt.
+pub fn together<R>(f: impl FnOnce(&mut Guard<'_>) -> R) -> R {
+    f(&mut Guard(live()))
+}
+
+/// Claims `path`, of option `flag`, as an output that the run itself writes and reads back
+/// as a regular file (a checkpoint, a partial trajectory, a grid's finished chunks):
+/// resolved and checked as [`AtomicFile::create`] does (`-`, a directory, a missing
+/// directory refused; a symlink followed), refused when it is a FIFO, a device or a socket
+/// (`what` says what the file is, for the message), and claimed in the run's list of
+/// outputs, so that no other output of the run may be the same file. Returns the file it
+/// names (a symlink followed).
+pub fn claim_regular(path: &Path, flag: &str, what: &str) -> Result<PathBuf> {
+    if path == Path::new("-") {
+        bail!("invalid {flag} -: {what} is a file that pendula reads back, not stdout; give a file name");
+    }
+    let Resolved { target, special } = resolve(path, flag)?;
+    if let Some(kind) = special {
+        bail!(
+            "cannot write {flag} {}: it is a {kind}, and {what} must be a regular file that pendula reads back; give a file name",
+            path.display()
+        );
+    }
+    let place = Place::of(&target).map_err(|e| WriteError::new(flag, path, e))?;
+    claim(Claim { held: Held::File { place, owner: None }, flag: flag.to_owned(), path: path.to_owned() })?;
+    Ok(target)
+}
+
+/// A trajectory written by a checkpointing run under a visible name beside the file it
+/// becomes, `OUT.partial`, so that a checkpoint can refer to it and `pendula resume` continue
+/// it. Until a checkpoint refers to it ([`PartialFile::keep`]) an interrupt removes it like a
+/// temporary file; afterwards it stays with its checkpoint. [`PartialFile::finish`] renames
+/// it into place.
+#[derive(Debug)]
+pub struct PartialFile {
+    path: PathBuf,
+    /// The file it becomes (`--out`, a symlink followed).
+    target: PathBuf,
+    /// The path as the user gave it, for messages.
+    shown: PathBuf,
+    /// Whether it is still in the interrupt's list (no checkpoint refers to it).
+    listed: bool,
+}
+
+/// What the partial trajectory is, in messages.
+const PARTIAL: &str = "with --checkpoint, the trajectory";
+
+impl PartialFile {
+    /// The partial file of `target`: `target` with `.partial` appended.
+    pub fn path_of(target: &Path) -> PathBuf {
+        let mut name = target.as_os_str().to_owned();
+        name.push(".partial");
+        PathBuf::from(name)
+    }
+
+    /// Claims the output `target` (of option `flag`) and its partial file, which must both be
+    /// regular files (a FIFO or a device cannot be continued), as outputs of the run; nothing
+    /// is created yet ([`PartialFile::create`]).
+    pub fn claim(target: &Path, flag: &str) -> Result<Self> {
+        let resolved = claim_regular(target, flag, PARTIAL)?;
+        let path = Self::path_of(&resolved);
+        claim_regular(&path, flag, PARTIAL)?;
+        Ok(PartialFile { path, target: resolved, shown: target.to_owned(), listed: false })
+    }
+
+    /// [`PartialFile::claim`] for the partial file `recorded` that a checkpoint refers to,
+    /// which must be the one beside `target`.
+    pub fn claim_recorded(target: &Path, recorded: &Path, flag: &str) -> Result<Self> {
+        let partial = Self::claim(target, flag)?;
+        if std::path::absolute(&partial.path).ok() != std::path::absolute(recorded).ok() {
+            bail!(
+                "the partial trajectory {} that the checkpoint refers to is not beside {flag} {} ({} expected): was the output moved?",
+                recorded.display(),
+                target.display(),
+                partial.path.display()
+            );
         }
-        Ok(())
+        Ok(partial)
     }
 
-    /// Flushes the rows; for .npy, writes the final row count into the header.
-    pub fn finish(self) -> Result<()> {
-        match self {
-            Sink::Discard => Ok(()),
-            Sink::Csv(mut w) => Ok(w.flush()?),
-            Sink::Npy(npy) => npy.finish(),
+    /// Creates (or empties) the file; an interrupt removes it until a checkpoint refers to it.
+    /// Its write errors name `--out` and the path the user gave, as a temporary file's do.
+    pub fn create(&mut self) -> Result<OutFile> {
+        let file = together(|guard| {
+            let file = guard.create_listed(&self.path)?;
+            self.listed = true;
+            Ok::<_, io::Error>(file)
+        })
+        .map_err(|e| WriteError::new("--out", &self.shown, e))?;
+        Ok(OutFile::new(file, "--out", &self.shown))
+    }
+
+    /// The path the user gave for the output it becomes, for messages.
+    pub fn shown(&self) -> &Path {
+        &self.shown
+    }
+
+    /// Opens the file as a checkpoint left it, for reading and appending.
+    pub fn open(&self) -> Result<File> {
+        File::options().read(true).write(true).open(&self.path).with_context(|| {
+            format!(
+                "cannot open the partial trajectory {} that the checkpoint refers to",
+                self.path.display()
+            )
+        })
+    }
+
+    /// Its path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Takes it off the interrupt's list: a checkpoint now refers to it.
+    pub fn keep(&mut self, guard: &mut Guard<'_>) {
+        guard.0.forget(&self.path);
+        self.listed = false;
+    }
+
+    /// Writes its contents to the disk, so that a checkpoint written next never refers to
+    /// bytes that a crash could lose.
+    pub fn sync(&self) -> Result<()> {
+        File::open(&self.path)
+            .and_then(|f| f.sync_data())
+            .map_err(|e| WriteError::new("--out", &self.shown, e).into())
+    }
+
+    /// Renames the finished trajectory into place.
+    pub fn finish(mut self, guard: &mut Guard<'_>) -> Result<()> {
+        guard.0.forget(&self.path);
+        self.listed = false;
+        std::fs::rename(&self.path, &self.target).map_err(|e| WriteError::new("--out", &self.shown, e).into())
+    }
+
+    /// Removes it (the run failed: nothing it wrote is of use).
+    pub fn remove(mut self) {
+        let mut live = live();
+        live.forget(&self.path);
+        self.listed = false;
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+impl Drop for PartialFile {
+    fn drop(&mut self) {
+        // Still listed: no checkpoint refers to it, so nothing can continue it.
+        if self.listed {
+            let mut live = live();
+            live.forget(&self.path);
+            let _ = std::fs::remove_file(&self.path);
         }
     }
-}
-
-/// A CSV writer's error as the writer's own when it is one ([`WriteError`], which names the
-/// output, and is what the exit code looks for).
-fn csv_error(e: csv::Error) -> anyhow::Error {
-    let text = e.to_string();
-    match e.into_kind() {
-        csv::ErrorKind::Io(io) => io.into(),
-        _ => anyhow::anyhow!(text),
-    }
-}
-
-/// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row: the header is
-/// written first with room for any row count, and rewritten with the real one at the end.
-/// Into a FIFO, which cannot seek, the rows are spooled in an unnamed temporary file (gone
-/// with the process, however it ends) and follow the final header at the end.
-pub struct NpyRows {
-    out: BufWriter<OutFile>,
-    /// The rows, when `out` cannot seek.
-    spool: Option<BufWriter<File>>,
-    columns: usize,
-    rows: u64,
-    header_len: usize,
-}
-
-impl NpyRows {
-    /// Starts the array in `file` (at its start).
-    pub fn new(mut file: OutFile, columns: usize) -> Result<Self> {
-        // The header's size for the longest row count; every header is padded to it.
-        let header_len = npy_header(u64::MAX, columns, 0).len();
-        let seekable = file.stream_position().is_ok();
-        let mut out = BufWriter::with_capacity(1 << 16, file);
-        let spool = if seekable {
-            out.write_all(&npy_header(0, columns, header_len))?;
-            None
-        } else {
-            let spool = tempfile::tempfile()
-                .context("cannot spool the .npy rows for a FIFO in the temporary directory")?;
-            Some(BufWriter::with_capacity(1 << 16, spool))
-        };
-        Ok(NpyRows { out, spool, columns, rows: 0, header_len })
-    }
-
-    /// Appends one row of `columns` values.
-    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
-        let w: &mut dyn Write = match &mut self.spool {
-            Some(spool) => spool,
-            None => &mut self.out,
-        };
-        let mut n = 0;
-        for v in values {
-            w.write_all(&v.to_le_bytes())?;
-            n += 1;
-        }
-        debug_assert_eq!(n, self.columns, "a row has one value per column");
-        self.rows += 1;
-        Ok(())
-    }
-
-    /// Writes the header with the final shape.
-    pub fn finish(self) -> Result<()> {
-        let header = npy_header(self.rows, self.columns, self.header_len);
-        let mut out = self.out;
-        match self.spool {
-            Some(spool) => {
-                let mut spool = spool.into_inner().map_err(|e| e.into_error())?;
-                spool.seek(SeekFrom::Start(0))?;
-                out.write_all(&header)?;
-                io::copy(&mut spool, &mut out)?;
-                out.flush()?;
-            }
-            None => {
-                let mut file = out.into_inner().map_err(|e| e.into_error())?;
-                file.seek(SeekFrom::Start(0))?;
-                file.write_all(&header)?;
-                file.flush()?;
-            }
-        }
-        Ok(())
-    }
-}
-
-/// The NPY 1.0 header of a C-order float64 array of shape (rows, columns): magic, version,
-/// the length, and the dictionary padded with spaces and a newline so that the whole header
-/// is `min_len` bytes or the next multiple of 64 (the format's alignment).
-fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
-    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
-    let unpadded = 10 + dict.len() + 1;
-    let total = unpadded.div_ceil(64).max(1) * 64;
-    let total = total.max(min_len);
-    let mut header = Vec::with_capacity(total);
-    header.extend_from_slice(b"\x93NUMPY\x01\x00");
-    header.extend_from_slice(&u16::try_from(total - 10).expect("a short header").to_le_bytes());
-    header.extend_from_slice(dict.as_bytes());
-    header.resize(total - 1, b' ');
-    header.push(b'\n');
-    header
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{matches, npy_header};
+    use super::matches;
 
     #[test]
     fn study_names_match_with_one_wildcard() {
@@ -961,16 +1108,5 @@ mod tests {
         let m = |n: &str| matches(&names, std::ffi::OsStr::new(n));
         assert!(m("summary.csv") && m("phase_rk4.png") && m("phase_.png"));
         assert!(!m("summary.json") && !m("phase_rk4.svg") && !m("phase.png") && !m("xphase_rk4.png"));
-    }
-
-    #[test]
-    fn npy_headers_are_aligned_and_of_one_length() {
-        let long = npy_header(u64::MAX, 6, 0).len();
-        assert_eq!(long % 64, 0);
-        let short = npy_header(3, 6, long);
-        assert_eq!(short.len(), long);
-        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
-        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
-        assert!(short.ends_with(b" \n"));
     }
 }

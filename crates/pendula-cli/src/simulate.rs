@@ -1,132 +1,135 @@
-//! `pendula simulate`: one system, one method, a trajectory and a summary.
+//! `pendula simulate`: one system, one method, a trajectory and a summary — run in one go,
+//! or in legs between checkpoints (`--checkpoint`, continued by `pendula resume`), which
+//! give the same bytes.
 
 use std::io::Write;
-use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Result;
-use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
+use pendula::checkpoint::{Leg, Pause};
 use pendula::error::Short;
 use pendula::events::{EndAtEvent, EventLocator, EventSpec};
-use pendula::observe::{Every, Ignore, Observer, Resample, Sample};
+use pendula::observe::{Every, Observer, Resample};
+use pendula::{Report, Stepping};
 use serde_json::{Map, Value, json};
 
 use crate::cli::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
-use crate::output::{AtomicFile, Sink};
+use crate::output::{AtomicFile, PartialFile};
+use crate::run_state::{Resumed, Saved};
+use crate::sink::Sink;
 use crate::study::Summary;
-
-/// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
-struct Writer<'a> {
-    model: &'a dyn pendula::system::DynModel,
-    sink: Sink,
-    rows: u64,
-    /// The rows, flat, when the run is to be drawn.
-    kept: Option<Vec<f64>>,
-    failure: Option<anyhow::Error>,
-}
-
-impl Observer for Writer<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        let e = s.energy.unwrap_or_else(|| self.model.energy(s.t, s.y));
-        let row = || std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
-        if let Err(err) = self.sink.row(row()) {
-            self.failure = Some(err);
-            return ControlFlow::Break(());
-        }
-        if let Some(kept) = &mut self.kept {
-            kept.extend(row());
-        }
-        self.rows += 1;
-        ControlFlow::Continue(())
-    }
-}
-
-/// A progress bar over simulated time (stderr, drawn only on a terminal) for runs longer
-/// than half a second, looked at every 4096 steps: a per-step check of one bit pattern.
-struct Progress {
-    bar: Option<ProgressBar>,
-    start: Instant,
-    t0: f64,
-    span: f64,
-}
-
-/// Ticks of the bar from t0 to t_end.
-const PROGRESS_TICKS: u64 = 1000;
-
-impl Progress {
-    fn new(t0: f64, t_end: f64) -> Self {
-        Progress { bar: None, start: Instant::now(), t0, span: t_end - t0 }
-    }
-
-    fn at(&mut self, step: u64, t: f64) {
-        if !step.is_multiple_of(4096) {
-            return;
-        }
-        let bar = match &self.bar {
-            Some(bar) => bar,
-            // A short run finishes before a bar would be read: none is drawn.
-            None if self.start.elapsed().as_secs_f64() < 0.5 => return,
-            None => {
-                let bar = ProgressBar::new(PROGRESS_TICKS);
-                bar.set_style(
-                    ProgressStyle::with_template("simulate [{bar:30}] {percent:>3}% {elapsed} (eta {eta})")
-                        .expect("valid template")
-                        .progress_chars("=> "),
-                );
-                self.bar.insert(bar)
-            }
-        };
-        let done = ((t - self.t0) / self.span).clamp(0.0, 1.0);
-        bar.set_position((done * PROGRESS_TICKS as f64) as u64);
-    }
-
-    fn finish(&self) {
-        if let Some(bar) = &self.bar {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-impl Observer for Progress {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
-        self.at(s.step, s.t);
-        ControlFlow::Continue(())
-    }
-}
+use crate::watch::{Progress, Rows, Watch, Writer};
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    execute(args, None)
+}
+
+/// Where the trajectory is written: a temporary file renamed into place at the end, or, for
+/// a run that writes checkpoints, the visible `OUT.partial` a checkpoint can refer to.
+enum Trajectory {
+    Atomic(AtomicFile),
+    Partial(PartialFile),
+}
+
+/// The trajectory's output, claimed and not yet written.
+enum Opened<'a> {
+    Atomic(AtomicFile),
+    Partial(PartialFile),
+    /// A checkpoint's partial file, and how much of it the checkpoint recorded.
+    Resumed(&'a Output, PartialFile, crate::sink::Position),
+    None,
+}
+
+/// Runs `simulate` from the start, or `resumed` from a checkpoint (`pendula resume`).
+pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<()> {
     let config = config::simulate(args)?;
-    let SimulateConfig { values, method, spec, tolerances, first_step, every, out, summary, grid, plot } =
-        &config;
+    let SimulateConfig {
+        values,
+        method,
+        spec,
+        tolerances,
+        first_step,
+        every,
+        out,
+        summary,
+        grid,
+        plot,
+        checkpoint,
+    } = &config;
+    let fingerprint = crate::run_state::fingerprint(&config, args);
+    if let Some(r) = &resumed {
+        r.checkpoint.check_fingerprint(&fingerprint)?;
+    }
+    // From here an interrupt asks for a checkpoint (taken after the first step at the
+    // earliest) rather than ending the process.
+    let _registered = checkpoint.as_ref().map(|_| crate::output::Checkpointing::start());
+    // The checkpoint is claimed with the outputs: a regular file, none of them.
+    if let Some(c) = checkpoint {
+        crate::output::claim_regular(&c.path, "--checkpoint", "a checkpoint")?;
+    }
     let info = values.info();
-    // Open the outputs first: a path that cannot be written fails before the work.
-    let out_file = match out {
-        Some(Output::Csv(p) | Output::Npy(p)) => Some(AtomicFile::create(p, "--out")?),
-        Some(Output::Stdout) => {
-            crate::output::claim_stdout("--out")?;
-            None
+    let mut columns = vec!["t"];
+    columns.extend(info.state.iter().map(|q| q.name));
+    columns.push("energy");
+    // Claim every output first, writing nothing: a path that cannot be written, or two
+    // outputs that are one file, fail before any byte goes anywhere (a FIFO included).
+    let opened = match (out, checkpoint, &resumed) {
+        (Some(Output::Csv(p) | Output::Npy(p)), None, _) => Opened::Atomic(AtomicFile::create(p, "--out")?),
+        (Some(o @ (Output::Csv(p) | Output::Npy(p))), Some(_), Some(r)) => {
+            let (position, partial) = r.out.as_ref().ok_or_else(|| r.mismatch("a trajectory file"))?;
+            Opened::Resumed(o, PartialFile::claim_recorded(p, partial, "--out")?, *position)
         }
-        None => None,
+        (Some(Output::Csv(p) | Output::Npy(p)), Some(_), None) => {
+            Opened::Partial(PartialFile::claim(p, "--out")?)
+        }
+        (Some(Output::Stdout), _, _) => {
+            crate::output::claim_stdout("--out")?;
+            Opened::None
+        }
+        (None, _, _) => Opened::None,
     };
     // `--summary -` prints the summary on stdout (config refuses it with `--out -`).
     let summary_out = Summary::open(summary.as_deref())?;
     let plot_file = plot.as_deref().map(|p| AtomicFile::create(p, "--plot")).transpose()?;
+    // Every output claimed: a checkpoint left by an earlier run is not overwritten.
+    if let (Some(c), None) = (checkpoint, &resumed)
+        && c.path.exists()
+    {
+        anyhow::bail!(
+            "invalid --checkpoint {}: it exists (from a run interrupted earlier?): continue that run with `pendula resume {}`, or remove the file to start again",
+            crate::checkpoint::absolute(&c.path).display(),
+            crate::checkpoint::absolute(&c.path).display()
+        );
+    }
+    let (trajectory, sink, kept) = match opened {
+        Opened::Atomic(file) => {
+            let sink = Sink::new(out.as_ref(), Some(file.handle()?), &columns)?;
+            (Some(Trajectory::Atomic(file)), sink, None)
+        }
+        Opened::Resumed(o, partial, position) => {
+            let (sink, kept) = Sink::resume(o, &partial, columns.len(), &position, plot.is_some())?;
+            (Some(Trajectory::Partial(partial)), sink, kept)
+        }
+        Opened::Partial(mut partial) => {
+            let file = partial.create()?;
+            let sink = Sink::new(out.as_ref(), Some(file), &columns)?;
+            (Some(Trajectory::Partial(partial)), sink, None)
+        }
+        Opened::None => (None, Sink::new(out.as_ref(), None, &columns)?, None),
+    };
 
-    let mut columns = vec!["t"];
-    columns.extend(info.state.iter().map(|q| q.name));
-    columns.push("energy");
     let model = values.build();
     // The energy error relative to the system's scale, or for damped and driven runs the
     // energy balance E − E(0) − W.
-    let mut energy = EnergyBalance::new(&*model, values.initial_state());
-    let mut progress = Progress::new(spec.t0, spec.schedule()?.t_end);
-    let mut writer = Writer {
+    let energy = EnergyBalance::new(&*model, values.initial_state());
+    let progress = Progress::new(spec.t0, spec.schedule()?.t_end);
+    let writer = Writer {
         model: &*model,
-        sink: Sink::new(out.as_ref(), out_file.as_ref(), &columns)?,
+        sink,
         rows: 0,
-        kept: plot.is_some().then(Vec::new),
+        kept: kept.or_else(|| plot.is_some().then(Vec::new)),
         failure: None,
     };
     let specs = args
@@ -137,47 +140,117 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let watch_events = !specs.is_empty();
     // Rows: on the --output-dt / --t-eval grid, or every N-th step and the last (a plot
     // without a trajectory file draws every step).
-    let (mut on_grid, mut thinned, mut none);
-    let rows: &mut dyn Observer = match (grid, every.or(plot.is_some().then_some(1))) {
-        (Some(g), _) => {
-            on_grid = Resample::new(g.clone(), info.state.len(), &mut writer);
-            &mut on_grid
-        }
-        (None, Some(n)) => {
-            thinned = Every { n, inner: &mut writer };
-            &mut thinned
-        }
-        (None, None) => {
-            none = Ignore;
-            &mut none
-        }
+    let rows = match (grid, every.or(plot.is_some().then_some(1))) {
+        (Some(g), _) => Rows::Grid(Resample::new(g.clone(), info.state.len(), writer)),
+        (None, Some(n)) => Rows::Every(Every { n, inner: writer }),
+        (None, None) => Rows::None(writer),
     };
     // The energy is tracked at every step; a terminal event ends the run, and the rows, at
     // the event's time and state.
-    let mut watch =
-        EndAtEvent { events: EventLocator::new(&*model, specs), inner: (&mut energy, (rows, &mut progress)) };
-    // Without events the locator is left out: one call per step less on the fast paths.
-    let observers: &mut dyn Observer = if watch_events { &mut watch } else { &mut watch.inner };
-    let start = Instant::now();
-    let report = match tolerances {
-        Some(tol) => {
-            let t_end = spec.schedule()?.t_end;
-            model.solve_adaptive(method, values.initial_state(), t_end, *first_step, tol, observers)
-        }
-        // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
-        // It implements the free equations: damped or driven runs take the general path.
-        None if info.name == "double" && method.name == "rk4" && !double(values).is_forced() => {
-            pendula::ensemble::rk4_trajectory(&double(values), values.initial_state(), spec, observers)
-        }
-        None => model.solve(method, values.initial_state(), spec, observers),
+    let mut watch = Watch { events: EventLocator::new(&*model, specs), energy, rows, progress };
+    let mut saved = match &resumed {
+        Some(r) => Some(r.restore(&mut watch)?),
+        None => None,
     };
-    let wall_s = start.elapsed().as_secs_f64();
-    let EndAtEvent { events, .. } = watch;
+    // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
+    // It implements the free equations: damped or driven runs take the general path.
+    let fast =
+        tolerances.is_none() && info.name == "double" && method.name == "rk4" && !double(values).is_forced();
+    let stepping = match tolerances {
+        Some(tol) => Stepping::Adaptive { t_end: spec.schedule()?.t_end, h0: *first_step, tol },
+        None => Stepping::Fixed(*spec),
+    };
+    let mut trajectory = trajectory;
+    let mut next = saved.as_ref().map_or_else(
+        || checkpoint.as_ref().and_then(|c| c.every).unwrap_or(f64::INFINITY),
+        |s| s.next_checkpoint,
+    );
+    let earlier_wall = resumed.as_ref().map_or(0.0, |r| r.wall_s);
+    let start = Instant::now();
+    // Legs between checkpoints; one leg without --checkpoint.
+    let report = loop {
+        let pause = match checkpoint {
+            Some(_) => Pause { at: next, flag: Some(crate::output::pause_flag()) },
+            None => Pause::NEVER,
+        };
+        let from = saved.as_ref().map(|s| &s.run);
+        let y0 = values.initial_state();
+        let Watch { events, energy, rows, progress } = &mut watch;
+        let mut ignore = pendula::observe::Ignore;
+        let rows: &mut dyn Observer = match rows {
+            Rows::Grid(r) => r,
+            Rows::Every(e) => e,
+            Rows::None(_) => &mut ignore,
+        };
+        let mut chain = EndAtEvent {
+            events: std::mem::replace(events, EventLocator::new(&*model, Vec::new())),
+            inner: (energy, (rows, progress)),
+        };
+        // Without events the locator is left out: one call per step less on the fast paths.
+        let observers: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
+        let leg = if fast {
+            pendula::ensemble::rk4_trajectory_resumable(&double(values), y0, spec, observers, from, &pause)
+        } else {
+            model.solve_resumable(method, y0, &stepping, observers, from, &pause)
+        };
+        *events = chain.events;
+        if let Some(err) = watch.rows.writer().failure.take() {
+            return Err(err);
+        }
+        let state = match leg {
+            Ok(Leg::Done(report)) => break report,
+            Ok(Leg::Paused(state)) => state,
+            Err(err) => {
+                // A run that failed numerically leaves nothing: continuing from its checkpoint
+                // would fail the same way. (A checkpoint that does not fit is left as it is.)
+                let numerical = matches!(
+                    err,
+                    pendula::Error::NonFinite { .. }
+                        | pendula::Error::NewtonDidNotConverge { .. }
+                        | pendula::Error::StepSizeTooSmall { .. }
+                );
+                if let (true, Some(c)) = (numerical, checkpoint) {
+                    if let Some(Trajectory::Partial(p)) = trajectory.take() {
+                        p.remove();
+                    }
+                    let _ = std::fs::remove_file(&c.path);
+                }
+                return Err(err.into());
+            }
+        };
+        let c = checkpoint.as_ref().expect("only a checkpointing run pauses");
+        // The next checkpoint at the next multiple of the interval after this one.
+        next = c.every.map_or(f64::INFINITY, |every| every * ((state.t / every).floor() + 1.0));
+        let partial = match &mut trajectory {
+            Some(Trajectory::Partial(p)) => Some(p),
+            _ => None,
+        };
+        let at = Saved { run: state, next_checkpoint: next };
+        let wall_s = earlier_wall + start.elapsed().as_secs_f64();
+        crate::run_state::write(&c.path, args, &fingerprint, &at, &mut watch, partial, wall_s)?;
+        if let Some(signal) = crate::output::interrupted_by() {
+            watch.progress.finish();
+            return Err(crate::output::Interrupted {
+                signal,
+                message: format!(
+                    "checkpoint written to {} at t = {} s (step {}); continue with `pendula resume {}`",
+                    crate::checkpoint::absolute(&c.path).display(),
+                    Short(at.run.t),
+                    at.run.steps,
+                    crate::checkpoint::absolute(&c.path).display()
+                ),
+            }
+            .into());
+        }
+        saved = Some(at);
+    };
+    let wall_s = earlier_wall + start.elapsed().as_secs_f64();
+    let Watch { events, energy, rows, progress } = watch;
     progress.finish();
+    let mut writer = rows.into_writer();
     if let Some(err) = writer.failure.take() {
         return Err(err);
     }
-    let report = report?;
     let energy_unit = info.energy_unit();
     let rows = writer.rows;
     writer.sink.finish()?;
@@ -195,6 +268,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         )?;
         file.write_all(&bytes)?;
     }
+    let report: &Report = &report;
 
     let mut final_state = Map::new();
     final_state.insert("t".into(), json!(t_end));
@@ -245,8 +319,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         }).collect::<Vec<_>>(),
     });
     let summary_path = summary_out.path().map(std::path::Path::to_path_buf);
-    // The trajectory, its picture and the summary appear together or not at all.
-    summary_out.write_with(&doc, out_file.into_iter().chain(plot_file).collect())?;
+    // The trajectory, its picture and the summary appear together or not at all; a
+    // checkpointing run's checkpoint goes in the same step (the run is complete).
+    finish_files(summary_out, &doc, trajectory, plot_file, checkpoint.as_ref().map(|c| c.path.as_path()))?;
 
     // The human summary is composed first and written at once (stderr is unbuffered).
     let mut err = Vec::new();
@@ -293,6 +368,34 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
     std::io::stderr().write_all(&err)?;
     Ok(())
+}
+
+/// Puts the finished files in place, as one step for an interrupt: the trajectory (renamed
+/// from its temporary or partial name), the plot and the summary `doc`; a checkpointing
+/// run's checkpoint is removed (the run is complete).
+fn finish_files(
+    summary: Summary,
+    doc: &Value,
+    trajectory: Option<Trajectory>,
+    plot: Option<AtomicFile>,
+    checkpoint: Option<&std::path::Path>,
+) -> Result<()> {
+    let (mut files, mut partial) = (Vec::new(), None);
+    match trajectory {
+        Some(Trajectory::Atomic(f)) => files.push(f),
+        Some(Trajectory::Partial(p)) => partial = Some(p),
+        None => {}
+    }
+    files.extend(plot);
+    summary.write_then(doc, files, |guard| {
+        if let Some(p) = partial {
+            p.finish(guard)?;
+        }
+        if let Some(c) = checkpoint {
+            crate::checkpoint::remove(c)?;
+        }
+        Ok(())
+    })
 }
 
 /// The double pendulum of these values (of the `double` system).

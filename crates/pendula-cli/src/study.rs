@@ -447,18 +447,33 @@ impl OutDir {
     /// steps leaves nothing untidied); then the previous run's files that this one did not
     /// write are removed, the manifest becomes this run's files, and stderr is told.
     pub fn finish(self) -> Result<()> {
-        self.finish_inner(None)
+        self.finish_inner(None, |_| Ok(()))
     }
 
     /// [`OutDir::finish`], with the run's summary: its file is renamed into place together
     /// with the directory's files, and JSON for stdout is printed after them.
     pub fn finish_with(self, summary: Summary, doc: &serde_json::Value) -> Result<()> {
+        self.finish_then(summary, doc, |_| Ok(()))
+    }
+
+    /// [`OutDir::finish_with`], and `also` in the step that renames the files into place
+    /// ([`AtomicFile::commit_with`]): a finished run's checkpoint removed.
+    pub fn finish_then(
+        self,
+        summary: Summary,
+        doc: &serde_json::Value,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
         let (file, stdout) = summary.stage(doc)?;
-        self.finish_inner(file)?;
+        self.finish_inner(file, also)?;
         print_json(stdout)
     }
 
-    fn finish_inner(mut self, summary: Option<AtomicFile>) -> Result<()> {
+    fn finish_inner(
+        mut self,
+        summary: Option<AtomicFile>,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
         let pending = std::mem::take(&mut self.pending);
         let written: Vec<&str> = pending.iter().map(|(n, _)| n.as_str()).collect();
         let mut listed = self.previous.iter().map(String::as_str).collect::<Vec<_>>();
@@ -473,7 +488,7 @@ impl OutDir {
         let mut files = vec![during];
         files.extend(pending.into_iter().map(|(_, f)| f));
         files.extend(summary);
-        AtomicFile::commit_all(files)?;
+        AtomicFile::commit_with(files, also)?;
         if let Some(created) = self.created.take() {
             created.keep();
         }
@@ -567,11 +582,18 @@ impl Summary {
     }
 
     /// Writes the JSON, and renames it into place together with the run's `files`: all of
-    /// them appear, or none. JSON for stdout is printed once the files are in place.
-    pub fn write_with(self, doc: &serde_json::Value, mut files: Vec<AtomicFile>) -> Result<()> {
+    /// them appear, or none; then `also`, in the same step for an interrupt
+    /// ([`AtomicFile::commit_with`]): a checkpointing run's partial trajectory renamed into
+    /// place, its checkpoint removed. JSON for stdout is printed once the files are in place.
+    pub fn write_then(
+        self,
+        doc: &serde_json::Value,
+        mut files: Vec<AtomicFile>,
+        also: impl FnOnce(&mut crate::output::Guard<'_>) -> Result<()>,
+    ) -> Result<()> {
         let (file, stdout) = self.stage(doc)?;
         files.extend(file);
-        AtomicFile::commit_all(files)?;
+        AtomicFile::commit_with(files, also)?;
         print_json(stdout)
     }
 

@@ -193,6 +193,28 @@ const CASES: &[(&str, &str, &str)] = &[
     ("plot x.csv --out disk/x.png", "x.png", "--out disk/x.png"),
     ("animate pendulum --t-end 1 --out disk/a.gif", "a.gif", "--out disk/a.gif"),
     ("man --out-dir disk/man", "man/pendula.1", "--out-dir disk/man/"),
+    // Checkpointing runs: the partial trajectory, the checkpoint or its chunk file on the full
+    // disk; nothing is left, here nor on the ordinary disk.
+    (
+        "simulate pendulum --t-end 10 --out disk/x.csv --checkpoint c.ckpt --checkpoint-every 1",
+        "x.csv",
+        "--out disk/x.csv",
+    ),
+    (
+        "simulate pendulum --t-end 10 --out t.csv --checkpoint disk/c.ckpt --checkpoint-every 1",
+        "c.earlier",
+        "--checkpoint disk/c.ckpt",
+    ),
+    (
+        "sweep --grid theta1=0:1:16 --t-end 0.1 --out s.npy --checkpoint disk/c.ckpt",
+        "c.earlier",
+        "--checkpoint disk/c.ckpt",
+    ),
+    (
+        "fractal --grid theta1=-3:3:16 --grid theta2=-3:3:16 --t-max 1 --out f.npy --checkpoint disk/c.ckpt",
+        "c.earlier",
+        "--checkpoint disk/c.ckpt",
+    ),
 ];
 
 #[test]

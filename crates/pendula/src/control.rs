@@ -2,6 +2,7 @@
 //! OrdinaryDiffEq): a PI controller on the scaled error norm.
 
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 
 /// The smallest relative tolerance: about 4.5 ε. Below it the error estimate is round-off,
 /// which no step size can bring under the tolerance.
@@ -103,5 +104,16 @@ impl PiController {
         } else {
             Verdict::Reject(h / (fac11 / safety).min(1.0 / min_factor))
         }
+    }
+}
+
+/// The previous step's error, which the PI controller's next proposal depends on.
+impl Snapshot for PiController {
+    fn save(&self, out: &mut Words) {
+        out.f64(self.previous);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        self.previous = from.f64()?;
+        Ok(())
     }
 }

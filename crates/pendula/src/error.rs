@@ -105,6 +105,15 @@ pub enum Error {
         /// Iterations performed.
         iterations: usize,
     },
+    /// A saved run state ([`crate::checkpoint`]) does not fit what restores it: a different
+    /// method, system or dimension, or words missing or left over.
+    #[error("the saved state of {part} does not fit: {reason}")]
+    BadCheckpoint {
+        /// What was being restored (the run, a stepper, an observer).
+        part: &'static str,
+        /// What does not fit, in words.
+        reason: String,
+    },
 }
 
 impl Error {

@@ -13,6 +13,7 @@
 use std::ops::ControlFlow;
 
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::observe::{Observer, Sample};
 use crate::system::DynModel;
 
@@ -381,5 +382,72 @@ impl<O: Observer> Observer for EndAtEvent<'_, O> {
 
     fn wants_dense(&self) -> bool {
         self.events.wants_dense() || self.inner.wants_dense()
+    }
+}
+
+/// The events found so far (each as its spec's index, time and state), which flips have
+/// happened, the terminal event if one ended the run, and the previous sample with its
+/// derivative, which the next step's crossings are bracketed and interpolated against.
+impl Snapshot for EventLocator<'_> {
+    fn save(&self, out: &mut Words) {
+        out.u64(self.specs.len() as u64);
+        for &f in &self.flipped {
+            out.bool(f);
+        }
+        out.bool(self.previous.is_some());
+        if let Some((t, y, f)) = &self.previous {
+            out.f64(*t);
+            out.f64s(y);
+            out.f64s(f);
+        }
+        out.f64s(&self.f);
+        out.u64(self.found.len() as u64);
+        for e in &self.found {
+            let k = self.specs.iter().position(|s| s.name == e.name).expect("an event of these specs");
+            out.u64(k as u64);
+            out.f64(e.t);
+            out.f64s(&e.state);
+        }
+        out.bool(self.stopped.is_some());
+        out.u64(self.stopped.unwrap_or(0) as u64);
+    }
+
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        let bad = |reason: String| Error::BadCheckpoint { part: "the event locator", reason };
+        let specs = from.usize()?;
+        if specs != self.specs.len() {
+            return Err(bad(format!("{specs} events were watched, here {}", self.specs.len())));
+        }
+        for f in &mut self.flipped {
+            *f = from.bool()?;
+        }
+        let n = self.f.len();
+        self.previous = if from.bool()? {
+            let t = from.f64()?;
+            let (mut y, mut f) = (vec![0.0; n], vec![0.0; n]);
+            from.f64s_into(&mut y)?;
+            from.f64s_into(&mut f)?;
+            Some((t, y, f))
+        } else {
+            None
+        };
+        from.f64s_into(&mut self.f)?;
+        let found = from.usize()?;
+        self.found.clear();
+        for _ in 0..found {
+            let k = from.usize()?;
+            let spec = self.specs.get(k).ok_or_else(|| bad(format!("event {k} of {specs}")))?;
+            let t = from.f64()?;
+            let mut state = vec![0.0; n];
+            from.f64s_into(&mut state)?;
+            self.found.push(EventRecord { name: spec.name.clone(), t, state });
+        }
+        let stopped = from.bool()?;
+        let index = from.usize()?;
+        if stopped && index >= self.found.len() {
+            return Err(bad(format!("the terminal event {index} of {}", self.found.len())));
+        }
+        self.stopped = stopped.then_some(index);
+        Ok(())
     }
 }

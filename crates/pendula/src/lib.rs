@@ -41,16 +41,20 @@
 //! vertical, y up), g = 9.81 m/s² by default. Abbreviations: t time, h step size, y state,
 //! q positions, p momenta, rhs right-hand side f(t, y), H Hamiltonian.
 
+pub mod adaptive;
 pub mod analysis;
+pub mod checkpoint;
 pub mod control;
 pub mod ensemble;
 pub mod error;
 pub mod events;
 pub mod integrator;
 pub mod observe;
+pub mod resume;
 pub mod simulate;
 pub mod special;
 pub mod system;
 
 pub use error::Error;
-pub use simulate::{End, Outcome, Report, RunSpec, Simulation, solve, solve_adaptive};
+pub use resume::solve_resumable;
+pub use simulate::{End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive};

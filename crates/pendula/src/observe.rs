@@ -4,6 +4,9 @@
 
 use std::ops::ControlFlow;
 
+use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
+
 /// One state of a run, as an observer sees it.
 #[derive(Debug, Clone, Copy)]
 pub struct Sample<'a> {
@@ -317,5 +320,20 @@ impl<O: Observer> Observer for Resample<O> {
 
     fn wants_dense(&self) -> bool {
         true
+    }
+}
+
+/// The index of the next grid time and the run's first time (the observer inside saves its
+/// own state).
+impl<O> Snapshot for Resample<O> {
+    fn save(&self, out: &mut Words) {
+        out.u64(self.next);
+        out.opt_f64(self.origin);
+    }
+
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        self.next = from.u64()?;
+        self.origin = from.opt_f64()?;
+        Ok(())
     }
 }

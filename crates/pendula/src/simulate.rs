@@ -1,11 +1,14 @@
 //! The run loop: a [`Simulation`] drives a stepper over a system and shows every state to
 //! an observer; [`solve`] does the same for a catalogued [`Model`] and a [`Method`] chosen
-//! at run time.
+//! at run time, and [`crate::resume::solve_resumable`] also pauses and continues it bit for bit
+//! ([`crate::checkpoint`]). The adaptive loop is in [`crate::adaptive`].
 
 use std::cell::Cell;
 
 use crate::Error;
-use crate::control::{PiController, Tolerances, Verdict};
+pub use crate::adaptive::solve_adaptive;
+use crate::checkpoint::{Leg, Pause, Pausing, RunState, Snapshot};
+use crate::control::Tolerances;
 use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::explicit_rk::ExplicitRk;
 use crate::integrator::gauss_legendre::Collocation;
@@ -149,16 +152,75 @@ impl<S: ?Sized> Simulation<'_, S> {
         St: Stepper<S> + ?Sized,
         O: Observer + ?Sized,
     {
+        self.steps(stepper, y, observer, 0)
+    }
+
+    /// Continues a run of which `done` steps are taken: `y` holds the state after them (in
+    /// the stepper's coordinates), the stepper what they left it, and the observer has seen
+    /// them; with `done` = 0 it is [`Simulation::run`], whose observer first sees the
+    /// initial state. After each step but the last it asks `pause` whether to stop there,
+    /// and if so returns [`Leg::Paused`] with the step index, time and state (the caller
+    /// adds the stepper's state and the counters). Times come from the step index as in a
+    /// run that never paused, so a run continued from any step is the same bits.
+    ///
+    /// # Errors
+    /// As [`Simulation::run`]; [`Error::BadCheckpoint`] when `done` is past the last step.
+    pub fn run_from<St, O>(
+        &self,
+        stepper: &mut St,
+        y: &mut [f64],
+        observer: &mut O,
+        done: u64,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Outcome>, Error>
+    where
+        St: Stepper<S> + ?Sized,
+        O: Observer + ?Sized,
+    {
+        // A run that never pauses takes the loop as it is; one that may pause has its
+        // observer wrapped, so that the loop itself is the same either way (a check inside
+        // it changed how the compiler vectorised the steps, at a cost of 10% measured).
+        if pause.never() {
+            return self.steps(stepper, y, observer, done).map(Leg::Done);
+        }
+        let mut pausing = Pausing::new(observer, pause);
+        let outcome = self.steps(stepper, y, &mut pausing, done)?;
+        Ok(match pausing.paused {
+            false => Leg::Done(outcome),
+            true => Leg::Paused(RunState::at(outcome.steps(), outcome.t(), y)),
+        })
+    }
+
+    /// The loop of [`Simulation::run`] and [`Simulation::run_from`].
+    pub(crate) fn steps<St, O>(
+        &self,
+        stepper: &mut St,
+        y: &mut [f64],
+        observer: &mut O,
+        done: u64,
+    ) -> Result<Outcome, Error>
+    where
+        St: Stepper<S> + ?Sized,
+        O: Observer + ?Sized,
+    {
         let Schedule { steps, last_h, t_end } = self.spec.schedule()?;
         let (t0, h) = (self.spec.t0, self.spec.h);
+        if done >= steps && done > 0 {
+            return Err(Error::BadCheckpoint {
+                part: "the run",
+                reason: format!("it is at step {done}, and the run has {steps} steps"),
+            });
+        }
         if y.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { t: t0 });
+            return Err(Error::NonFinite { t: if done == 0 { t0 } else { t0 + done as f64 * h } });
         }
-        let first = Sample::new(0, t0, y, false);
-        if observer.observe(&first).is_break() {
-            return Ok(Outcome::Stopped { steps: 0, t: t0 });
+        if done == 0 {
+            let first = Sample::new(0, t0, y, false);
+            if observer.observe(&first).is_break() {
+                return Ok(Outcome::Stopped { steps: 0, t: t0 });
+            }
         }
-        for k in 1..=steps {
+        for k in done + 1..=steps {
             let last = k == steps;
             // t from the step index, not by accumulation, so that it does not drift.
             let t = t0 + (k - 1) as f64 * h;
@@ -207,20 +269,78 @@ pub fn solve<M: Model>(
     spec: &RunSpec,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
+    match crate::resume::solve_resumable(
+        model,
+        method,
+        y0,
+        &Stepping::Fixed(*spec),
+        observer,
+        None,
+        &Pause::NEVER,
+    )? {
+        Leg::Done(report) => Ok(report),
+        Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
+    }
+}
+
+/// How a run steps: fixed steps as a [`RunSpec`] says, or adaptive steps of an embedded pair
+/// from t = 0 to `t_end` (see [`solve_adaptive`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stepping<'a> {
+    /// Fixed steps.
+    Fixed(RunSpec),
+    /// Adaptive steps.
+    Adaptive {
+        /// End time, s.
+        t_end: f64,
+        /// The first step to try, s; `None` picks one from the problem.
+        h0: Option<f64>,
+        /// Tolerances and step bounds.
+        tol: &'a Tolerances,
+    },
+}
+
+/// What to do with the stepper a method's family builds: run it on the model's own
+/// (position, velocity) ODE, or on its Hamiltonian form ([`dispatch`], the one match on the
+/// family, hands it over).
+pub(crate) trait Drive<M: Model> {
+    /// What the run gives back.
+    type Output;
+    /// Runs `stepper` on the model's own ODE.
+    fn direct(
+        self,
+        model: &M,
+        stepper: &mut (impl for<'a> Stepper<Counted<'a, M>> + Snapshot),
+    ) -> Result<Self::Output, Error>;
+    /// Runs `stepper` on the Hamiltonian form `form`, showing states as (q, q').
+    fn on_form(
+        self,
+        model: &M,
+        form: &M::Form,
+        stepper: &mut (impl for<'a> Stepper<Counted<'a, M::Form>> + Snapshot),
+    ) -> Result<Self::Output, Error>;
+}
+
+/// Builds `method`'s stepper for `model` (fixed step `h`) and hands it to `drive`.
+///
+/// # Errors
+/// [`Error::UnmetRequirement`] when the model lacks what the method needs, Tao's maps above
+/// their stable step, and the drive's errors.
+pub(crate) fn dispatch<M: Model, D: Drive<M>>(
+    model: &M,
+    method: &Method,
+    h: f64,
+    drive: D,
+) -> Result<D::Output, Error> {
     let dim = model.dim();
-    assert_eq!(y0.len(), dim, "initial state of the wrong length");
     match method.scheme {
-        Scheme::ExplicitRk(tableau) => {
-            run_direct(model, &mut ExplicitRk::new(tableau, dim), y0, spec, observer)
-        }
-        Scheme::Embedded(tableau) => {
-            run_direct(model, &mut EmbeddedRk::new(tableau, dim), y0, spec, observer)
-        }
+        Scheme::ExplicitRk(tableau) => drive.direct(model, &mut ExplicitRk::new(tableau, dim)),
+        Scheme::Embedded(tableau) => drive.direct(model, &mut EmbeddedRk::new(tableau, dim)),
         Scheme::Collocation(tableau) => match model.hamiltonian_form() {
             // On (q, p), where the method is symplectic.
-            Ok(form) => run_on_form(model, &form, &mut Collocation::new(tableau, dim), y0, spec, observer),
+            Ok(form) => drive.on_form(model, &form, &mut Collocation::new(tableau, dim)),
             // Damped or otherwise not Hamiltonian: still an order-2s method on the ODE.
-            Err(_) => run_direct(model, &mut Collocation::new(tableau, dim), y0, spec, observer),
+            Err(_) => drive.direct(model, &mut Collocation::new(tableau, dim)),
         },
         Scheme::Tao(scheme) => {
             let form = model.hamiltonian_form().map_err(|reason| Error::UnmetRequirement {
@@ -229,8 +349,8 @@ pub fn solve<M: Model>(
                 reason,
                 suggestion: method.requirement.suggestion(),
             })?;
-            crate::integrator::tao::check_binding_step(&scheme, spec.h)?;
-            run_on_form(model, &form, &mut TaoStepper::new(scheme, dim / 2), y0, spec, observer)
+            crate::integrator::tao::check_binding_step(&scheme, h)?;
+            drive.on_form(model, &form, &mut TaoStepper::new(scheme, dim / 2))
         }
         Scheme::Partitioned(partition) => {
             let unmet = |reason| Error::UnmetRequirement {
@@ -246,201 +366,16 @@ pub fn solve<M: Model>(
                     M::INFO.name
                 )));
             }
-            run_on_form(model, &form, &mut PartitionedStepper::new(partition, dim / 2), y0, spec, observer)
+            drive.on_form(model, &form, &mut PartitionedStepper::new(partition, dim / 2))
         }
     }
-}
-
-/// Runs a stepper on the model's own (position, velocity) ODE.
-fn run_direct<M: Model>(
-    model: &M,
-    stepper: &mut impl for<'a> Stepper<Counted<'a, M>>,
-    y0: &[f64],
-    spec: &RunSpec,
-    observer: &mut dyn Observer,
-) -> Result<Report, Error> {
-    let system = Counted::new(model);
-    let mut y = y0.to_vec();
-    let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut y, observer)?;
-    Ok(Report {
-        outcome,
-        rhs_evals: system.evaluations(),
-        state: y,
-        steps_rejected: 0,
-        jacobian_evals: system.jacobians.get(),
-    })
-}
-
-/// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly),
-/// showing the initial state and every accepted step to `observer`. `h0` is the first step
-/// to try; `None` picks one from the problem (Hairer, Nørsett, Wanner §II.4).
-///
-/// # Errors
-/// [`Error::UnmetRequirement`] for a method without an error estimate, invalid tolerances,
-/// [`Error::StepSizeTooSmall`], [`Error::NonFinite`].
-pub fn solve_adaptive<M: Model>(
-    model: &M,
-    method: &Method,
-    y0: &[f64],
-    t_end: f64,
-    h0: Option<f64>,
-    tol: &Tolerances,
-    observer: &mut dyn Observer,
-) -> Result<Report, Error> {
-    let Scheme::Embedded(tableau) = method.scheme else {
-        return Err(Error::UnmetRequirement {
-            method: method.name,
-            needs: "fixed steps (--dt)",
-            reason: "tolerances apply to methods with an error estimate".into(),
-            suggestion: "dopri5 or dop853 for adaptive steps",
-        });
-    };
-    tol.validate()?;
-    if !(t_end.is_finite() && t_end > 0.0) {
-        return Err(Error::InvalidValue {
-            name: "t-end".into(),
-            value: t_end,
-            allowed: "the end time must be finite and > 0",
-        });
-    }
-    let system = Counted::new(model);
-    let mut y = y0.to_vec();
-    if y.iter().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite { t: 0.0 });
-    }
-    let mut stepper = EmbeddedRk::new(tableau, y.len());
-    let mut control = PiController::new(tableau.control);
-    let dense = observer.wants_dense();
-    let (mut accepted, mut rejected) = (0u64, 0u64);
-    if observer.observe(&Sample::new(0, 0.0, &y, false)).is_break() {
-        return Ok(Report {
-            outcome: Outcome::Stopped { steps: 0, t: 0.0 },
-            rhs_evals: 0,
-            state: y,
-            steps_rejected: 0,
-            jacobian_evals: system.jacobians.get(),
-        });
-    }
-    let mut t = 0.0;
-    let mut h = h0.unwrap_or_else(|| initial_step(&system, &y, method.order, tol)).min(tol.h_max).min(t_end);
-    let mut just_rejected = false;
-    loop {
-        // Land on t_end exactly; stretch a last step that would leave a sliver.
-        let last = t + 1.01 * h >= t_end;
-        if last {
-            h = t_end - t;
-        }
-        // Never below what the end time can resolve: a smaller step would need more than
-        // 1/(16 ε) ≈ 3·10¹⁴ steps to get there, and at t = 0 a floor of 16 ε |t| alone is 0,
-        // which let a rejected step shrink to 0 and the run stall for ever.
-        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs().max(t_end));
-        if h < floor && !last {
-            return Err(Error::StepSizeTooSmall { t, h });
-        }
-        stepper.attempt(&system, t, h, &y);
-        let err = stepper.error_norm(&y, tol.rtol, tol.atol);
-        match control.judge(h, err) {
-            Verdict::Accept(next) => {
-                let t_new = if last { t_end } else { t + h };
-                stepper.accept(&system, t, h, t_new, &mut y, dense);
-                accepted += 1;
-                t = t_new;
-                if y.iter().any(|v| !v.is_finite()) {
-                    return Err(Error::NonFinite { t });
-                }
-                let sample = Sample { dense: stepper.dense_output(), ..Sample::new(accepted, t, &y, last) };
-                if observer.observe(&sample).is_break() {
-                    let outcome = Outcome::Stopped { steps: accepted, t };
-                    return Ok(Report {
-                        outcome,
-                        rhs_evals: system.evaluations(),
-                        state: y,
-                        steps_rejected: rejected,
-                        jacobian_evals: system.jacobians.get(),
-                    });
-                }
-                if last {
-                    break;
-                }
-                // After a rejection, do not grow the step at once (as DOPRI5 does).
-                h = if just_rejected { next.min(h) } else { next }.min(tol.h_max);
-                just_rejected = false;
-            }
-            Verdict::Reject(next) => {
-                rejected += 1;
-                just_rejected = true;
-                if next < floor {
-                    return Err(Error::StepSizeTooSmall { t, h: next });
-                }
-                h = next;
-            }
-        }
-    }
-    let outcome = Outcome::ReachedEnd { steps: accepted, t: t_end };
-    Ok(Report {
-        outcome,
-        rhs_evals: system.evaluations(),
-        state: y,
-        steps_rejected: rejected,
-        jacobian_evals: 0,
-    })
-}
-
-/// A first step from the sizes of y₀, f(0, y₀) and an estimate of f', as Hairer's DOPRI5 and
-/// DOP853 codes choose it (`HINIT`; Hairer, Nørsett, Wanner §II.4, "Starting step size"):
-/// h₀ = 0.01 ‖y₀‖/‖f₀‖, one Euler step to estimate ‖f'‖, then h₁ = (0.01 / max(‖f₀‖,
-/// ‖f'‖))^(1/p) with p the method's order, and the smaller of 100 h₀ and h₁. Norms are
-/// weighted sums of squares (not means), as in the codes.
-fn initial_step<S: System + ?Sized>(system: &S, y0: &[f64], order: u32, tol: &Tolerances) -> f64 {
-    let n = y0.len();
-    let scale: Vec<f64> = y0.iter().map(|v| tol.atol + tol.rtol * v.abs()).collect();
-    let norm2 = |v: &[f64]| v.iter().zip(&scale).map(|(a, s)| (a / s) * (a / s)).sum::<f64>();
-    let mut f0 = vec![0.0; n];
-    system.rhs(0.0, y0, &mut f0);
-    let (dny, dnf) = (norm2(y0), norm2(&f0));
-    let h0 = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { 0.01 * (dny / dnf).sqrt() }.min(tol.h_max);
-    let y1: Vec<f64> = y0.iter().zip(&f0).map(|(y, f)| y + h0 * f).collect();
-    let mut f1 = vec![0.0; n];
-    system.rhs(h0, &y1, &mut f1);
-    let diff: Vec<f64> = f1.iter().zip(&f0).map(|(a, b)| a - b).collect();
-    let der2 = norm2(&diff).sqrt() / h0;
-    let der12 = der2.max(dnf.sqrt());
-    let h1 = if der12 <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / order as f64) };
-    (100.0 * h0).min(h1)
-}
-
-/// Runs a stepper on the Hamiltonian form, converting to (q, p) before and back after, and
-/// for every state the observer sees.
-fn run_on_form<M: Model>(
-    model: &M,
-    form: &M::Form,
-    stepper: &mut impl for<'a> Stepper<Counted<'a, M::Form>>,
-    y0: &[f64],
-    spec: &RunSpec,
-    observer: &mut dyn Observer,
-) -> Result<Report, Error> {
-    let dim = y0.len();
-    let system = Counted::new(form);
-    let mut z = vec![0.0; dim];
-    model.to_momenta(y0, &mut z);
-    let mut shown = ToVelocities { model, y: vec![0.0; dim], inner: observer };
-    let outcome = Simulation { system: &system, spec: *spec }.run(stepper, &mut z, &mut shown)?;
-    let mut y = vec![0.0; dim];
-    model.to_velocities(&z, &mut y);
-    Ok(Report {
-        outcome,
-        rhs_evals: system.evaluations(),
-        state: y,
-        steps_rejected: 0,
-        jacobian_evals: system.jacobians.get(),
-    })
 }
 
 /// Shows (q, p) states to an observer as (q, q').
-struct ToVelocities<'a, M> {
-    model: &'a M,
-    y: Vec<f64>,
-    inner: &'a mut dyn Observer,
+pub(crate) struct ToVelocities<'a, M> {
+    pub(crate) model: &'a M,
+    pub(crate) y: Vec<f64>,
+    pub(crate) inner: &'a mut dyn Observer,
 }
 
 impl<M: Model> Observer for ToVelocities<'_, M> {
@@ -451,20 +386,32 @@ impl<M: Model> Observer for ToVelocities<'_, M> {
 }
 
 /// Counts a system's evaluations.
-struct Counted<'a, S: ?Sized> {
+pub(crate) struct Counted<'a, S: ?Sized> {
     inner: &'a S,
     rhs: Cell<u64>,
     halves: Cell<u64>,
-    jacobians: Cell<u64>,
+    pub(crate) jacobians: Cell<u64>,
 }
 
 impl<'a, S: ?Sized> Counted<'a, S> {
-    fn new(inner: &'a S) -> Self {
+    pub(crate) fn new(inner: &'a S) -> Self {
         Counted { inner, rhs: Cell::new(0), halves: Cell::new(0), jacobians: Cell::new(0) }
     }
 
-    fn evaluations(&self) -> u64 {
+    pub(crate) fn evaluations(&self) -> u64 {
         self.rhs.get() + self.halves.get().div_ceil(2)
+    }
+
+    /// The counters (f, half-evaluations, Jacobians), for a [`RunState`].
+    pub(crate) fn counts(&self) -> [u64; 3] {
+        [self.rhs.get(), self.halves.get(), self.jacobians.get()]
+    }
+
+    /// Sets the counters to those of a [`RunState`].
+    pub(crate) fn set_counts(&self, [rhs, halves, jacobians]: [u64; 3]) {
+        self.rhs.set(rhs);
+        self.halves.set(halves);
+        self.jacobians.set(jacobians);
     }
 }
 

@@ -96,3 +96,32 @@ fn bitwise_identical_on_one_and_two_threads() {
     assert!(same(&a.flip_time, &b.flip_time) && same(&a.flip_time_half_step, &b.flip_time_half_step));
     assert_eq!(a.converged, b.converged);
 }
+
+/// Computed in ranges of pixels (as a checkpointed `fractal` computes its chunks, of uneven
+/// sizes that split lane groups), the flip times and the assembled fractal are bitwise those
+/// of the fractal computed at once.
+#[test]
+fn ranges_of_pixels_give_the_same_bits() {
+    use pendula::analysis::fractal::{assemble, flip_times};
+    let spec = spec();
+    let whole = flip_fractal(&spec).unwrap();
+    let pixels = spec.theta1.n * spec.theta2.n;
+    let (mut at_h, mut at_half) = (Vec::new(), Vec::new());
+    let mut start = 0;
+    for len in [1, 37, 250, 5].into_iter().cycle() {
+        let end = (start + len).min(pixels);
+        let (a, b) = flip_times(&spec, start..end, &|_| ()).unwrap();
+        at_h.extend(a);
+        at_half.extend(b);
+        start = end;
+        if start == pixels {
+            break;
+        }
+    }
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&at_h), bits(&whole.flip_time));
+    assert_eq!(bits(&at_half), bits(&whole.flip_time_half_step));
+    let parts = assemble(&spec, at_h, at_half);
+    assert_eq!(parts.converged, whole.converged);
+    assert_eq!(parts.forbidden, whole.forbidden);
+}

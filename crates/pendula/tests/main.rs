@@ -12,6 +12,7 @@ mod analysis;
 mod architecture;
 mod bifurcation;
 mod chain;
+mod checkpoint;
 mod conformance;
 mod energy;
 mod ensemble;

@@ -13,13 +13,15 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use pendula::analysis::fractal::{FractalSpec, GridAxis, flip_fractal_with_progress};
+use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_fractal_with_progress, flip_times};
 use pendula::ensemble::BatchMethod;
 use pendula::integrator;
 use pendula::system::{self, Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
+use crate::checkpoint::Checkpoint;
+use crate::chunks::{Chunks, chunk_size};
 use crate::commands::sweep::{batch_method, parse_axis, write_npy};
 use pendula::error::Short;
 
@@ -28,7 +30,7 @@ use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 use crate::study::{OutDir, Summary};
 
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct FractalArgs {
     /// An axis, theta1=LO:HI:N or theta2=LO:HI:N (cell centres, `pi` and `deg` accepted)
     /// [default: theta1=-pi:pi:512 and theta2=-pi:pi:512].
@@ -64,6 +66,11 @@ pub struct FractalArgs {
     /// Write a JSON summary here (`-`: on stdout, and the report line on stderr).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    /// Compute the pixels in chunks and keep the finished ones in FILE (and FILE.chunks), so
+    /// that an interrupted fractal continues with `pendula resume FILE`, computing only the
+    /// chunks missing; both files are removed when the fractal is written.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
     #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
     pub allow_large: bool,
 }
@@ -75,6 +82,11 @@ fn beside(path: &Path, suffix: &str) -> PathBuf {
 }
 
 pub fn run(args: &FractalArgs) -> Result<()> {
+    execute(args, None)
+}
+
+/// Draws the fractal from the start, or `resumed` from its checkpoint (`pendula resume`).
+pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result<()> {
     // Parse and validate everything before any work.
     let info = system::find("double")?;
     let settings = parse_settings(info, &args.set)?;
@@ -180,6 +192,17 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         (None, None) => unreachable!("a directory when there is no --out"),
     };
     let summary = Summary::open(args.summary.as_deref())?;
+    let checkpoint = match &args.checkpoint {
+        Some(c) => {
+            let flag = if dir.is_some() { "--out-dir" } else { "--out" };
+            let mut outputs: Vec<(&str, &Path)> = paths.iter().map(|p| (flag, p.as_path())).collect();
+            outputs.extend(args.summary.as_deref().map(|s| ("--summary", s)));
+            let path = crate::checkpoint::check_path(c, &outputs)?;
+            Chunks::claim(&path)?;
+            Some(path)
+        }
+        None => None,
+    };
 
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     let pool =
@@ -195,7 +218,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
         }
     };
     // A non-finite state is a numerical failure (exit 1) at a pixel, as in sweep.
-    let fractal = pool.install(|| flip_fractal_with_progress(&spec, &tick)).map_err(|e| match e {
+    let pixel_error = |e| match e {
         pendula::ensemble::EnsembleError::NonFinite(f) => {
             let (i, j) = (f.member % theta1.n, f.member / theta1.n);
             anyhow::Error::new(pendula::Error::NonFinite { t: f.t }).context(format!(
@@ -205,7 +228,53 @@ pub fn run(args: &FractalArgs) -> Result<()> {
             ))
         }
         other => anyhow::Error::new(other),
-    })?;
+    };
+    let (fractal, chunks) = match checkpoint {
+        None => (pool.install(|| flip_fractal_with_progress(&spec, &tick)).map_err(pixel_error)?, None),
+        Some(path) => {
+            let _registered = crate::output::Checkpointing::start();
+            let pixels = theta1.n * theta2.n;
+            // Both flip times of each pixel, one after the other.
+            let mut times = vec![f64::NAN; 2 * pixels];
+            let fingerprint =
+                crate::checkpoint::fingerprint(&format!("{spec:?}|fma {}", pendula::ensemble::has_fma()));
+            let (chunks, done) = match resumed {
+                Some(c) => {
+                    let (chunks, done) = Chunks::resume(&c, &fingerprint, 2, &mut times)?;
+                    tick(
+                        2 * (0..chunks.count())
+                            .filter(|&i| done[i])
+                            .map(|i| chunks.range(i).len() as u64)
+                            .sum::<u64>(),
+                    );
+                    (chunks, done)
+                }
+                None => {
+                    let base = json!({
+                        "command": "fractal",
+                        "pendula": env!("CARGO_PKG_VERSION"),
+                        "cwd": std::env::current_dir().context("cannot read the working directory")?,
+                        "args": args,
+                        "fingerprint": fingerprint,
+                    });
+                    let chunks = Chunks::start(&path, base, pixels, 2, chunk_size(pixels, threads))?;
+                    let done = vec![false; chunks.count()];
+                    (chunks, done)
+                }
+            };
+            let compute = |cells: std::ops::Range<usize>, values: &mut [f64]| -> Result<()> {
+                let (at_h, at_half) =
+                    pool.install(|| flip_times(&spec, cells, &tick)).map_err(pixel_error)?;
+                for ((v, a), b) in values.chunks_exact_mut(2).zip(at_h).zip(at_half) {
+                    v.copy_from_slice(&[a, b]);
+                }
+                Ok(())
+            };
+            let chunks = chunks.run(&done, &mut times, compute).inspect_err(|_| bar.finish_and_clear())?;
+            let (at_h, at_half) = times.chunks_exact(2).map(|v| (v[0], v[1])).unzip();
+            (assemble(&spec, at_h, at_half), Some(chunks))
+        }
+    };
     bar.finish_and_clear();
     let wall = begin.elapsed().as_secs_f64();
 
@@ -297,14 +366,16 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     let wrote =
         format!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     let on_stdout = summary.on_stdout();
-    // The four files and the summary appear together or not at all.
+    // The four files and the summary appear together or not at all, and a finished
+    // fractal's checkpoint goes in the same step.
     let files = vec![npy, png, flags_npy, flags_png];
+    let finish = |guard: &mut crate::output::Guard<'_>| chunks.map_or(Ok(()), |c| c.finish(guard));
     match dir {
         Some(mut dir) => {
             dir.commit(files)?;
-            dir.finish_with(summary, &doc)?;
+            dir.finish_then(summary, &doc, finish)?;
         }
-        None => summary.write_with(&doc, files)?,
+        None => summary.write_then(&doc, files, finish)?,
     }
     crate::study::say_after(on_stdout, &wrote);
     Ok(())

@@ -13,6 +13,7 @@ pub mod plot;
 pub mod poincare;
 pub mod regimes;
 pub mod report;
+pub mod resume;
 pub mod stability;
 pub mod sweep;
 pub mod work_precision;

@@ -21,11 +21,13 @@ use pendula::{End, RunSpec};
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::checkpoint::Checkpoint;
+use crate::chunks::{Chunks, chunk_size};
 use crate::config::{clip, f64_arg, parse_count, parse_settings, parse_value};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 
-#[derive(Debug, Clone, Args)]
+#[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SweepArgs {
     /// System [default: double].
     pub system: Option<String>,
@@ -71,6 +73,11 @@ pub struct SweepArgs {
     /// Write a JSON summary here (`-`: on stdout).
     #[arg(long, value_name = "FILE.json")]
     pub summary: Option<PathBuf>,
+    /// Compute the cells in chunks and keep the finished ones in FILE (and FILE.chunks), so
+    /// that an interrupted sweep continues with `pendula resume FILE`, computing only the
+    /// chunks missing; both files are removed when the sweep ends.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
     #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
     pub allow_large: bool,
 }
@@ -380,6 +387,11 @@ impl Observer for FlipWatch {
 }
 
 pub fn run(args: &SweepArgs) -> Result<()> {
+    execute(args, None)
+}
+
+/// Runs a sweep from the start, or `resumed` from its checkpoint (`pendula resume`).
+pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<()> {
     let sweep = parse(args)?;
     let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
@@ -389,12 +401,24 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
     }
-    let out_file = AtomicFile::create(&out_path, "--out")?;
     let sharded = sweep.shard != (1, 1);
     let side_path = PathBuf::from(format!("{}.json", out_path.display()));
+    let checkpoint = match &args.checkpoint {
+        Some(c) => {
+            let mut outputs =
+                vec![("--out", out_path.as_path()), ("--out (shard description)", side_path.as_path())];
+            outputs.extend(args.summary.as_deref().map(|s| ("--summary", s)));
+            Some(crate::checkpoint::check_path(c, &outputs)?)
+        }
+        None => None,
+    };
+    let out_file = AtomicFile::create(&out_path, "--out")?;
     let side_file =
         if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
     let summary = crate::study::Summary::open(args.summary.as_deref())?;
+    if let Some(c) = &checkpoint {
+        Chunks::claim(c)?;
+    }
 
     let (start, end) = sweep.range();
     let cols = sweep.columns.len();
@@ -410,13 +434,49 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let begin = Instant::now();
     let simd = lanes(&sweep);
     let progress = Progress::new((end - start) as u64);
-    pool.install(|| {
-        if simd {
-            run_simd(&sweep, start, &mut data, &progress)
-        } else {
-            run_scalar(&sweep, start, &mut data, &progress)
+    let compute = |cells: std::ops::Range<usize>, data: &mut [f64]| {
+        pool.install(|| {
+            if simd {
+                run_simd(&sweep, start + cells.start, data, &progress)
+            } else {
+                run_scalar(&sweep, start + cells.start, data, &progress)
+            }
+        })
+    };
+    let chunks = match checkpoint {
+        None => {
+            compute(0..end - start, &mut data)?;
+            None
         }
-    })?;
+        Some(path) => {
+            let _registered = crate::output::Checkpointing::start();
+            let fingerprint = format!("{}|fma {}", sweep.fingerprint(), ensemble::has_fma());
+            let chunks = match resumed {
+                Some(c) => {
+                    let (chunks, done) = Chunks::resume(&c, &fingerprint, cols, &mut data)?;
+                    let cells: usize =
+                        (0..chunks.count()).filter(|&i| done[i]).map(|i| chunks.range(i).len()).sum();
+                    progress.advance(cells as u64);
+                    (chunks, done)
+                }
+                None => {
+                    let base = json!({
+                        "command": "sweep",
+                        "pendula": env!("CARGO_PKG_VERSION"),
+                        "cwd": std::env::current_dir().context("cannot read the working directory")?,
+                        "args": args,
+                        "fingerprint": fingerprint,
+                    });
+                    let count = end - start;
+                    let chunks = Chunks::start(&path, base, count, cols, chunk_size(count, threads))?;
+                    let done = vec![false; chunks.count()];
+                    (chunks, done)
+                }
+            };
+            let (chunks, done) = chunks;
+            Some(chunks.run(&done, &mut data, compute).inspect_err(|_| progress.bar.finish_and_clear())?)
+        }
+    };
     progress.bar.finish_and_clear();
     let wall_s = begin.elapsed().as_secs_f64();
 
@@ -449,8 +509,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         write_json(&f, &description)?;
         files.push(f);
     }
-    // The array, its shard description and the summary appear together or not at all.
-    summary.write_with(&description, files)?;
+    // The array, its shard description and the summary appear together or not at all, and
+    // a finished sweep's checkpoint goes in the same step.
+    summary.write_then(&description, files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
         sweep.info.name,
@@ -544,6 +605,12 @@ struct Progress {
 impl Progress {
     fn new(cells: u64) -> Self {
         Progress { bar: crate::study::progress(cells, "sweep"), done: std::sync::atomic::AtomicU64::new(0) }
+    }
+
+    /// Counts cells done before (a resumed sweep's finished chunks).
+    fn advance(&self, cells: u64) {
+        let n = self.done.fetch_add(cells, std::sync::atomic::Ordering::Relaxed) + cells;
+        self.bar.set_position(n);
     }
 
     fn cell_done(&self) {

@@ -33,6 +33,25 @@ pub fn cases() -> Vec<Case> {
         Case::new("a method twice in convergence", "convergence --methods verlet,verlet")
             .says("listed twice"),
         Case::new("an event twice", "simulate --event flip --event flip").says("--event flip").says("twice"),
+        // The checkpoint's interval: a positive time, and only with a checkpoint.
+        Case::new("a checkpoint interval without a checkpoint", "simulate --checkpoint-every 1")
+            .says("--checkpoint <FILE>"),
+        Case::new("a zero checkpoint interval", "simulate --out t.csv --checkpoint c --checkpoint-every 0")
+            .says("invalid --checkpoint-every 0: must be finite and > 0"),
+        Case::new("a NaN checkpoint interval", "simulate --out t.csv --checkpoint c --checkpoint-every nan")
+            .says("invalid value `nan` for --checkpoint-every"),
+        Case::new(
+            "a checkpoint interval beyond f64",
+            "simulate --out t.csv --checkpoint c --checkpoint-every 1e400",
+        )
+        .says("invalid value `1e400` for --checkpoint-every"),
+        Case::new(
+            "a negative checkpoint interval",
+            "simulate --out t.csv --checkpoint c --checkpoint-every -2",
+        )
+        .says("invalid --checkpoint-every -2"),
+        Case::new("a checkpointed trajectory on stdout", "simulate --out - --checkpoint c")
+            .says("--checkpoint needs the trajectory in a file"),
         Case::new(
             "a scenario value overridden by a flag is allowed",
             "simulate --scenario s.toml --set theta1=1 --steps 1 --every 0",

@@ -90,6 +90,7 @@ pub fn cases() -> Vec<Case> {
     cases.extend(stdout());
     cases.extend(out_dirs());
     cases.extend(merge());
+    cases.extend(checkpoints());
     cases
 }
 
@@ -529,6 +530,98 @@ fn merge() -> Vec<Case> {
                 precious(d, "m.npy");
             })
             .says("missing"),
+    ]
+}
+
+/// `--checkpoint FILE`, its `FILE.chunks` and the trajectory's `OUT.partial` are outputs
+/// like the others, and regular files that pendula reads back: onto another output, a
+/// directory, `-`, a FIFO or a device, or an existing checkpoint, they are refused before the
+/// run; `resume` refuses what is not a checkpoint of this version, naming the file.
+fn checkpoints() -> Vec<Case> {
+    let checkpoint = |d: &Path, name: &str, text: &str| std::fs::write(d.join(name), text).unwrap();
+    vec![
+        Case::new("checkpoint onto the trajectory", &format!("{FAST} --out x.csv --checkpoint x.csv"))
+            .setup(|d| precious(d, "x.csv"))
+            .says("invalid --checkpoint x.csv: it is also the --out file"),
+        Case::new(
+            "checkpoint onto the summary",
+            &format!("{FAST} --out t.csv --summary s.json --checkpoint s.json"),
+        )
+        .setup(|d| precious(d, "s.json"))
+        .says("it is also the --summary file"),
+        Case::new(
+            "checkpoint onto the summary by another name",
+            &format!("{FAST} --out t.csv --summary s.json --checkpoint sub/../s.json"),
+        )
+        .setup(|d| {
+            std::fs::create_dir(d.join("sub")).unwrap();
+            precious(d, "s.json");
+        })
+        .says("are the same file"),
+        Case::new(
+            "summary onto the partial trajectory",
+            &format!("{FAST} --out t.csv --checkpoint c.ckpt --summary t.csv.partial"),
+        )
+        .says("same file"),
+        Case::new("checkpoint onto a directory", &format!("{FAST} --out t.csv --checkpoint d"))
+            .setup(|d| std::fs::create_dir(d.join("d")).unwrap())
+            .says("invalid --checkpoint d: it is a directory"),
+        Case::new("checkpoint on stdout", &format!("{FAST} --out t.csv --checkpoint -"))
+            .says("invalid --checkpoint -"),
+        Case::new("an existing checkpoint", &format!("{FAST} --out t.csv --checkpoint c.ckpt"))
+            .setup(|d| precious(d, "c.ckpt"))
+            .says("it exists (from a run interrupted earlier?)")
+            .says("pendula resume"),
+        Case::new("checkpoint onto a FIFO", &format!("{FAST} --out t.csv --checkpoint ff"))
+            .setup(|d| mkfifo(d, "ff"))
+            .reads_fifo("ff", |b| assert!(b.is_empty(), "{} bytes written", b.len()))
+            .says("cannot write --checkpoint ff: it is a FIFO"),
+        Case::new("checkpoint onto a null device", &format!("{FAST} --out t.csv --checkpoint null"))
+            .needs_root()
+            .setup(|d| null(d, "null"))
+            .says("--checkpoint null: it is a character device"),
+        Case::new("checkpointed trajectory into a FIFO", &format!("{FAST} --out ff --checkpoint c.ckpt"))
+            .setup(|d| mkfifo(d, "ff"))
+            .reads_fifo("ff", |b| assert!(b.is_empty(), "{} bytes written", b.len()))
+            .says("cannot write --out ff: it is a FIFO"),
+        Case::new(
+            "sweep's checkpoint onto its shard description",
+            &format!("{SWEEP} --shard 1/2 --out s.npy --checkpoint s.npy.json"),
+        )
+        .says("it is also the --out (shard description) file"),
+        Case::new(
+            "summary onto the sweep's finished chunks",
+            &format!("{SWEEP} --out s.npy --checkpoint c --summary c.chunks"),
+        )
+        .setup(|d| precious(d, "c.chunks"))
+        .says("same file"),
+        Case::new(
+            "fractal's checkpoint onto its picture",
+            &format!("{FRACTAL} --out f.npy --checkpoint f.png"),
+        )
+        .says("it is also the --out file"),
+        Case::new("resume of a missing checkpoint", "resume gone.ckpt")
+            .says("cannot read the checkpoint")
+            .says("gone.ckpt"),
+        Case::new("resume of a corrupt checkpoint", "resume c.ckpt")
+            .setup(move |d| checkpoint(d, "c.ckpt", "pendula-checkpoint 1 crc32=00000000\n{}\n"))
+            .says("c.ckpt is not a checkpoint pendula can resume")
+            .says("do not match its checksum"),
+        Case::new("resume of another version's checkpoint", "resume c.ckpt")
+            .setup(move |d| checkpoint(d, "c.ckpt", "pendula-checkpoint 99 crc32=00000000\n{}\n"))
+            .says("c.ckpt is not a checkpoint pendula can resume")
+            .says("format version 99"),
+        Case::new("resume of a file that is no checkpoint", "resume x.csv")
+            .setup(|d| precious(d, "x.csv"))
+            .says("x.csv is not a checkpoint pendula can resume"),
+        Case::new("resume of a directory", "resume d")
+            .setup(|d| std::fs::create_dir(d.join("d")).unwrap())
+            .says("cannot read the checkpoint")
+            .says("it is a directory"),
+        Case::new("resume of a FIFO", "resume ff")
+            .setup(|d| mkfifo(d, "ff"))
+            .reads_fifo("ff", |b| assert!(b.is_empty(), "{} bytes written", b.len()))
+            .says("it is a FIFO, not a checkpoint file"),
     ]
 }
 

@@ -4,6 +4,8 @@
 
 use std::ops::ControlFlow;
 
+use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::observe::{Observer, Sample};
 use crate::system::DynModel;
 
@@ -108,6 +110,37 @@ impl Observer for EnergyBalance<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
         self.track(s.t, s.y, s.energy);
         ControlFlow::Continue(())
+    }
+}
+
+/// The running values: E(0), the last energy, the work integral, the largest error, and
+/// the previous state, derivative, time and power that the next Simpson step starts from.
+impl Snapshot for EnergyBalance<'_> {
+    fn save(&self, out: &mut Words) {
+        for v in [self.initial, self.last, self.work, self.max_abs, self.t_previous, self.p_previous] {
+            out.f64(v);
+        }
+        out.bool(self.started);
+        out.f64s(&self.previous);
+        out.f64s(&self.f_previous);
+        out.f64s(&self.f);
+    }
+
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        for v in [
+            &mut self.initial,
+            &mut self.last,
+            &mut self.work,
+            &mut self.max_abs,
+            &mut self.t_previous,
+            &mut self.p_previous,
+        ] {
+            *v = from.f64()?;
+        }
+        self.started = from.bool()?;
+        from.f64s_into(&mut self.previous)?;
+        from.f64s_into(&mut self.f_previous)?;
+        from.f64s_into(&mut self.f)
     }
 }
 

@@ -99,17 +99,40 @@ pub fn flip_fractal_with_progress(
     spec: &FractalSpec,
     tick: &(dyn Fn(u64) + Sync),
 ) -> Result<FlipFractal, EnsembleError> {
+    let pixels = spec.theta1.n * spec.theta2.n;
+    let (flip_time, flip_time_half_step) = flip_times(spec, 0..pixels, tick)?;
+    Ok(assemble(spec, flip_time, flip_time_half_step))
+}
+
+/// The flip times at h and at h/2 of the pixels in `pixels` (indices with θ₁ fastest), NaN
+/// where none happens before `t_max` or the energy forbids it, reporting progress to `tick`
+/// as [`flip_fractal_with_progress`] does. A pixel's times do not depend on which others
+/// are computed with it, so a fractal computed in ranges (and continued from a checkpoint)
+/// is bitwise the fractal computed at once.
+///
+/// # Errors
+/// As [`flip_fractal`] (member = pixel index).
+///
+/// # Panics
+/// As [`flip_fractal`], and if the range is outside the grid.
+pub fn flip_times(
+    spec: &FractalSpec,
+    pixels: std::ops::Range<usize>,
+    tick: &(dyn Fn(u64) + Sync),
+) -> Result<(Vec<f64>, Vec<f64>), EnsembleError> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
-    let (n1, n2) = (spec.theta1.n, spec.theta2.n);
+    let n1 = spec.theta1.n;
+    assert!(pixels.end <= n1 * spec.theta2.n, "pixels inside the grid");
     let start = |i: usize| (spec.theta1.centre(i % n1), spec.theta2.centre(i / n1));
     // Only pixels that can flip are integrated; the others are NaN at both step sizes.
-    let allowed: Vec<usize> = (0..n1 * n2)
+    let allowed: Vec<usize> = pixels
+        .clone()
         .filter(|&i| {
             let (a, b) = start(i);
             !cannot_flip(&spec.pendulum, a, b)
         })
         .collect();
-    tick(2 * (n1 * n2 - allowed.len()) as u64);
+    tick(2 * (pixels.len() - allowed.len()) as u64);
     let run = |h: f64| -> Result<Vec<f64>, EnsembleError> {
         let steps = (spec.t_max / h).ceil() as u64;
         let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
@@ -128,15 +151,23 @@ pub fn flip_fractal_with_progress(
             }
             EnsembleError::Forced { member } => EnsembleError::Forced { member: allowed[member] },
         })?;
-        let mut image = vec![f64::NAN; n1 * n2];
+        let mut image = vec![f64::NAN; pixels.len()];
         for (k, t) in allowed.iter().zip(times) {
-            image[*k] = t;
+            image[*k - pixels.start] = t;
         }
         Ok(image)
     };
-    let flip_time = run(spec.h)?;
-    let flip_time_half_step = run(spec.h / 2.0)?;
+    Ok((run(spec.h)?, run(spec.h / 2.0)?))
+}
+
+/// The fractal of the flip times of every pixel at h and at h/2 ([`flip_times`]): the
+/// convergence flags and the count of pixels the energy forbids.
+pub fn assemble(spec: &FractalSpec, flip_time: Vec<f64>, flip_time_half_step: Vec<f64>) -> FlipFractal {
+    let n1 = spec.theta1.n;
+    let forbidden = (0..flip_time.len())
+        .filter(|&i| cannot_flip(&spec.pendulum, spec.theta1.centre(i % n1), spec.theta2.centre(i / n1)))
+        .count();
     let converged =
         flip_time.iter().zip(&flip_time_half_step).map(|(a, b)| converged(*a, *b, spec.tolerance)).collect();
-    Ok(FlipFractal { flip_time, flip_time_half_step, converged, forbidden: n1 * n2 - allowed.len() })
+    FlipFractal { flip_time, flip_time_half_step, converged, forbidden }
 }

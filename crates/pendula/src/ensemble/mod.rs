@@ -14,7 +14,10 @@
 //! is an error naming the member and the time.
 
 pub mod driven;
+mod trajectory;
 pub mod trig;
+
+pub use trajectory::{rk4_trajectory, rk4_trajectory_resumable};
 
 use rayon::prelude::*;
 
@@ -301,8 +304,10 @@ fn axpy<const FMA: bool>(out: &mut V, y: &V, a: f64, k: &V) {
 }
 
 /// Whether this CPU has fused multiply-add instructions (then the trigonometric polynomials
-/// use them: faster, and as accurate, but rounded differently from the plain kernel).
-pub(crate) fn has_fma() -> bool {
+/// use them: faster, and as accurate, but rounded differently from the plain kernel), so
+/// that results computed in parts — a checkpoint continued later — are bit-identical only
+/// on CPUs that answer the same.
+pub fn has_fma() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("fma")
@@ -660,178 +665,4 @@ fn tao_kernel<const FMA: bool, const WIDE: bool>(
     lanes.flip_ends = [before, after];
     *z = [q1, q2, p1, p2];
     true
-}
-
-/// One double pendulum with RK4 through the engine's arithmetic (branch-free sine and cosine,
-/// fused multiply-adds where the CPU has them), showing every state, with its energy
-/// ([`crate::observe::Sample::energy`]), to `observer`: the
-/// fast path of `pendula simulate double --method rk4`. It follows [`crate::Simulation::run`]
-/// (schedule, first sample, the shortened last step, [`crate::Error::NonFinite`] with the
-/// time, an observer's stop) and differs from the general path only by rounding (≈1e-11 at
-/// t = 10 s on the chaotic default orbit).
-///
-/// # Errors
-/// A damped or driven pendulum ([`crate::Error::UnmetRequirement`]: the kernel implements
-/// the free equations); an invalid `spec`; [`crate::Error::NonFinite`] at the first
-/// non-finite state.
-pub fn rk4_trajectory(
-    pendulum: &DoublePendulum,
-    y0: &[f64],
-    spec: &crate::RunSpec,
-    observer: &mut dyn crate::observe::Observer,
-) -> Result<crate::Report, crate::Error> {
-    if pendulum.is_forced() {
-        return Err(crate::Error::UnmetRequirement {
-            method: "ensemble::rk4_trajectory",
-            needs: "an undamped, undriven double pendulum",
-            reason: format!(
-                "this one has damping = {} and drive_amplitude = {}",
-                pendulum.damping, pendulum.drive_amplitude
-            ),
-            suggestion: "pendula::solve with RK4",
-        });
-    }
-    let schedule = spec.schedule()?;
-    let mut y: [f64; 4] = y0.try_into().expect("four state variables");
-    if y.iter().any(|v| !v.is_finite()) {
-        return Err(crate::Error::NonFinite { t: spec.t0 });
-    }
-    let p = [pendulum.m1, pendulum.m2, pendulum.l1, pendulum.l2, pendulum.g];
-    let (steps, outcome) = if has_fma() {
-        trajectory_kernel::<true>(&p, &mut y, spec, &schedule, observer)?
-    } else {
-        trajectory_kernel::<false>(&p, &mut y, spec, &schedule, observer)?
-    };
-    Ok(crate::Report {
-        outcome,
-        rhs_evals: 4 * steps,
-        state: y.to_vec(),
-        steps_rejected: 0,
-        jacobian_evals: 0,
-    })
-}
-
-/// The trigonometry of a state: (sin, cos) of θ₁ − θ₂, θ₁ and θ₂ — what both the
-/// accelerations and the energy need, computed once per step (one test of the angles picks
-/// the fast path for all three, or the path for every angle).
-#[inline(always)]
-fn trig_of<const FMA: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
-    if fast_pair(y[0], y[1]) { trig_of_with::<FMA, false>(y) } else { trig_of_with::<FMA, true>(y) }
-}
-
-/// Whether the fast trigonometry serves a, b and a − b ([`trig::is_fast`]).
-#[inline(always)]
-fn fast_pair(a: f64, b: f64) -> bool {
-    trig::is_fast(a) & trig::is_fast(b) & trig::is_fast(a - b)
-}
-
-/// [`trig_of`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
-#[inline(always)]
-fn trig_of_with<const FMA: bool, const WIDE: bool>(y: &[f64; 4]) -> [(f64, f64); 3] {
-    let sc = trig::sin_cos_with::<FMA, WIDE>;
-    [sc(y[0] - y[1]), sc(y[0]), sc(y[1])]
-}
-
-/// The energy T + V of one double pendulum (the expressions of `DoublePendulum::energy`)
-/// from its trigonometry.
-#[inline(always)]
-fn energy_from(p: &[f64; 5], y: &[f64; 4], tr: &[(f64, f64); 3]) -> f64 {
-    let [m1, m2, l1, l2, g] = *p;
-    let (w1, w2) = (y[2], y[3]);
-    let kinetic =
-        0.5 * (m1 + m2) * l1 * l1 * w1 * w1 + 0.5 * m2 * l2 * l2 * w2 * w2 + m2 * l1 * l2 * w1 * w2 * tr[0].1;
-    let potential = -(m1 + m2) * g * l1 * tr[1].1 - m2 * g * l2 * tr[2].1;
-    kinetic + potential
-}
-
-/// The accelerations of one double pendulum (the lanes' expressions, one lane) from
-/// sin(θ₁ − θ₂), cos(θ₁ − θ₂), sin θ₁, sin θ₂.
-#[inline(always)]
-fn accelerations_from<const FMA: bool>(
-    p: &[f64; 5],
-    y: &[f64; 4],
-    sd: f64,
-    cd: f64,
-    s1: f64,
-    s2: f64,
-) -> [f64; 4] {
-    let m = trig::madd::<FMA>;
-    let [m1, m2, l1, l2, g] = *p;
-    let m11 = (m1 + m2) * l1;
-    let m12 = m2 * l2 * cd;
-    let m21 = l1 * cd;
-    let m22 = l2;
-    let r1 = m(-m2 * l2 * y[3] * y[3], sd, -((m1 + m2) * g * s1));
-    let r2 = m(l1 * y[2] * y[2], sd, -(g * s2));
-    let inverse = 1.0 / m(m11, m22, -(m12 * m21));
-    [y[2], y[3], m(r1, m22, -(m12 * r2)) * inverse, m(m11, r2, -(m21 * r1)) * inverse]
-}
-
-/// The accelerations of one double pendulum at y (as [`trig_of`], one test of the angles).
-#[inline(always)]
-fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
-    if fast_pair(y[0], y[1]) {
-        accelerations_one_with::<FMA, false>(p, y)
-    } else {
-        accelerations_one_with::<FMA, true>(p, y)
-    }
-}
-
-/// [`accelerations_one`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
-#[inline(always)]
-fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
-    let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(y[0] - y[1]);
-    let s = trig::sin_with::<FMA, WIDE>;
-    accelerations_from::<FMA>(p, y, sd, cd, s(y[0]), s(y[1]))
-}
-
-#[multiversion::multiversion(targets(
-    "x86_64+avx512f+avx512dq+avx2+fma",
-    "x86_64+avx2+fma",
-    "x86_64+avx+fma",
-    "x86_64+avx",
-    "x86_64+sse4.1",
-    "aarch64+neon"
-))]
-fn trajectory_kernel<const FMA: bool>(
-    p: &[f64; 5],
-    y: &mut [f64; 4],
-    spec: &crate::RunSpec,
-    schedule: &crate::simulate::Schedule,
-    observer: &mut dyn crate::observe::Observer,
-) -> Result<(u64, crate::Outcome), crate::Error> {
-    use crate::observe::Sample;
-    let (t0, h) = (spec.t0, spec.h);
-    let mut tr = trig_of::<FMA>(y);
-    if observer
-        .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(0, t0, y, false) })
-        .is_break()
-    {
-        return Ok((0, crate::Outcome::Stopped { steps: 0, t: t0 }));
-    }
-    let m = trig::madd::<FMA>;
-    for k in 1..=schedule.steps {
-        let last = k == schedule.steps;
-        let step = if last { schedule.last_h } else { h };
-        let (hh, h6) = (0.5 * step, step / 6.0);
-        let k1 = accelerations_from::<FMA>(p, y, tr[0].0, tr[0].1, tr[1].0, tr[2].0);
-        let k2 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k1[c], y[c])));
-        let k3 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k2[c], y[c])));
-        let k4 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(step, k3[c], y[c])));
-        for c in 0..4 {
-            y[c] = m(h6, m(2.0, k2[c] + k3[c], k1[c]) + k4[c], y[c]);
-        }
-        let t = if last { schedule.t_end } else { t0 + k as f64 * h };
-        if y.iter().any(|v| !v.is_finite()) {
-            return Err(crate::Error::NonFinite { t });
-        }
-        tr = trig_of::<FMA>(y);
-        if observer
-            .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(k, t, y, last) })
-            .is_break()
-        {
-            return Ok((k, crate::Outcome::Stopped { steps: k, t }));
-        }
-    }
-    Ok((schedule.steps, crate::Outcome::ReachedEnd { steps: schedule.steps, t: schedule.t_end }))
 }

@@ -13,6 +13,7 @@
 
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::control::{ControlParams, DOP853_CONTROL, DOPRI5_CONTROL};
 use crate::observe::DenseStep;
 use crate::system::System;
@@ -595,6 +596,33 @@ impl<S: System + ?Sized> Stepper<S> for EmbeddedRk {
         // ended, which `first_stage` records.
         self.attempt(system, t, h, y);
         self.accept(system, t, h, t + h, y, false);
+        Ok(())
+    }
+}
+
+/// The stages (the first holds the next step's first-same-as-last derivative), the last
+/// candidate and error estimate, the time that derivative belongs to, and the dense output.
+impl Snapshot for EmbeddedRk {
+    fn save(&self, out: &mut Words) {
+        out.f64s(&self.k);
+        out.f64s(&self.candidate);
+        out.f64s(&self.error);
+        out.opt_f64(self.first_stage);
+        out.f64s(&self.dense);
+        out.bool(self.dense_step.is_some());
+        let (t0, h) = self.dense_step.unwrap_or((0.0, 0.0));
+        out.f64(t0);
+        out.f64(h);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        from.f64s_into(&mut self.k)?;
+        from.f64s_into(&mut self.candidate)?;
+        from.f64s_into(&mut self.error)?;
+        self.first_stage = from.opt_f64()?;
+        from.f64s_into(&mut self.dense)?;
+        let dense = from.bool()?;
+        let (t0, h) = (from.f64()?, from.f64()?);
+        self.dense_step = dense.then_some((t0, h));
         Ok(())
     }
 }

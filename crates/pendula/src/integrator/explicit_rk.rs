@@ -2,6 +2,7 @@
 
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::system::System;
 
 /// A Butcher tableau with weights b over a common denominator, so that the update is
@@ -180,5 +181,13 @@ fn fixed_update<const N: usize>(b: &[f64], k: &[f64], scale: f64, y: &mut [f64])
     }
     for j in 0..N {
         y[j] += scale * acc[j];
+    }
+}
+
+/// Nothing is carried from step to step: every stage is recomputed from the step's start.
+impl Snapshot for ExplicitRk {
+    fn save(&self, _: &mut Words) {}
+    fn restore(&mut self, _: &mut Reader<'_>) -> Result<(), Error> {
+        Ok(())
     }
 }

@@ -29,6 +29,7 @@
 
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::system::System;
 
 /// The Butcher tableau of a fully implicit Runge–Kutta method.
@@ -588,6 +589,69 @@ impl<S: System + ?Sized> Stepper<S> for Collocation {
         self.kept.h = h;
         self.kept.t_end = t + h;
         self.kept.y_end.copy_from_slice(y);
+        Ok(())
+    }
+}
+
+/// Everything one step leaves for the next: the stage increments and derivatives, the kept
+/// Jacobian and the LU factors with their pivots, the flags and step sizes they belong to,
+/// and how the last step was solved. The starting guess and the path of the Newton
+/// iteration depend on them, and so does the round-off of the converged stages.
+impl Snapshot for Collocation {
+    fn save(&self, out: &mut Words) {
+        out.f64s(&self.z);
+        out.f64s(&self.f);
+        out.f64s(&self.jac);
+        out.f64s(&self.lu);
+        out.usizes(&self.pivots);
+        out.bool(self.newton);
+        let k = &self.kept;
+        out.bool(k.stages);
+        out.f64(k.h);
+        out.f64(k.t_end);
+        out.f64s(&k.y_end);
+        out.bool(k.jacobian);
+        out.f64(k.lu_h);
+        out.bool(k.refresh);
+        let (kind, iterations) = match self.last_solver {
+            None => (0, 0),
+            Some(Solver::SimplifiedNewton(i)) => (1, i),
+            Some(Solver::Newton(i)) => (2, i),
+            Some(Solver::FixedPoint(i)) => (3, i),
+        };
+        out.u64(kind);
+        out.u64(iterations as u64);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        from.f64s_into(&mut self.z)?;
+        from.f64s_into(&mut self.f)?;
+        from.f64s_into(&mut self.jac)?;
+        from.f64s_into(&mut self.lu)?;
+        let m = self.pivots.len();
+        from.usizes_into(&mut self.pivots, m)?;
+        self.newton = from.bool()?;
+        let k = &mut self.kept;
+        k.stages = from.bool()?;
+        k.h = from.f64()?;
+        k.t_end = from.f64()?;
+        from.f64s_into(&mut k.y_end)?;
+        k.jacobian = from.bool()?;
+        k.lu_h = from.f64()?;
+        k.refresh = from.bool()?;
+        let kind = from.u64()?;
+        let iterations = from.usize()?;
+        self.last_solver = match kind {
+            0 => None,
+            1 => Some(Solver::SimplifiedNewton(iterations)),
+            2 => Some(Solver::Newton(iterations)),
+            3 => Some(Solver::FixedPoint(iterations)),
+            _ => {
+                return Err(Error::BadCheckpoint {
+                    part: "the Gauss-Legendre stepper",
+                    reason: format!("unknown solver kind {kind}"),
+                });
+            }
+        };
         Ok(())
     }
 }

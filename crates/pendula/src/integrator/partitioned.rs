@@ -15,6 +15,7 @@
 
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::system::Hamiltonian;
 
 /// Which partitioned scheme.
@@ -239,5 +240,21 @@ impl<H: Hamiltonian + ?Sized> Stepper<H> for PartitionedStepper {
             }
             _ => self.implicit(system, t, h, y),
         }
+    }
+}
+
+/// The cached force and where it was taken: reusing it or not changes the evaluation count,
+/// and on a time-dependent H (the drive) the last bits, since the cache matches times up to
+/// rounding.
+impl Snapshot for PartitionedStepper {
+    fn save(&self, out: &mut Words) {
+        out.f64s(&self.force);
+        out.opt_f64(self.cached);
+        out.f64s(&self.cached_q);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        from.f64s_into(&mut self.force)?;
+        self.cached = from.opt_f64()?;
+        from.f64s_into(&mut self.cached_q)
     }
 }

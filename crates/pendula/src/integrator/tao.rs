@@ -32,6 +32,7 @@
 use super::composition::YOSHIDA_4_WEIGHTS;
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
+use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::error::Short;
 use crate::system::Hamiltonian;
 
@@ -225,5 +226,19 @@ impl<S: Hamiltonian + ?Sized> Stepper<S> for TaoStepper {
         self.compose(system, t, h, z);
         self.last.copy_from_slice(z);
         Ok(())
+    }
+}
+
+/// The copy (x, y) and the state it belongs to (a different state on entry restarts the copy).
+impl Snapshot for TaoStepper {
+    fn save(&self, out: &mut Words) {
+        out.f64s(&self.x);
+        out.f64s(&self.y);
+        out.f64s(&self.last);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        from.f64s_into(&mut self.x)?;
+        from.f64s_into(&mut self.y)?;
+        from.f64s_into(&mut self.last)
     }
 }

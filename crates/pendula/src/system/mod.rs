@@ -372,6 +372,17 @@ pub trait DynModel: Send + Sync {
         tol: &crate::control::Tolerances,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error>;
+    /// Runs `method` from `y0` as `stepping` says, able to pause and to continue from a
+    /// paused state (see [`crate::resume::solve_resumable`]).
+    fn solve_resumable(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &crate::simulate::Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&crate::checkpoint::RunState>,
+        pause: &crate::checkpoint::Pause<'_>,
+    ) -> Result<crate::checkpoint::Leg<Report>, Error>;
 }
 
 impl<M: Model> DynModel for M {
@@ -432,6 +443,17 @@ impl<M: Model> DynModel for M {
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
         crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
+    }
+    fn solve_resumable(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &crate::simulate::Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&crate::checkpoint::RunState>,
+        pause: &crate::checkpoint::Pause<'_>,
+    ) -> Result<crate::checkpoint::Leg<Report>, Error> {
+        crate::resume::solve_resumable(self, method, y0, stepping, observer, from, pause)
     }
 }
 

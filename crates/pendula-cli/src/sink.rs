@@ -1,0 +1,341 @@
+//! Trajectories stream to disk as CSV rows, or as .npy rows behind a fixed-size header
+//! rewritten with the row count at the end, so memory does not grow with the run's length.
+//!
+//! Every byte written is counted and checksummed (CRC-32) on the way, so that a checkpoint
+//! can record how much of the trajectory is on disk ([`Sink::position`]); a resumed run
+//! ([`Sink::resume`]) checks that prefix against its checksum, cuts off what was written
+//! after the checkpoint, and appends from there — the file ends byte-identical to one
+//! written in one go.
+//!
+//! Write errors name the output ([`crate::output::OutFile`]); into a FIFO, which cannot
+//! seek, .npy rows are spooled in an unnamed temporary file and follow the final header.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+
+use crate::config::Output;
+use crate::output::{OutFile, PartialFile};
+
+/// A writer that counts the bytes through it and their CRC-32.
+pub struct Tally<W> {
+    inner: W,
+    bytes: u64,
+    crc: crc32fast::Hasher,
+}
+
+impl<W> Tally<W> {
+    fn new(inner: W) -> Self {
+        Tally { inner, bytes: 0, crc: crc32fast::Hasher::new() }
+    }
+}
+
+impl<W: Write> Write for Tally<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// How much of a trajectory file is written: its length, the rows in it, and the CRC-32 of
+/// its bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Position {
+    /// Bytes.
+    pub bytes: u64,
+    /// Data rows (the CSV header is not one).
+    pub rows: u64,
+    /// CRC-32 of the bytes.
+    pub crc32: u32,
+}
+
+/// Where trajectory rows go.
+pub enum Sink {
+    /// Nowhere (`--every 0`).
+    Discard,
+    /// CSV rows, streamed.
+    Csv(Box<csv::Writer<Tally<Box<dyn Write>>>>),
+    /// Rows of a 2-D float64 .npy array, streamed.
+    Npy(NpyRows),
+}
+
+impl Sink {
+    /// A sink for `output` with these column names; `file` is the open output file.
+    pub fn new(output: Option<&Output>, file: Option<OutFile>, columns: &[&str]) -> Result<Self> {
+        let writer: Box<dyn Write> = match output {
+            None => return Ok(Sink::Discard),
+            Some(Output::Npy(_)) => {
+                let file = file.expect("a .npy output has a file");
+                return Ok(Sink::Npy(NpyRows::new(file, columns.len())?));
+            }
+            Some(Output::Stdout) => Box::new(std::io::stdout().lock()),
+            Some(Output::Csv(_)) => Box::new(file.expect("a CSV file output has a file")),
+        };
+        let mut csv = csv_writer(Tally::new(writer));
+        csv.write_record(columns).map_err(csv_error)?;
+        Ok(Sink::Csv(Box::new(csv)))
+    }
+
+    /// A sink that continues the trajectory in the `partial` file (named by its path in
+    /// messages about its contents; its write errors name `--out` and the output's path) at
+    /// `at`: the first `at.bytes` bytes must have the recorded checksum; what follows them
+    /// (rows written after the checkpoint) is cut off. Returns the rows already there
+    /// (values, row after row) when `keep_rows`, for a plot.
+    pub fn resume(
+        output: &Output,
+        partial: &PartialFile,
+        columns: usize,
+        at: &Position,
+        keep_rows: bool,
+    ) -> Result<(Self, Option<Vec<f64>>)> {
+        let mut file = partial.open()?;
+        let path = partial.path();
+        let length = file.metadata().with_context(|| format!("cannot read {}", path.display()))?.len();
+        if length < at.bytes {
+            bail!(
+                "the partial trajectory {} has {length} bytes; the checkpoint recorded {}: it was cut short",
+                path.display(),
+                at.bytes
+            );
+        }
+        let mut prefix = Vec::new();
+        (&mut file)
+            .take(at.bytes)
+            .read_to_end(&mut prefix)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&prefix);
+        if crc.clone().finalize() != at.crc32 {
+            bail!(
+                "the partial trajectory {} does not match its checkpoint (checksum): it was changed",
+                path.display()
+            );
+        }
+        let mut file = OutFile::new(file, "--out", partial.shown());
+        file.set_len(at.bytes)?;
+        file.seek(SeekFrom::End(0))?;
+        let rows = if keep_rows { Some(parse_rows(output, &prefix, columns, at.rows, path)?) } else { None };
+        let tally = Tally { inner: file, bytes: at.bytes, crc };
+        let sink = match output {
+            Output::Npy(_) => Sink::Npy(NpyRows::resume(tally, columns, at.rows)),
+            Output::Csv(_) => Sink::Csv(Box::new(csv_writer(Tally {
+                inner: Box::new(tally.inner) as Box<dyn Write>,
+                bytes: tally.bytes,
+                crc: tally.crc,
+            }))),
+            Output::Stdout => unreachable!("a checkpointed trajectory is a file"),
+        };
+        Ok((sink, rows))
+    }
+
+    /// Writes one row.
+    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
+        match self {
+            Sink::Discard => {}
+            Sink::Npy(npy) => npy.row(values)?,
+            Sink::Csv(w) => {
+                let mut buf = ryu::Buffer::new();
+                for v in values {
+                    w.write_field(buf.format(v)).map_err(csv_error)?;
+                }
+                w.write_record(None::<&[u8]>).map_err(csv_error)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Flushes what is written to the file and says how much that is (`rows` rows).
+    pub fn position(&mut self, rows: u64) -> Result<Position> {
+        let tally = match self {
+            Sink::Discard => return Ok(Position { bytes: 0, rows, crc32: 0 }),
+            Sink::Csv(w) => {
+                w.flush()?;
+                let t = w.get_ref();
+                (t.bytes, t.crc.clone().finalize())
+            }
+            Sink::Npy(npy) => {
+                assert!(npy.spool.is_none(), "a checkpointed trajectory is a regular file");
+                npy.out.flush()?;
+                let t = npy.out.get_ref();
+                (t.bytes, t.crc.clone().finalize())
+            }
+        };
+        Ok(Position { bytes: tally.0, rows, crc32: tally.1 })
+    }
+
+    /// Flushes the rows; for .npy, writes the final row count into the header.
+    pub fn finish(self) -> Result<()> {
+        match self {
+            Sink::Discard => Ok(()),
+            Sink::Csv(mut w) => Ok(w.flush()?),
+            Sink::Npy(npy) => npy.finish(),
+        }
+    }
+}
+
+fn csv_writer<W: Write>(w: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new().buffer_capacity(1 << 16).from_writer(w)
+}
+
+/// A CSV writer's error as the writer's own when it is one ([`crate::output::WriteError`],
+/// which names the output, and is what the exit code looks for).
+fn csv_error(e: csv::Error) -> anyhow::Error {
+    let text = e.to_string();
+    match e.into_kind() {
+        csv::ErrorKind::Io(io) => io.into(),
+        _ => anyhow::anyhow!(text),
+    }
+}
+
+/// The data rows of a trajectory file's first bytes (its header skipped), as flat values.
+fn parse_rows(output: &Output, bytes: &[u8], columns: usize, rows: u64, path: &Path) -> Result<Vec<f64>> {
+    let values: Vec<f64> = match output {
+        Output::Npy(_) => {
+            let header = npy_header(u64::MAX, columns, 0).len();
+            bytes
+                .get(header..)
+                .unwrap_or_default()
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                .collect()
+        }
+        _ => {
+            let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(bytes);
+            let mut values = Vec::new();
+            for record in reader.records() {
+                let record = record.with_context(|| format!("cannot read the rows of {}", path.display()))?;
+                for field in &record {
+                    values.push(
+                        field.parse().with_context(|| format!("a value `{field}` in {}", path.display()))?,
+                    );
+                }
+            }
+            values
+        }
+    };
+    if values.len() as u64 != rows * columns as u64 {
+        bail!(
+            "the partial trajectory {} holds {} values; the checkpoint recorded {rows} rows",
+            path.display(),
+            values.len()
+        );
+    }
+    Ok(values)
+}
+
+/// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row: the header is
+/// written first with room for any row count, and rewritten with the real one at the end.
+/// Into a FIFO, which cannot seek, the rows are spooled in an unnamed temporary file (gone
+/// with the process, however it ends) and follow the final header at the end.
+pub struct NpyRows {
+    out: BufWriter<Tally<OutFile>>,
+    /// The rows, when `out` cannot seek.
+    spool: Option<BufWriter<File>>,
+    columns: usize,
+    rows: u64,
+    header_len: usize,
+}
+
+impl NpyRows {
+    /// Starts the array in `file` (at its start).
+    pub fn new(mut file: OutFile, columns: usize) -> Result<Self> {
+        // The header's size for the longest row count; every header is padded to it.
+        let header_len = npy_header(u64::MAX, columns, 0).len();
+        let seekable = file.seekable();
+        let mut out = BufWriter::with_capacity(1 << 16, Tally::new(file));
+        let spool = if seekable {
+            out.write_all(&npy_header(0, columns, header_len))?;
+            None
+        } else {
+            let spool = tempfile::tempfile()
+                .context("cannot spool the .npy rows for a FIFO in the temporary directory")?;
+            Some(BufWriter::with_capacity(1 << 16, spool))
+        };
+        Ok(NpyRows { out, spool, columns, rows: 0, header_len })
+    }
+
+    /// Continues an array of `rows` rows whose bytes so far `file` has counted.
+    fn resume(file: Tally<OutFile>, columns: usize, rows: u64) -> Self {
+        let header_len = npy_header(u64::MAX, columns, 0).len();
+        NpyRows { out: BufWriter::with_capacity(1 << 16, file), spool: None, columns, rows, header_len }
+    }
+
+    /// Appends one row of `columns` values.
+    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
+        let w: &mut dyn Write = match &mut self.spool {
+            Some(spool) => spool,
+            None => &mut self.out,
+        };
+        let mut n = 0;
+        for v in values {
+            w.write_all(&v.to_le_bytes())?;
+            n += 1;
+        }
+        debug_assert_eq!(n, self.columns, "a row has one value per column");
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Writes the header with the final shape.
+    pub fn finish(self) -> Result<()> {
+        let header = npy_header(self.rows, self.columns, self.header_len);
+        let mut out = self.out;
+        match self.spool {
+            Some(spool) => {
+                let mut spool = spool.into_inner().map_err(|e| e.into_error())?;
+                spool.seek(SeekFrom::Start(0))?;
+                out.write_all(&header)?;
+                io::copy(&mut spool, &mut out)?;
+                out.flush()?;
+            }
+            None => {
+                let mut file = out.into_inner().map_err(|e| e.into_error())?.inner;
+                file.seek(SeekFrom::Start(0))?;
+                file.write_all(&header)?;
+                file.flush()?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The NPY 1.0 header of a C-order float64 array of shape (rows, columns): magic, version,
+/// the length, and the dictionary padded with spaces and a newline so that the whole header
+/// is `min_len` bytes or the next multiple of 64 (the format's alignment).
+fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
+    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
+    let unpadded = 10 + dict.len() + 1;
+    let total = unpadded.div_ceil(64).max(1) * 64;
+    let total = total.max(min_len);
+    let mut header = Vec::with_capacity(total);
+    header.extend_from_slice(b"\x93NUMPY\x01\x00");
+    header.extend_from_slice(&u16::try_from(total - 10).expect("a short header").to_le_bytes());
+    header.extend_from_slice(dict.as_bytes());
+    header.resize(total - 1, b' ');
+    header.push(b'\n');
+    header
+}
+
+#[cfg(test)]
+mod tests {
+    use super::npy_header;
+
+    #[test]
+    fn npy_headers_are_aligned_and_of_one_length() {
+        let long = npy_header(u64::MAX, 6, 0).len();
+        assert_eq!(long % 64, 0);
+        let short = npy_header(3, 6, long);
+        assert_eq!(short.len(), long);
+        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
+        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
+        assert!(short.ends_with(b" \n"));
+    }
+}
