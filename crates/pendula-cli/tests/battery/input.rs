@@ -162,6 +162,14 @@ pub fn cases() -> Vec<Case> {
                 std::fs::write(d.join("x.npy"), npy(header, &[])).unwrap();
             })
             .says("take no bytes"),
+        // The commands that only print: a misspelt choice gets the valid ones.
+        Case::new("list of a misspelt kind", "list methodz")
+            .says("possible values: systems, methods, presets")
+            .says("'methods'"),
+        Case::new("completions for an unknown shell", "completions tcsh").says("possible values: bash"),
+        Case::new("man pages into a file", "man --out-dir man")
+            .setup(|d| std::fs::write(d.join("man"), "x").unwrap())
+            .says("cannot write --out-dir man: it is a file, not a directory"),
         Case::new("a plot of an endless file", "plot z.csv")
             .setup(|d| std::os::unix::fs::symlink("/dev/zero", d.join("z.csv")).unwrap())
             .says("z.csv: it is not a regular file"),
