@@ -49,6 +49,7 @@ pub mod ensemble;
 pub mod error;
 pub mod events;
 pub mod integrator;
+pub mod num;
 pub mod observe;
 pub mod resume;
 pub mod simulate;

@@ -15,12 +15,14 @@
 
 pub mod driven;
 mod trajectory;
-pub mod trig;
+
+pub use crate::num::trig;
 
 pub use trajectory::{rk4_trajectory, rk4_trajectory_resumable};
 
 use rayon::prelude::*;
 
+use crate::num::Lanes as L;
 use crate::system::double::DoublePendulum;
 
 /// Values per lane group: two AVX-512 vectors, four AVX2 vectors (16 measured fastest on
@@ -162,12 +164,7 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
     for (g, (group, results)) in members.chunks(LANES).zip(out.chunks_mut(LANES)).enumerate() {
         let pick = |i: usize| group[i.min(group.len() - 1)];
         let mut lanes = Lanes {
-            params: std::array::from_fn(|p| {
-                std::array::from_fn(|i| {
-                    let d = pick(i).pendulum;
-                    [(d.m1 + d.m2) * d.l1, d.m2 * d.l2, -d.m2 * d.l2, (d.m1 + d.m2) * d.g, d.l1, d.l2, d.g][p]
-                })
-            }),
+            params: DoublePendulum::transpose(std::array::from_fn(|i| pick(i).pendulum)),
             state: std::array::from_fn(|k| std::array::from_fn(|i| pick(i).state[k])),
             flip_step: [-1.0; LANES],
             flip_ends: [[[0.0; LANES]; 4]; 2],
@@ -199,11 +196,11 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
     first_failure.map_or(Ok(()), Err)
 }
 
-/// A lane group: parameter products (see `params`), state (θ₁, θ₂, ω₁, ω₂), and per-lane
-/// records, each an array over the lanes.
+/// A lane group: parameters, state (θ₁, θ₂, ω₁, ω₂), and per-lane records, each an array
+/// over the lanes.
 struct Lanes {
-    /// m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g, l1, l2, g.
-    params: [[f64; LANES]; 7],
+    /// The pendulums, lane i's parameters in entry i of each array.
+    params: DoublePendulum<V>,
     state: [[f64; LANES]; 4],
     /// The step in which the lane first flipped (−1: none), as a float.
     flip_step: [f64; LANES],
@@ -260,39 +257,29 @@ fn beyond_half_fast(reach: &V) -> bool {
     reach.iter().fold(false, |beyond, &r| beyond | (r > HALF_FAST))
 }
 
-/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
-/// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC) (θ' = ω needs no work). Not `WIDE`:
-/// the branch-free sine and cosine, and `reach` = max(reach, |θ₁|, |θ₂|) per lane, data flow
-/// only (a test and branch per stage instead cost the W3 sweep 12–17%, its AVX-512 kernel
-/// spilling a third more). `WIDE`: angles beyond the fast range reduced exactly, per lane.
+/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane: the double
+/// pendulum's own ([`DoublePendulum::accelerations`]) in the engine arithmetic
+/// ([`crate::num::Lanes`]) (θ' = ω needs no work). Not `WIDE`: the branch-free sine and cosine,
+/// and `reach` = max(reach, |θ₁|, |θ₂|) per lane, data flow only (a test and branch per stage
+/// instead cost the W3 sweep 12–17%, its AVX-512 kernel spilling a third more). `WIDE`: angles
+/// beyond the fast range reduced exactly, per lane. The free pendulum's (the kernels refuse
+/// forced members), so the time is not needed.
 #[inline(always)]
 fn accelerations<const FMA: bool, const WIDE: bool>(
-    p: &[V; 7],
+    p: &DoublePendulum<V>,
     [th1, th2]: [&V; 2],
     [w1, w2]: [&V; 2],
     [a1, a2]: [&mut V; 2],
     reach: &mut V,
 ) {
-    for i in 0..LANES {
-        if !WIDE {
+    if !WIDE {
+        for i in 0..LANES {
             reach[i] = max_of(th2[i].abs(), max_of(th1[i].abs(), reach[i]));
         }
-        // The parameter products that do not change, computed once per lane group in the same
-        // grouping as the scalar expressions: m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g.
-        let (m11, m2l2, neg_m2l2, m12g, l1, l2, g) =
-            (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i]);
-        let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(th1[i] - th2[i]);
-        let (s1, s2) = (trig::sin_with::<FMA, WIDE>(th1[i]), trig::sin_with::<FMA, WIDE>(th2[i]));
-        let m12 = m2l2 * cd;
-        let m21 = l1 * cd;
-        let m22 = l2;
-        let r1 = neg_m2l2 * w2[i] * w2[i] * sd - m12g * s1;
-        let r2 = l1 * w1[i] * w1[i] * sd - g * s2;
-        // One division, two products: division is the slowest vector operation here.
-        let inverse = 1.0 / (m11 * m22 - m12 * m21);
-        a1[i] = (r1 * m22 - m12 * r2) * inverse;
-        a2[i] = (m11 * r2 - m21 * r1) * inverse;
     }
+    let pendulum = p.map(L::<LANES, FMA, WIDE>);
+    let [x1, x2] = pendulum.accelerations(L([0.0; LANES]), &[L(*th1), L(*th2), L(*w1), L(*w2)]);
+    (*a1, *a2) = (x1.0, x2.0);
 }
 
 /// out = y + a k, lane by lane (fused where `FMA`).
@@ -449,35 +436,24 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool, const WIDE: bool>(
 }
 
 /// The gradient (∂H/∂q₁, ∂H/∂q₂, ∂H/∂p₁, ∂H/∂p₂) of the double pendulum's Hamiltonian at
-/// (q, p) for every lane, in the expressions of `DoublePendulumForm`'s `dh_dq` and `dh_dp`
-/// (raw parameters m₁, m₂, l₁, l₂, g per lane); the trigonometry and `reach` as in
-/// [`accelerations`].
+/// (q, p) for every lane: [`DoublePendulum::hamiltonian_gradient`] in the engine arithmetic;
+/// `reach` as in [`accelerations`].
 #[inline(always)]
 fn gradient<const FMA: bool, const WIDE: bool>(
-    raw: &[V; 5],
+    p: &DoublePendulum<V>,
     [q1, q2]: [&V; 2],
     [p1, p2]: [&V; 2],
     out: &mut [V; 4],
     reach: &mut V,
 ) {
-    for i in 0..LANES {
-        if !WIDE {
+    if !WIDE {
+        for i in 0..LANES {
             reach[i] = max_of(q2[i].abs(), max_of(q1[i].abs(), reach[i]));
         }
-        let (m1, m2, l1, l2, g) = (raw[0][i], raw[1][i], raw[2][i], raw[3][i], raw[4][i]);
-        let (s, c) = trig::sin_cos_with::<FMA, WIDE>(q1[i] - q2[i]);
-        let d = m1 + m2 * s * s;
-        let (a, b) = (p1[i], p2[i]);
-        let bracket = m2 * c / (l1 * l1) * a * a - (m2 * c * c + (m1 + m2)) / (l1 * l2) * a * b
-            + (m1 + m2) * c / (l2 * l2) * b * b;
-        let coupling = s / (d * d) * bracket;
-        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA, WIDE>(q1[i]);
-        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA, WIDE>(q2[i]);
-        let det = m2 * l1 * l1 * l2 * l2 * d;
-        let bc = m2 * l1 * l2 * c;
-        out[2][i] = (m2 * l2 * l2 * a - bc * b) / det;
-        out[3][i] = (-bc * a + l1 * l1 * (m1 + m2) * b) / det;
     }
+    let pendulum = p.map(L::<LANES, FMA, WIDE>);
+    let g = pendulum.hamiltonian_gradient(L([0.0; LANES]), [L(*q1), L(*q2)], [L(*p1), L(*p2)]);
+    *out = g.map(|x| x.0);
 }
 
 /// Tao steps for a lane group: (θ, ω) → (q, p) with the libm cosine, the extended-space map
@@ -499,12 +475,7 @@ fn tao_lanes(
         z[2][i] = p[0];
         z[3][i] = p[1];
     }
-    let raw: [V; 5] = std::array::from_fn(|k| {
-        std::array::from_fn(|i| {
-            let d = pendulums[i];
-            [d.m1, d.m2, d.l1, d.l2, d.g][k]
-        })
-    });
+    let raw = lanes.params;
     // The fast kernel, and if it gave up (`lanes` and `z` left as they were), the wide one.
     let run = (h, steps);
     let done = if has_fma() {
@@ -559,7 +530,7 @@ fn tao_lanes(
 ))]
 fn tao_kernel<const FMA: bool, const WIDE: bool>(
     lanes: &mut Lanes,
-    raw: &[V; 5],
+    raw: &DoublePendulum<V>,
     z: &mut [V; 4],
     scheme: crate::integrator::tao::TaoScheme,
     (h, steps): (f64, u64),

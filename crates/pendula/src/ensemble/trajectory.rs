@@ -3,6 +3,7 @@
 
 use super::{has_fma, trig};
 use crate::checkpoint::{Leg, Pause, Pausing, Reader, RunState, Words};
+use crate::num::Lanes;
 use crate::observe::{Observer, Sample};
 use crate::simulate::Schedule;
 use crate::system::double::DoublePendulum;
@@ -90,15 +91,15 @@ pub fn rk4_trajectory_resumable(
             (state.steps, fma)
         }
     };
-    let p = [pendulum.m1, pendulum.m2, pendulum.l1, pendulum.l2, pendulum.g];
+    let p = pendulum;
     // The kernel's loop is the same whether it may pause or not: the check is the
     // observer's (see `Simulation::run_from`).
     let mut pausing = Pausing::new(observer, pause);
     let (steps, outcome) = match (fma, pause.never()) {
-        (true, true) => trajectory_kernel::<true, _>(&p, &mut y, spec, &schedule, done, pausing.inner())?,
-        (false, true) => trajectory_kernel::<false, _>(&p, &mut y, spec, &schedule, done, pausing.inner())?,
-        (true, false) => trajectory_kernel::<true, _>(&p, &mut y, spec, &schedule, done, &mut pausing)?,
-        (false, false) => trajectory_kernel::<false, _>(&p, &mut y, spec, &schedule, done, &mut pausing)?,
+        (true, true) => trajectory_kernel::<true, _>(p, &mut y, spec, &schedule, done, pausing.inner())?,
+        (false, true) => trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, pausing.inner())?,
+        (true, false) => trajectory_kernel::<true, _>(p, &mut y, spec, &schedule, done, &mut pausing)?,
+        (false, false) => trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, &mut pausing)?,
     };
     Ok(match (!pausing.paused).then_some(outcome) {
         Some(outcome) => Leg::Done(Report {
@@ -145,44 +146,29 @@ fn trig_of_with<const FMA: bool, const WIDE: bool>(y: &[f64; 4]) -> [(f64, f64);
     [sc(y[0] - y[1]), sc(y[0]), sc(y[1])]
 }
 
-/// The energy T + V of one double pendulum (the expressions of `DoublePendulum::energy`)
-/// from its trigonometry.
+/// The energy T + V of one double pendulum ([`DoublePendulum::energy_from`], in the
+/// reference arithmetic) from its trigonometry.
 #[inline(always)]
-fn energy_from(p: &[f64; 5], y: &[f64; 4], tr: &[(f64, f64); 3]) -> f64 {
-    let [m1, m2, l1, l2, g] = *p;
-    let (w1, w2) = (y[2], y[3]);
-    let kinetic =
-        0.5 * (m1 + m2) * l1 * l1 * w1 * w1 + 0.5 * m2 * l2 * l2 * w2 * w2 + m2 * l1 * l2 * w1 * w2 * tr[0].1;
-    let potential = -(m1 + m2) * g * l1 * tr[1].1 - m2 * g * l2 * tr[2].1;
-    kinetic + potential
+fn energy_from(p: &DoublePendulum, y: &[f64; 4], tr: &[(f64, f64); 3]) -> f64 {
+    p.energy_from(y, [tr[0].1, tr[1].1, tr[2].1])
 }
 
-/// The accelerations of one double pendulum (the lanes' expressions, one lane) from
-/// sin(θ₁ − θ₂), cos(θ₁ − θ₂), sin θ₁, sin θ₂.
+/// One pendulum in the engine arithmetic: one lane.
+type One<const FMA: bool, const WIDE: bool> = Lanes<1, FMA, WIDE>;
+
+/// θ' = ω and the accelerations of one double pendulum ([`DoublePendulum::accelerations`] in
+/// the engine arithmetic, one lane: the bits a lane of the ensemble engine gets) from `trig`
+/// = (sin(θ₁ − θ₂), cos(θ₁ − θ₂), sin θ₁, sin θ₂). The free pendulum's: no time needed.
 #[inline(always)]
-fn accelerations_from<const FMA: bool>(
-    p: &[f64; 5],
-    y: &[f64; 4],
-    sd: f64,
-    cd: f64,
-    s1: f64,
-    s2: f64,
-) -> [f64; 4] {
-    let m = trig::madd::<FMA>;
-    let [m1, m2, l1, l2, g] = *p;
-    let m11 = (m1 + m2) * l1;
-    let m12 = m2 * l2 * cd;
-    let m21 = l1 * cd;
-    let m22 = l2;
-    let r1 = m(-m2 * l2 * y[3] * y[3], sd, -((m1 + m2) * g * s1));
-    let r2 = m(l1 * y[2] * y[2], sd, -(g * s2));
-    let inverse = 1.0 / m(m11, m22, -(m12 * m21));
-    [y[2], y[3], m(r1, m22, -(m12 * r2)) * inverse, m(m11, r2, -(m21 * r1)) * inverse]
+fn accelerations_from<const FMA: bool>(p: &DoublePendulum, y: &[f64; 4], trig: [f64; 4]) -> [f64; 4] {
+    let one = |x: f64| -> One<FMA, false> { Lanes([x]) };
+    let [a1, a2] = p.map(one).accelerations_from(one(0.0), &y.map(one), trig.map(one));
+    [y[2], y[3], a1.0[0], a2.0[0]]
 }
 
 /// The accelerations of one double pendulum at y (as [`trig_of`], one test of the angles).
 #[inline(always)]
-fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
+fn accelerations_one<const FMA: bool>(p: &DoublePendulum, y: &[f64; 4]) -> [f64; 4] {
     if fast_pair(y[0], y[1]) {
         accelerations_one_with::<FMA, false>(p, y)
     } else {
@@ -192,10 +178,10 @@ fn accelerations_one<const FMA: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
 
 /// [`accelerations_one`] with `trig`'s fast path alone (`WIDE` false) or for every angle.
 #[inline(always)]
-fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &[f64; 5], y: &[f64; 4]) -> [f64; 4] {
-    let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(y[0] - y[1]);
-    let s = trig::sin_with::<FMA, WIDE>;
-    accelerations_from::<FMA>(p, y, sd, cd, s(y[0]), s(y[1]))
+fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &DoublePendulum, y: &[f64; 4]) -> [f64; 4] {
+    let one = |x: f64| -> One<FMA, WIDE> { Lanes([x]) };
+    let [a1, a2] = p.map(one).accelerations(one(0.0), &y.map(one));
+    [y[2], y[3], a1.0[0], a2.0[0]]
 }
 
 #[multiversion::multiversion(targets(
@@ -209,7 +195,7 @@ fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &[f64; 5], y: &[
 /// Steps from `done` (showing the initial state first when it is 0): the steps taken and how
 /// the run ended.
 fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
-    p: &[f64; 5],
+    p: &DoublePendulum,
     y: &mut [f64; 4],
     spec: &RunSpec,
     schedule: &Schedule,
@@ -230,7 +216,7 @@ fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
         let last = k == schedule.steps;
         let step = if last { schedule.last_h } else { h };
         let (hh, h6) = (0.5 * step, step / 6.0);
-        let k1 = accelerations_from::<FMA>(p, y, tr[0].0, tr[0].1, tr[1].0, tr[2].0);
+        let k1 = accelerations_from::<FMA>(p, y, [tr[0].0, tr[0].1, tr[1].0, tr[2].0]);
         let k2 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k1[c], y[c])));
         let k3 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(hh, k2[c], y[c])));
         let k4 = accelerations_one::<FMA>(p, &std::array::from_fn(|c| m(step, k3[c], y[c])));

@@ -3,9 +3,10 @@
 
 use std::f64::consts::PI;
 
-use num_dual::DualNum;
+use num_dual::Dual64;
 
 use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian};
+use crate::num::Num;
 
 /// Two point masses on massless rigid rods, the second hung from the first.
 ///
@@ -13,25 +14,31 @@ use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Va
 /// velocities (rad/s). Its Hamiltonian (94) is not separable (the mass matrix depends on
 /// θ₁ − θ₂), so explicit splitting methods do not apply: symplectic methods run on
 /// [`DoublePendulumForm`].
+///
+/// The parameters are of any [`Num`] type `T`: `f64` for one pendulum, [`crate::num::Lanes`]
+/// for a lane group of the ensemble engine (one pendulum per lane), dual numbers for
+/// Jacobians. The equations of motion, the energy and the Hamiltonian gradient are written
+/// once, over `T` ([`DoublePendulum::accelerations`], [`DoublePendulum::energy_from`],
+/// [`DoublePendulum::hamiltonian_gradient`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DoublePendulum {
+pub struct DoublePendulum<T = f64> {
     /// Mass of the first bob m₁, kg.
-    pub m1: f64,
+    pub m1: T,
     /// Mass of the second bob m₂, kg.
-    pub m2: f64,
+    pub m2: T,
     /// Length of the first rod l₁, m.
-    pub l1: f64,
+    pub l1: T,
     /// Length of the second rod l₂, m.
-    pub l2: f64,
+    pub l2: T,
     /// Gravitational acceleration g, m/s².
-    pub g: f64,
+    pub g: T,
     /// Viscous friction coefficient b at both joints, N m s/rad: torques −b θ̇₁ at the pivot
     /// and −b (θ̇₂ − θ̇₁) at the elbow (on the second rod; its reaction on the first).
-    pub damping: f64,
+    pub damping: T,
     /// Amplitude A of the driving torque A cos(Ω t) on the first rod, N m.
-    pub drive_amplitude: f64,
+    pub drive_amplitude: T,
     /// Angular frequency Ω of the drive, rad/s.
-    pub drive_frequency: f64,
+    pub drive_frequency: T,
 }
 
 impl Default for DoublePendulum {
@@ -174,38 +181,6 @@ impl DoublePendulum {
         }
     }
 
-    /// Whether damping or a drive acts (then the energy is not conserved, and the ensemble
-    /// engine's kernels, which implement the free equations, do not apply).
-    pub fn is_forced(&self) -> bool {
-        self.damping != 0.0 || self.drive_amplitude != 0.0
-    }
-
-    /// The generalized forces (Q₁, Q₂) of the joint friction and the drive at time t, N m:
-    /// Q₁ = −b ω₁ + b (ω₂ − ω₁) + A cos(Ω t), Q₂ = −b (ω₂ − ω₁). They enter the right-hand
-    /// side of the Euler–Lagrange equations, M θ'' + C + G = Q.
-    pub fn generalized_forces(&self, t: f64, w1: f64, w2: f64) -> [f64; 2] {
-        let b = self.damping;
-        [b * (w2 - 2.0 * w1) + self.drive(t), -b * (w2 - w1)]
-    }
-
-    /// The rows of the Lagrangian right-hand side with the generalized forces added (first
-    /// row divided by l₁, second by m₂ l₂, as in [`System::rhs`]).
-    #[cold]
-    #[inline(never)]
-    fn add_forces(&self, t: f64, w1: f64, w2: f64, r1: f64, r2: f64) -> (f64, f64) {
-        let [q1, q2] = self.generalized_forces(t, w1, w2);
-        (r1 + q1 / self.l1, r2 + q2 / (self.m2 * self.l2))
-    }
-
-    /// The driving torque A cos(Ω t) on the first rod, N m.
-    pub fn drive(&self, t: f64) -> f64 {
-        if self.drive_amplitude == 0.0 {
-            0.0
-        } else {
-            self.drive_amplitude * (self.drive_frequency * t).cos()
-        }
-    }
-
     /// Generalized momenta p = M(θ) ω (paper (84) with the ERRATA's [θ̇₁, θ̇₂]), kg m²/s.
     pub fn momenta(&self, y: &[f64]) -> [f64; 2] {
         let Self { m1, m2, l1, l2, .. } = *self;
@@ -215,17 +190,12 @@ impl DoublePendulum {
 
     /// Kinetic energy T (43), J.
     pub fn kinetic(&self, y: &[f64]) -> f64 {
-        let Self { m1, m2, l1, l2, .. } = *self;
-        let (w1, w2) = (y[2], y[3]);
-        0.5 * (m1 + m2) * l1 * l1 * w1 * w1
-            + 0.5 * m2 * l2 * l2 * w2 * w2
-            + m2 * l1 * l2 * w1 * w2 * cos(y[0] - y[1])
+        self.kinetic_from(y[2], y[3], (y[0] - y[1]).cos())
     }
 
     /// Potential energy V (46), J; zero when both rods are horizontal at the pivot's height.
     pub fn potential(&self, theta1: f64, theta2: f64) -> f64 {
-        let Self { m1, m2, l1, l2, g, .. } = *self;
-        -(m1 + m2) * g * l1 * cos(theta1) - m2 * g * l2 * cos(theta2)
+        self.potential_from(theta1.cos(), theta2.cos())
     }
 
     /// Lagrangian L = T − V (47), J.
@@ -238,30 +208,156 @@ impl DoublePendulum {
         DoublePendulumForm { pendulum: *self }
     }
 
-    /// The Lagrangian right-hand side (the expressions of [`System::rhs`]) over any number
-    /// type, for its Jacobian by forward-mode automatic differentiation (num-dual).
-    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, t: f64, y: [T; 4]) -> [T; 4] {
-        let Self { m1, m2, l1, l2, g, .. } = *self;
-        let [th1, th2, w1, w2] = y;
-        let (sd, cd) = (th1 - th2).sin_cos();
-        let (m11, m22) = (T::from((m1 + m2) * l1), T::from(l2));
-        let (m12, m21) = (cd * (m2 * l2), cd * l1);
-        // The forces enter before M⁻¹, which depends on θ: both stay in the Jacobian.
-        let b = self.damping;
-        let r1 = w2 * w2 * sd * (-m2 * l2) - th1.sin() * ((m1 + m2) * g)
-            + (w2 * b - w1 * (2.0 * b) + self.drive(t)) / l1;
-        let r2 = w1 * w1 * sd * l1 - th2.sin() * g - (w2 - w1) * b / (m2 * l2);
-        let det = m11 * m22 - m12 * m21;
-        [w1, w2, (r1 * m22 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det]
+    /// `N` pendulums as one whose parameters are arrays (lane i the i-th pendulum's), for a
+    /// lane group of the ensemble engine.
+    pub fn transpose<const N: usize>(all: [Self; N]) -> DoublePendulum<[f64; N]> {
+        DoublePendulum {
+            m1: all.map(|d| d.m1),
+            m2: all.map(|d| d.m2),
+            l1: all.map(|d| d.l1),
+            l2: all.map(|d| d.l2),
+            g: all.map(|d| d.g),
+            damping: all.map(|d| d.damping),
+            drive_amplitude: all.map(|d| d.drive_amplitude),
+            drive_frequency: all.map(|d| d.drive_frequency),
+        }
+    }
+
+    /// The parameters as dual numbers (constants), for Jacobians.
+    fn dual(&self) -> DoublePendulum<Dual64> {
+        self.map(Dual64::from)
     }
 }
 
-/// The cosine the energy uses: the engine's ([`crate::ensemble::trig`]: within 2 ulp of
-/// libm's, or 6.8·10⁻²¹ near the multiples of π/2, for every angle), which costs a third of
-/// libm's where the energy is tracked at every step (`pendula simulate`).
-#[inline]
-fn cos(x: f64) -> f64 {
-    crate::ensemble::trig::sin_cos(x).1
+impl<T: Copy> DoublePendulum<T> {
+    /// The same pendulum with each parameter converted by `f` (to lanes, to dual numbers).
+    pub fn map<U>(&self, f: impl Fn(T) -> U) -> DoublePendulum<U> {
+        DoublePendulum {
+            m1: f(self.m1),
+            m2: f(self.m2),
+            l1: f(self.l1),
+            l2: f(self.l2),
+            g: f(self.g),
+            damping: f(self.damping),
+            drive_amplitude: f(self.drive_amplitude),
+            drive_frequency: f(self.drive_frequency),
+        }
+    }
+}
+
+/// The equations, written once over every number type.
+impl<T: Num> DoublePendulum<T> {
+    /// Whether damping or a drive acts (in some lane): then the energy is not conserved, and
+    /// the forces' terms are computed.
+    #[inline(always)]
+    pub fn is_forced(&self) -> bool {
+        !(self.damping.is_zero() && self.drive_amplitude.is_zero())
+    }
+
+    /// The driving torque A cos(Ω t) on the first rod, N m.
+    #[inline(always)]
+    pub fn drive(&self, t: T) -> T {
+        if self.drive_amplitude.is_zero() {
+            T::splat(0.0)
+        } else {
+            self.drive_amplitude * (self.drive_frequency * t).cos()
+        }
+    }
+
+    /// The generalized forces (Q₁, Q₂) of the joint friction and the drive at time t, N m:
+    /// Q₁ = −b ω₁ + b (ω₂ − ω₁) + A cos(Ω t), Q₂ = −b (ω₂ − ω₁). They enter the right-hand
+    /// side of the Euler–Lagrange equations, M θ'' + C + G = Q.
+    #[inline(always)]
+    pub fn generalized_forces(&self, t: T, w1: T, w2: T) -> [T; 2] {
+        let b = self.damping;
+        [b * (w2 - T::splat(2.0) * w1) + self.drive(t), -b * (w2 - w1)]
+    }
+
+    /// The angular accelerations (θ₁'', θ₂'') at (t, y), y = (θ₁, θ₂, ω₁, ω₂): θ'' = M⁻¹ (Q −
+    /// C − G) (paper (76), (81), (82)); see [`DoublePendulum::accelerations_from`].
+    #[inline(always)]
+    pub fn accelerations(&self, t: T, y: &[T; 4]) -> [T; 2] {
+        let (sd, cd) = (y[0] - y[1]).sin_cos();
+        self.accelerations_from(t, y, [sd, cd, y[0].sin(), y[1].sin()])
+    }
+
+    /// [`DoublePendulum::accelerations`] from `trig` = (sin(θ₁ − θ₂), cos(θ₁ − θ₂), sin θ₁,
+    /// sin θ₂), the first row of the matrix equation divided by l₁ and the second by m₂ l₂. In
+    /// the reference arithmetic (`f64`) the expressions are, in order, those
+    /// `shared/bench/SPEC.md` fixes, so that the result is bit-identical to the benchmark's C
+    /// peers; the engine's ([`crate::num::Lanes`]) fuses the products and sums marked `madd`
+    /// where the CPU can, and divides once.
+    #[inline(always)]
+    pub fn accelerations_from(&self, t: T, y: &[T; 4], trig: [T; 4]) -> [T; 2] {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
+        let [sd, cd, s1, s2] = trig;
+        let (w1, w2) = (y[2], y[3]);
+        let m11 = (m1 + m2) * l1;
+        let m12 = m2 * l2 * cd;
+        let m21 = l1 * cd;
+        let m22 = l2;
+        let mut r1 = (-m2 * l2 * w2 * w2).madd(sd, -((m1 + m2) * g * s1));
+        let mut r2 = (l1 * w1 * w1).madd(sd, -(g * s2));
+        // Tested, not assumed zero: the free pendulum's expressions stay the spec's, and the
+        // forces cost it one test.
+        if self.is_forced() {
+            (r1, r2) = self.add_forces(t, w1, w2, r1, r2);
+        }
+        let det = m11.madd(m22, -(m12 * m21));
+        let (a1, a2) = T::div2(r1.madd(m22, -(m12 * r2)), m11.madd(r2, -(m21 * r1)), det);
+        [a1, a2]
+    }
+
+    /// The rows of [`DoublePendulum::accelerations_from`] with the generalized forces added
+    /// (Q₁ / l₁, Q₂ / (m₂ l₂)); out of line, so that they cost the free pendulum nothing.
+    #[cold]
+    #[inline(never)]
+    fn add_forces(&self, t: T, w1: T, w2: T, r1: T, r2: T) -> (T, T) {
+        let [q1, q2] = self.generalized_forces(t, w1, w2);
+        (r1 + q1 / self.l1, r2 + q2 / (self.m2 * self.l2))
+    }
+
+    /// Kinetic energy T (43) from ω₁, ω₂ and cos(θ₁ − θ₂), J.
+    #[inline(always)]
+    pub fn kinetic_from(&self, w1: T, w2: T, cd: T) -> T {
+        let Self { m1, m2, l1, l2, .. } = *self;
+        let half = T::splat(0.5);
+        half * (m1 + m2) * l1 * l1 * w1 * w1 + half * m2 * l2 * l2 * w2 * w2 + m2 * l1 * l2 * w1 * w2 * cd
+    }
+
+    /// Potential energy V (46) from cos θ₁ and cos θ₂, J.
+    #[inline(always)]
+    pub fn potential_from(&self, c1: T, c2: T) -> T {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
+        -(m1 + m2) * g * l1 * c1 - m2 * g * l2 * c2
+    }
+
+    /// The energy T + V at y from (cos(θ₁ − θ₂), cos θ₁, cos θ₂), J.
+    #[inline(always)]
+    pub fn energy_from(&self, y: &[T; 4], [cd, c1, c2]: [T; 3]) -> T {
+        self.kinetic_from(y[2], y[3], cd) + self.potential_from(c1, c2)
+    }
+
+    /// The gradient (∂H/∂θ₁, ∂H/∂θ₂, ∂H/∂p₁, ∂H/∂p₂) of the Hamiltonian (94) at (t, q, p):
+    /// ∂H/∂θ = −ṗ from (108), (109), with the drive's −θ₁ A cos(Ω t) (the form exists only
+    /// without damping), and ∂H/∂p = θ̇ from (87), (88).
+    #[inline(always)]
+    pub fn hamiltonian_gradient(&self, t: T, [q1, q2]: [T; 2], [p1, p2]: [T; 2]) -> [T; 4] {
+        let Self { m1, m2, l1, l2, g, .. } = *self;
+        let (s, c) = (q1 - q2).sin_cos();
+        let d = m1 + m2 * s * s;
+        let bracket = m2 * c / (l1 * l1) * p1 * p1 - (m2 * c * c + (m1 + m2)) / (l1 * l2) * p1 * p2
+            + (m1 + m2) * c / (l2 * l2) * p2 * p2;
+        let coupling = s / (d * d) * bracket;
+        let mut dq1 = -coupling + (m1 + m2) * g * l1 * q1.sin();
+        if !self.drive_amplitude.is_zero() {
+            dq1 = dq1 - self.drive(t);
+        }
+        let dq2 = coupling + m2 * g * l2 * q2.sin();
+        let det = m2 * l1 * l1 * l2 * l2 * d;
+        let b = m2 * l1 * l2 * c;
+        [dq1, dq2, (m2 * l2 * l2 * p1 - b * p2) / det, (-b * p1 + l1 * l1 * (m1 + m2) * p2) / det]
+    }
 }
 
 impl Model for DoublePendulum {
@@ -328,38 +424,23 @@ impl System for DoublePendulum {
         4
     }
 
-    /// θ'' = −M⁻¹ (C + G) (paper (76), (81), (82)), with the first row of the matrix
-    /// equation divided by l₁ and the second by m₂ l₂. The expression order is the one
-    /// `shared/bench/SPEC.md` fixes, so that without FMA the result is bit-identical to the
-    /// benchmark peers.
+    /// θ' = ω and θ'' from [`DoublePendulum::accelerations`] (bit-identical to the benchmark
+    /// peers' C reference).
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        let Self { m1, m2, l1, l2, g, .. } = *self;
-        let (th1, th2, w1, w2) = (y[0], y[1], y[2], y[3]);
-        let d = th1 - th2;
-        let (sd, cd) = (d.sin(), d.cos());
-        let (s1, s2) = (th1.sin(), th2.sin());
-        let m11 = (m1 + m2) * l1;
-        let m12 = m2 * l2 * cd;
-        let m21 = l1 * cd;
-        let m22 = l2;
-        let mut r1 = -m2 * l2 * w2 * w2 * sd - (m1 + m2) * g * s1;
-        let mut r2 = l1 * w1 * w1 * sd - g * s2;
-        // Tested, not assumed zero: the unforced expressions stay bit-identical to the spec's,
-        // and the forced terms stay out of line so that they cost the free pendulum nothing.
-        if self.is_forced() {
-            (r1, r2) = self.add_forces(t, w1, w2, r1, r2);
-        }
-        let det = m11 * m22 - m12 * m21;
-        dydt[0] = w1;
-        dydt[1] = w2;
-        dydt[2] = (r1 * m22 - m12 * r2) / det;
-        dydt[3] = (m11 * r2 - m21 * r1) / det;
+        let y: &[f64; 4] = y.try_into().expect("four state variables");
+        let [a1, a2] = self.accelerations(t, y);
+        dydt.copy_from_slice(&[y[2], y[3], a1, a2]);
     }
 
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let dual = self.dual();
         dual_jacobian(
             4,
-            |y, out| out.copy_from_slice(&self.rhs_generic(t, [y[0], y[1], y[2], y[3]])),
+            |y, out| {
+                let y = [y[0], y[1], y[2], y[3]];
+                let [a1, a2] = dual.accelerations(Dual64::from(t), &y);
+                out.copy_from_slice(&[y[2], y[3], a1, a2]);
+            },
             y,
             jac,
         );
@@ -385,61 +466,39 @@ impl System for DoublePendulumForm {
     fn dim(&self) -> usize {
         4
     }
+    /// Hamilton's equations (∂H/∂p, −∂H/∂q), the gradient computed once.
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        super::hamilton_rhs(self, t, y, dydt);
+        let [dq1, dq2, dp1, dp2] = self.pendulum.hamiltonian_gradient(t, [y[0], y[1]], [y[2], y[3]]);
+        dydt.copy_from_slice(&[dp1, dp2, -dq1, -dq2]);
     }
 
-    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
-        dual_jacobian(4, |y, out| out.copy_from_slice(&self.rhs_generic([y[0], y[1], y[2], y[3]])), y, jac);
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let dual = self.pendulum.dual();
+        dual_jacobian(
+            4,
+            |y, out| {
+                let [dq1, dq2, dp1, dp2] =
+                    dual.hamiltonian_gradient(Dual64::from(t), [y[0], y[1]], [y[2], y[3]]);
+                out.copy_from_slice(&[dp1, dp2, -dq1, -dq2]);
+            },
+            y,
+            jac,
+        );
         true
     }
 }
 
-impl DoublePendulumForm {
-    /// Hamilton's equations (∂H/∂p, −∂H/∂q) with the expressions of [`Hamiltonian::dh_dq`]
-    /// and [`Hamiltonian::dh_dp`], over any number type (for the Jacobian).
-    fn rhs_generic<T: DualNum<Primitive = f64> + Copy>(&self, y: [T; 4]) -> [T; 4] {
-        let DoublePendulum { m1, m2, l1, l2, g, .. } = self.pendulum;
-        let [q1, q2, p1, p2] = y;
-        let (s, c) = (q1 - q2).sin_cos();
-        let d = s * s * m2 + m1;
-        let bracket = c * (m2 / (l1 * l1)) * p1 * p1 - (c * c * m2 + (m1 + m2)) / (l1 * l2) * p1 * p2
-            + c * ((m1 + m2) / (l2 * l2)) * p2 * p2;
-        let coupling = s / (d * d) * bracket;
-        let det = (s * s * m2 + m1) * (m2 * l1 * l1 * l2 * l2);
-        let b = c * (m2 * l1 * l2);
-        [
-            (p1 * (m2 * l2 * l2) - b * p2) / det,
-            (-b * p1 + p2 * (l1 * l1 * (m1 + m2))) / det,
-            coupling - q1.sin() * ((m1 + m2) * g * l1),
-            -coupling - q2.sin() * (m2 * g * l2),
-        ]
-    }
-}
-
 impl Hamiltonian for DoublePendulumForm {
-    /// ∂H/∂θ = −ṗ from (108) and (109).
+    /// ∂H/∂θ = −ṗ from (108) and (109) ([`DoublePendulum::hamiltonian_gradient`]).
     fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
-        let DoublePendulum { m1, m2, l1, l2, g, .. } = self.pendulum;
-        let (s, c) = (q[0] - q[1]).sin_cos();
-        let d = m1 + m2 * s * s;
-        let (p1, p2) = (p[0], p[1]);
-        let bracket = m2 * c / (l1 * l1) * p1 * p1 - (m2 * c * c + (m1 + m2)) / (l1 * l2) * p1 * p2
-            + (m1 + m2) * c / (l2 * l2) * p2 * p2;
-        let coupling = s / (d * d) * bracket;
-        // A drive adds −θ₁ A cos(Ω t) to H (the form exists only without damping).
-        out[0] = -coupling + (m1 + m2) * g * l1 * q[0].sin() - self.pendulum.drive(t);
-        out[1] = coupling + m2 * g * l2 * q[1].sin();
+        let g = self.pendulum.hamiltonian_gradient(t, [q[0], q[1]], [p[0], p[1]]);
+        out.copy_from_slice(&g[..2]);
     }
 
-    /// ∂H/∂p = θ̇ from (87) and (88).
-    fn dh_dp(&self, _t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
-        let DoublePendulum { m1, m2, l1, l2, .. } = self.pendulum;
-        let (s, c) = (q[0] - q[1]).sin_cos();
-        let det = m2 * l1 * l1 * l2 * l2 * (m1 + m2 * s * s);
-        let b = m2 * l1 * l2 * c;
-        out[0] = (m2 * l2 * l2 * p[0] - b * p[1]) / det;
-        out[1] = (-b * p[0] + l1 * l1 * (m1 + m2) * p[1]) / det;
+    /// ∂H/∂p = θ̇ from (87) and (88) ([`DoublePendulum::hamiltonian_gradient`]).
+    fn dh_dp(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        let g = self.pendulum.hamiltonian_gradient(t, [q[0], q[1]], [p[0], p[1]]);
+        out.copy_from_slice(&g[2..]);
     }
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The polynomial of pendula's branch-free sine (crates/pendula/src/ensemble/trig.rs).
+"""The polynomial of pendula's branch-free sine (crates/pendula/src/num/trig.rs).
 
 sin r = r + r^3 P(r^2) on |r| <= pi/2; P is fitted by mpmath's Chebyshev approximation
 (near-minimax) of degree 7 in z = r^2 on [0, (pi/2)^2]. Prints the coefficients, highest

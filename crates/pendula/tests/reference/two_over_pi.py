@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The bits of 2/pi for the exact (Payne-Hanek) argument reduction of pendula's sine and cosine
-(crates/pendula/src/ensemble/trig/exact.rs), and the two-double split of pi/2 it multiplies by.
+(crates/pendula/src/num/trig/exact.rs), and the two-double split of pi/2 it multiplies by.
 
 Run: python3 two_over_pi.py   (needs mpmath only for the cross-check)
 
