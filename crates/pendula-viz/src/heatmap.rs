@@ -89,7 +89,15 @@ impl Heatmap {
                 return self.nan_color;
             }
             let s = if self.log { v.log10() } else { v };
-            ViridisRGB.get_color_normalized(s as f32, lo as f32, hi as f32)
+            // Normalised here, in f64 and halved (so that s − lo cannot overflow for values
+            // near ±f64::MAX): plotters normalises in f32, where such values are infinite,
+            // and panics on the NaN that follows. A flat range gives its middle colour.
+            let span = 0.5 * hi - 0.5 * lo;
+            let t = if span > 0.0 { ((0.5 * s - 0.5 * lo) / span).clamp(0.0, 1.0) } else { 0.5 };
+            if t.is_nan() {
+                return self.nan_color;
+            }
+            ViridisRGB.get_color_normalized(t as f32, 0.0, 1.0)
         };
         let root = root.titled(&self.title, ("sans-serif", 24)).map_err(draw_error)?;
         let side = if self.categories.is_empty() { 150 } else { 190 };
@@ -170,11 +178,10 @@ impl Heatmap {
         let value = |s: f64| if self.log { 10f64.powf(s) } else { s };
         bar_chart
             .draw_series((0..bands).map(|b| {
-                let (s0, s1) = (
-                    lo + (hi - lo) * b as f64 / bands as f64,
-                    lo + (hi - lo) * (b + 1) as f64 / bands as f64,
-                );
-                let c = ViridisRGB.get_color_normalized((0.5 * (s0 + s1)) as f32, lo as f32, hi as f32);
+                // Halved, as the cells' colours are, so that hi − lo cannot overflow.
+                let at = |f: f64| 2.0 * (0.5 * lo + (0.5 * hi - 0.5 * lo) * f);
+                let (s0, s1) = (at(b as f64 / bands as f64), at((b + 1) as f64 / bands as f64));
+                let c = ViridisRGB.get_color_normalized(((b as f64 + 0.5) / bands as f64) as f32, 0.0, 1.0);
                 Rectangle::new([(0.0, value(s0)), (1.0, value(s1))], c.filled())
             }))
             .map_err(draw_error)?;

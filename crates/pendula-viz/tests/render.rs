@@ -238,3 +238,35 @@ fn numbers_print_to_three_significant_digits() {
         assert_eq!(number(v), s, "{v}");
     }
 }
+
+/// Values at the ends of f64 (found by the fuzz harness's long run: plotters normalises
+/// colours in f32, where they are infinite, and panicked) are drawn, in the map's colours.
+#[test]
+fn heat_maps_of_extreme_values_are_drawn() {
+    for values in [
+        vec![f64::MAX, -f64::MAX, 1.0, 0.0],
+        vec![1.7e308, 1.7e308, 1.7e308, 1.7e308],
+        vec![-1e300, 1e-300, 5e-324, f64::NAN],
+        vec![1e-310, 2e-310, 3e-310, 4e-310],
+    ] {
+        for log in [false, true] {
+            let map = Heatmap {
+                title: "extremes".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                bar_label: "v".into(),
+                x: (0.0, 1.0),
+                y: (0.0, 1.0),
+                nx: 2,
+                ny: 2,
+                values: values.clone(),
+                log,
+                nan_color: pendula_viz::BLACK,
+                categories: Vec::new(),
+            };
+            let bytes = map.png().unwrap_or_else(|e| panic!("{values:?} (log {log}): {e}"));
+            let (w, h, _) = decode(&bytes);
+            assert!(w > 0 && h > 0);
+        }
+    }
+}
