@@ -551,13 +551,13 @@ pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula
     spec.schedule().map_err(|e| match e {
         pendula::Error::InvalidValue { name, value, allowed } => {
             let flag = match name.as_str() {
-                "dt" => dt_flag,
-                "t-end" | "steps" => end_flag,
+                "h" => dt_flag,
+                "t_end" | "steps" => end_flag,
                 _ => return anyhow::Error::new(pendula::Error::InvalidValue { name, value, allowed }),
             };
             // Too many steps is the step and the end together: both are named.
             let with = match (name.as_str(), spec.end) {
-                ("dt", End::Time(t)) if allowed.contains("10^13") => format!(" to {end_flag} {}", Short(t)),
+                ("h", End::Time(t)) if allowed.contains("10^13") => format!(" to {end_flag} {}", Short(t)),
                 _ => String::new(),
             };
             if flag.starts_with("--") {
@@ -568,6 +568,21 @@ pub fn schedule(spec: &RunSpec, dt_flag: &str, end_flag: &str) -> Result<pendula
         }
         other => other.into(),
     })
+}
+
+/// Tao's maps are stable for ω h ≤ 1 ([`pendula::integrator::tao::check_binding_step`]):
+/// checked before the run, in the flags' words (the library names the quantities).
+pub fn binding_step(method: &pendula::integrator::Method, h: f64, dt_flag: &str) -> Result<()> {
+    let Scheme::Tao(scheme) = method.scheme else { return Ok(()) };
+    if pendula::integrator::tao::check_binding_step(&scheme, h).is_err() {
+        bail!(
+            "invalid binding * dt = {} (--binding {} 1/s, {dt_flag} {} s): Tao's methods are unstable above binding * dt = 1: lower --binding or {dt_flag} (for chaotic motion keep binding near 200 and dt <= 5 ms)",
+            Short(scheme.binding * h),
+            Short(scheme.binding),
+            Short(h)
+        );
+    }
+    Ok(())
 }
 
 /// A library error about a quantity (`rtol`), renamed to the flag or key it came from
@@ -605,7 +620,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         .or(scenario.system)
         .or_else(|| preset.map(|p| p.system.to_owned()))
         .unwrap_or_else(|| "double".into());
-    let info: &'static SystemInfo = system::find(&system_name)?;
+    let info: &'static SystemInfo = pendula::model::find(&system_name)?;
     let mut method =
         *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
     if let Some(text) = &args.binding {
@@ -659,6 +674,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         _ => spec,
     };
     schedule(&checked, dt_flag, end_flag)?;
+    binding_step(&method, h, dt_flag)?;
     let number = |flag: &str, text: &Option<String>, file: Option<f64>, default: f64| -> Result<f64> {
         Ok(match text {
             // The largest step is unbounded by default, and may be said so.

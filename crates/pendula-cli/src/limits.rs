@@ -228,7 +228,7 @@ pub fn adaptive_steps(span: f64, period: f64, h_max: f64) -> f64 {
 /// small-oscillation period, shortened for a start with more energy than the system's
 /// scale at rest — the motion is then faster by about the square root of the ratio (a
 /// pendulum spun up to K joules turns at a rate ∝ √K).
-pub fn motion_period(model: &dyn pendula::system::DynModel, y0: &[f64]) -> f64 {
+pub fn motion_period(model: &dyn pendula::model::DynModel, y0: &[f64]) -> f64 {
     let rest = vec![0.0; y0.len()];
     let ratio = model.energy_scale(&rest) / model.energy_scale(y0);
     // NaN: a start whose energy overflows, whose motion has no period to speak of.

@@ -4,7 +4,8 @@ use std::io::Write;
 
 use anyhow::Result;
 use pendula::integrator::METHODS;
-use pendula::system::{CATALOGUE, Quantity};
+use pendula::model::CATALOGUE;
+use pendula::system::Quantity;
 
 use crate::cli::ListWhat;
 

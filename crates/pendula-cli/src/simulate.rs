@@ -152,10 +152,6 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
         Some(r) => Some(r.restore(&mut watch)?),
         None => None,
     };
-    // The double pendulum with RK4 takes the ensemble engine's single-trajectory kernel.
-    // It implements the free equations: damped or driven runs take the general path.
-    let fast =
-        tolerances.is_none() && info.name == "double" && method.name == "rk4" && !double(values).is_forced();
     let stepping = match tolerances {
         Some(tol) => Stepping::Adaptive { t_end: spec.schedule()?.t_end, h0: *first_step, tol },
         None => Stepping::Fixed(*spec),
@@ -188,11 +184,9 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
         };
         // Without events the locator is left out: one call per step less on the fast paths.
         let observers: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
-        let leg = if fast {
-            pendula::ensemble::rk4_trajectory_resumable(&double(values), y0, spec, observers, from, &pause)
-        } else {
-            model.solve_resumable(method, y0, &stepping, observers, from, &pause)
-        };
+        // The library picks the fastest path (the double pendulum's RK4 kernel, or the
+        // general run loop).
+        let leg = model.solve_fastest(method, y0, &stepping, observers, from, &pause);
         *events = chain.events;
         if let Some(err) = watch.rows.writer().failure.take() {
             return Err(err);
@@ -396,9 +390,4 @@ fn finish_files(
         }
         Ok(())
     })
-}
-
-/// The double pendulum of these values (of the `double` system).
-fn double(values: &pendula::system::Values) -> pendula::system::double::DoublePendulum {
-    <pendula::system::double::DoublePendulum as pendula::system::Model>::from_values(values)
 }

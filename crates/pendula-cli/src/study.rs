@@ -8,7 +8,8 @@ use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::integrator::{self, METHODS, Method, Requirement};
-use pendula::system::{self, DynModel, Values};
+use pendula::model::DynModel;
+use pendula::system::{self, Values};
 use pendula_viz::Figure;
 
 use pendula::error::Short;
@@ -178,7 +179,7 @@ pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) 
 
 /// Validated system values from a name and `--set` items.
 pub fn values(system: &str, set: &[String]) -> Result<Values> {
-    let info = system::find(system)?;
+    let info = pendula::model::find(system)?;
     Ok(info.values(&parse_settings(info, set)?)?)
 }
 
@@ -205,7 +206,7 @@ pub fn preset_settings(
 ) -> Result<(&'static system::SystemInfo, Vec<(String, f64)>)> {
     let preset = preset.map(system::driven::find_preset).transpose()?;
     let name = system.or(preset.map(|p| p.system)).unwrap_or(default);
-    let info = system::find(name)?;
+    let info = pendula::model::find(name)?;
     let mut settings = match preset {
         Some(p) => crate::config::preset_settings(info, p)?,
         None => Vec::new(),

@@ -14,7 +14,7 @@ use crate::sink::Sink;
 
 /// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
 pub(crate) struct Writer<'a> {
-    pub(crate) model: &'a dyn pendula::system::DynModel,
+    pub(crate) model: &'a dyn pendula::model::DynModel,
     pub(crate) sink: Sink,
     pub(crate) rows: u64,
     /// The rows, flat, when the run is to be drawn.

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use assert_cmd::Command;
-use pendula::system::CATALOGUE;
+use pendula::model::CATALOGUE;
 use tempfile::TempDir;
 
 fn json(path: &Path) -> serde_json::Value {

@@ -5,7 +5,9 @@
 //!   rtol = atol = 1e-10 (`dop853` vs `ode_solvers::Dop853`, the same steps);
 //! - W1 (shortened): RK4 at h = 1 ms for 10⁴ steps (`rk4` vs `ode_solvers::Rk4`);
 //! - W3 (shortened): a 64 × 64 grid of initial angles from rest, RK4 at h = 10 ms for 100
-//!   steps, on one thread (the ensemble engine vs `ode_solvers::Rk4` cell by cell).
+//!   steps, on one thread (the ensemble engine vs `ode_solvers::Rk4` cell by cell);
+//! - the general engine's lanes against scalar runs per member: the chain of three links and
+//!   the damped, driven double pendulum, 1024 members, RK4 for 200 steps, one thread.
 //!
 //! Run: `cargo bench -p pendula --bench integrators`.
 
@@ -18,8 +20,8 @@ use pendula::control::Tolerances;
 use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
 use pendula::integrator::embedded::DOP853;
 use pendula::integrator::explicit_rk::RK4;
+use pendula::model::find;
 use pendula::observe::Ignore;
-use pendula::system::find;
 use pendula::{End, RunSpec};
 
 /// The SPEC's equations for `ode_solvers`.
@@ -122,6 +124,69 @@ fn benches(c: &mut Criterion) {
         })
     });
     w3.finish();
+
+    // Lanes against per-member scalar runs of the same method (rk4), one thread: the chain of
+    // three links and the driven double pendulum (issue 13 asks for at least 5 times).
+    for (name, settings) in [
+        ("chain N=3", vec![("links".to_owned(), 3.0)]),
+        (
+            "driven double",
+            vec![
+                ("drive_amplitude".to_owned(), 2.0),
+                ("drive_frequency".to_owned(), 3.0),
+                ("damping".to_owned(), 0.1),
+            ],
+        ),
+    ] {
+        let entry = find(if name.starts_with("chain") { "chain" } else { "double" }).unwrap();
+        let values = entry.values(&settings).unwrap();
+        let info = values.info();
+        let raw: Vec<f64> =
+            values.parameters().map(|(_, v)| v).chain(values.initial_state().iter().copied()).collect();
+        let np = info.parameters.len();
+        let dim = info.state.len();
+        let count = 1024;
+        let member = |i: usize, v: &mut [f64]| {
+            v.copy_from_slice(&raw);
+            v[np] += 1e-3 * i as f64;
+        };
+        let tableau = pendula::model::lane_tableau(&RK4, info).unwrap();
+        let lanes = pendula::ensemble::engine::LaneSpec {
+            tableau,
+            h: 1e-3,
+            steps: 200,
+            stop_at_flip: false,
+            track_flips: false,
+        };
+        let model = values.build();
+        let mut out = vec![0.0; count * dim];
+        let mut group = c.benchmark_group(format!("{name}: 1024 members, rk4, 200 steps, 1 thread"));
+        group.sample_size(10);
+        group.bench_function("lanes", |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    model
+                        .ensemble(info, count, &member, &lanes, &mut out, dim, &|_, o, row: &mut [f64]| {
+                            row.copy_from_slice(&o.state[..dim])
+                        })
+                        .unwrap()
+                })
+            })
+        });
+        let spec = RunSpec { t0: 0.0, h: 1e-3, end: End::Steps(200) };
+        group.bench_function("scalar per member", |b| {
+            b.iter(|| {
+                (0..count)
+                    .map(|i| {
+                        let mut v = raw.clone();
+                        member(i, &mut v);
+                        model.solve(&RK4, black_box(&v[np..]), &spec, &mut Ignore).unwrap().state[0]
+                    })
+                    .sum::<f64>()
+            })
+        });
+        group.finish();
+    }
 }
 
 criterion_group!(integrators, benches);

@@ -21,7 +21,7 @@
 //!
 //! A run pauses at a step boundary when a [`Pause`] says so — at a simulated time, or when
 //! an [`AtomicBool`] is set (an interrupt) — and hands back a [`RunState`]; started again
-//! from it ([`crate::resume::solve_resumable`]) it takes the same steps, shows the
+//! from it ([`crate::simulate::resume::solve_resumable`]) it takes the same steps, shows the
 //! observer the same samples, and ends in the same bits.
 //!
 //! # References
@@ -29,11 +29,9 @@
 //! of planetary systems", MNRAS 467 (2017) 2377 (REBOUND's Simulationarchive: restarts bit
 //! for bit).
 
-use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::Error;
-use crate::observe::{Observer, Sample};
 
 /// State as a flat list of 64-bit words: floats as their bit patterns, flags as 0 or 1,
 /// slices as their length followed by their elements.
@@ -263,45 +261,6 @@ impl Pause<'_> {
     /// Whether it never pauses.
     pub fn never(&self) -> bool {
         self.at == f64::INFINITY && self.flag.is_none()
-    }
-}
-
-/// An observer that shows every sample to `inner` and then, after a sample that did not end
-/// the run and is neither its first (the initial state) nor its last, asks a [`Pause`]
-/// whether to pause there: if so it ends the run and says so (`paused`). Loops that can pause run with it around their observer, and
-/// without it (the same loop) when they never pause.
-pub(crate) struct Pausing<'a, 'p, O: ?Sized> {
-    inner: &'a mut O,
-    pause: &'a Pause<'p>,
-    /// Whether the run was ended here to pause.
-    pub(crate) paused: bool,
-}
-
-impl<'a, 'p, O: ?Sized> Pausing<'a, 'p, O> {
-    pub(crate) fn new(inner: &'a mut O, pause: &'a Pause<'p>) -> Self {
-        Pausing { inner, pause, paused: false }
-    }
-
-    /// The observer inside, for a loop that never pauses.
-    pub(crate) fn inner(&mut self) -> &mut O {
-        self.inner
-    }
-}
-
-impl<O: Observer + ?Sized> Observer for Pausing<'_, '_, O> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        if self.inner.observe(sample).is_break() {
-            return ControlFlow::Break(());
-        }
-        // Not at the initial state: a run resumed from step 0 would show it again.
-        if sample.step > 0 && !sample.last && self.pause.due(sample.t) {
-            self.paused = true;
-            return ControlFlow::Break(());
-        }
-        ControlFlow::Continue(())
-    }
-    fn wants_dense(&self) -> bool {
-        self.inner.wants_dense()
     }
 }
 

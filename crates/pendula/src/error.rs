@@ -10,7 +10,7 @@ use std::fmt;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// No system of this name is in [`crate::system::CATALOGUE`].
+    /// No system of this name is in [`crate::model::CATALOGUE`].
     #[error("unknown system `{name}`{}; valid systems: {valid}", did_you_mean(.suggestions))]
     UnknownSystem {
         /// The name asked for.
@@ -78,6 +78,14 @@ pub enum Error {
     /// motion is singular.
     #[error("the state became non-finite at t = {} s (try a smaller step)", Short(*.t))]
     NonFinite {
+        /// Time of the first non-finite state, s.
+        t: f64,
+    },
+    /// A member of an ensemble (a sweep's cell, a fractal's pixel) stopped being finite.
+    #[error("member {member}: the state became non-finite at t = {} s (try a smaller step)", Short(*.t))]
+    NonFiniteMember {
+        /// Index of the member.
+        member: usize,
         /// Time of the first non-finite state, s.
         t: f64,
     },

@@ -15,7 +15,7 @@ use std::ops::ControlFlow;
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::observe::{Observer, Sample};
-use crate::system::DynModel;
+use crate::system::DynSystem;
 
 /// Which crossings of zero count.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -68,7 +68,7 @@ impl EventSpec {
     /// `model`; angles of `Flip` are the variables in rad. A trailing `+` or `-` on `zero` and
     /// `section` keeps only rising or falling crossings (`section:theta1=0+`: θ₁ passes 0
     /// upwards, as a Poincaré section usually wants).
-    pub fn parse(text: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
+    pub fn parse(text: &str, model: &dyn DynSystem, terminal: bool) -> Result<Self, Error> {
         let (body, direction) = match text.strip_suffix('+') {
             Some(body) if text != "flip" => (body, Direction::Rising),
             _ => match text.strip_suffix('-') {
@@ -89,7 +89,7 @@ impl EventSpec {
         Ok(spec)
     }
 
-    fn parse_kind(text: &str, full: &str, model: &dyn DynModel, terminal: bool) -> Result<Self, Error> {
+    fn parse_kind(text: &str, full: &str, model: &dyn DynSystem, terminal: bool) -> Result<Self, Error> {
         let state = model.info().state;
         let index_of = |name: &str| {
             state
@@ -156,7 +156,7 @@ pub struct EventRecord {
 
 /// An observer that locates events between the steps it sees.
 pub struct EventLocator<'a> {
-    model: &'a dyn DynModel,
+    model: &'a dyn DynSystem,
     specs: Vec<EventSpec>,
     /// Flip events already seen (they count once).
     flipped: Vec<bool>,
@@ -170,7 +170,7 @@ pub struct EventLocator<'a> {
 
 impl<'a> EventLocator<'a> {
     /// Locates `specs` along a run of `model`.
-    pub fn new(model: &'a dyn DynModel, specs: Vec<EventSpec>) -> Self {
+    pub fn new(model: &'a dyn DynSystem, specs: Vec<EventSpec>) -> Self {
         let n = model.info().state.len();
         let flipped = vec![false; specs.len()];
         EventLocator {

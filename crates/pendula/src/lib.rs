@@ -13,7 +13,7 @@
 //! [`Stepper`](integrator::Stepper) advances a state by one step without allocating. A
 //! [`Simulation`] drives a stepper over a system and shows every state to an
 //! [`Observer`](observe::Observer), which records, thins, tracks energy or stops the run.
-//! The [`CATALOGUE`](system::CATALOGUE) lists the systems with their parameters, units and
+//! The [`CATALOGUE`](model::CATALOGUE) lists the systems with their parameters, units and
 //! defaults; [`solve`] runs any catalogued system with any method chosen at run time.
 //!
 //! ```
@@ -41,7 +41,6 @@
 //! vertical, y up), g = 9.81 m/s² by default. Abbreviations: t time, h step size, y state,
 //! q positions, p momenta, rhs right-hand side f(t, y), H Hamiltonian.
 
-pub mod adaptive;
 pub mod analysis;
 pub mod checkpoint;
 pub mod control;
@@ -49,13 +48,14 @@ pub mod ensemble;
 pub mod error;
 pub mod events;
 pub mod integrator;
+pub mod kit;
+pub mod model;
 pub mod num;
 pub mod observe;
-pub mod resume;
 pub mod simulate;
 pub mod special;
 pub mod system;
 
 pub use error::Error;
-pub use resume::solve_resumable;
+pub use simulate::resume::solve_resumable;
 pub use simulate::{End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive};

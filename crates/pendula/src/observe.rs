@@ -5,7 +5,7 @@
 use std::ops::ControlFlow;
 
 use crate::Error;
-use crate::checkpoint::{Reader, Snapshot, Words};
+use crate::checkpoint::{Pause, Reader, Snapshot, Words};
 
 /// One state of a run, as an observer sees it.
 #[derive(Debug, Clone, Copy)]
@@ -335,5 +335,44 @@ impl<O> Snapshot for Resample<O> {
         self.next = from.u64()?;
         self.origin = from.opt_f64()?;
         Ok(())
+    }
+}
+
+/// An observer that shows every sample to `inner` and then, after a sample that did not end
+/// the run and is neither its first (the initial state) nor its last, asks a [`crate::checkpoint::Pause`]
+/// whether to pause there: if so it ends the run and says so (`paused`). Loops that can pause run with it around their observer, and
+/// without it (the same loop) when they never pause.
+pub(crate) struct Pausing<'a, 'p, O: ?Sized> {
+    inner: &'a mut O,
+    pause: &'a Pause<'p>,
+    /// Whether the run was ended here to pause.
+    pub(crate) paused: bool,
+}
+
+impl<'a, 'p, O: ?Sized> Pausing<'a, 'p, O> {
+    pub(crate) fn new(inner: &'a mut O, pause: &'a Pause<'p>) -> Self {
+        Pausing { inner, pause, paused: false }
+    }
+
+    /// The observer inside, for a loop that never pauses.
+    pub(crate) fn inner(&mut self) -> &mut O {
+        self.inner
+    }
+}
+
+impl<O: Observer + ?Sized> Observer for Pausing<'_, '_, O> {
+    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+        if self.inner.observe(sample).is_break() {
+            return ControlFlow::Break(());
+        }
+        // Not at the initial state: a run resumed from step 0 would show it again.
+        if sample.step > 0 && !sample.last && self.pause.due(sample.t) {
+            self.paused = true;
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+    fn wants_dense(&self) -> bool {
+        self.inner.wants_dense()
     }
 }

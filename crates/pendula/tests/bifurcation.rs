@@ -4,8 +4,9 @@
 use pendula::analysis::strobe::stroboscopic as scalar;
 use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
 use pendula::integrator::explicit_rk::RK4;
+use pendula::model::DynModel;
 use pendula::system::driven::DrivenPendulum;
-use pendula::system::{DynModel, Model, wrap_angle};
+use pendula::system::{Model, wrap_angle};
 
 use crate::support::values;
 

@@ -5,8 +5,9 @@
 
 use pendula::integrator::explicit_rk::RK4;
 use pendula::integrator::gauss_legendre::GAUSS_LEGENDRE_4;
+use pendula::model::DynModel;
 use pendula::observe::Ignore;
-use pendula::system::{DynModel, Model, System};
+use pendula::system::{Model, System};
 use pendula::{End, RunSpec};
 
 use crate::energy::Tenths;
@@ -114,7 +115,7 @@ fn four_links_conserve_energy_with_gauss_legendre() {
 
 #[test]
 fn links_pick_the_state_and_bad_links_are_refused() {
-    let info = pendula::system::find("chain").unwrap();
+    let info = pendula::model::find("chain").unwrap();
     assert_eq!(info.state.len(), 16);
     let v = values("chain", &[("links", 5.0)]);
     assert_eq!(v.info().state.len(), 10);

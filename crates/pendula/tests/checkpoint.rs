@@ -12,8 +12,9 @@ use pendula::checkpoint::{Leg, Pause, RunState, Snapshot, Words};
 use pendula::control::Tolerances;
 use pendula::events::{EventLocator, EventSpec};
 use pendula::integrator::{self, METHODS, Method};
+use pendula::model::DynModel;
 use pendula::observe::{Grid, Observer, Resample, Sample};
-use pendula::system::{DynModel, Model, Values, double::DoublePendulum};
+use pendula::system::{Model, Values, double::DoublePendulum};
 use pendula::{End, Error, Report, RunSpec, Stepping};
 
 use crate::support::values;

@@ -7,8 +7,8 @@
 use std::ops::ControlFlow;
 
 use pendula::integrator::{self, Method, Requirement, Scheme};
+use pendula::model::DynModel;
 use pendula::observe::{Observer, Sample};
-use pendula::system::DynModel;
 use pendula::{End, Error, RunSpec};
 
 use crate::support::values;

@@ -81,17 +81,38 @@ fn driven_hamiltonian_form_gives_the_lagrangian_equations() {
     assert!(damped.hamiltonian_form().unwrap_err().contains("damping = 0.1"));
 }
 
+/// RK4 on lanes runs damped and driven pendulums (the double pendulum's one set of
+/// equations has the forces, issue 13); Tao's lanes, which implement the free Hamiltonian,
+/// and the single-trajectory fast path refuse them.
 #[test]
-fn ensemble_paths_refuse_forced_pendulums() {
+fn ensemble_paths_run_or_refuse_forced_pendulums() {
     let free = Member { pendulum: DoublePendulum::default(), state: [1.0, 0.5, 0.0, 0.0] };
     let mut members = vec![free; 40];
     members[21].pendulum.damping = 0.2;
+    members[30].pendulum.drive_amplitude = 2.0;
+    members[30].pendulum.drive_frequency = 3.0;
     let spec =
         BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips: false };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: f64::NAN }; members.len()];
-    assert_eq!(ensemble::run(&members, &spec, &mut out), Err(EnsembleError::Forced { member: 21 }));
+    ensemble::run(&members, &spec, &mut out).unwrap();
+    let run = RunSpec { t0: 0.0, h: 0.01, end: End::Steps(10) };
+    let spec_steps = run;
+    for i in [0, 21, 30] {
+        let m = members[i];
+        let reference =
+            pendula::solve(&m.pendulum, &RK4, &m.state, &run, &mut Recorder::default()).unwrap().state;
+        let diff = out[i].state.iter().zip(&reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(diff < 1e-12, "member {i}: {:?} against {reference:?}", out[i].state);
+    }
+    assert_ne!(out[21].state, out[0].state, "the damping acts");
+    assert_ne!(out[30].state, out[0].state, "the drive acts");
+    let tao = BatchSpec {
+        method: BatchMethod::Tao(pendula::integrator::tao::TaoScheme { weights: &[1.0], binding: 100.0 }),
+        ..spec
+    };
+    assert_eq!(ensemble::run(&members, &tao, &mut out), Err(EnsembleError::Forced { member: 21 }));
 
-    let spec = RunSpec { t0: 0.0, h: 0.01, end: End::Steps(10) };
+    let spec = spec_steps;
     let driven = DoublePendulum { drive_amplitude: 1.0, ..DoublePendulum::default() };
     let err = ensemble::rk4_trajectory(&driven, &[1.0, 0.5, 0.0, 0.0], &spec, &mut Recorder::default());
     assert!(matches!(err, Err(Error::UnmetRequirement { .. })), "{err:?}");

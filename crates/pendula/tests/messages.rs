@@ -45,16 +45,16 @@ fn suggestions_are_the_closest_names_within_a_third_of_their_length() {
 
 #[test]
 fn lookups_carry_their_suggestions() {
-    let Err(Error::UnknownSystem { suggestions, .. }) = system::find("dubble") else { panic!() };
+    let Err(Error::UnknownSystem { suggestions, .. }) = pendula::model::find("dubble") else { panic!() };
     assert_eq!(suggestions, ["double"]);
-    let err = system::find("pendulum").unwrap().quantity("omgea").unwrap_err();
+    let err = pendula::model::find("pendulum").unwrap().quantity("omgea").unwrap_err();
     assert!(
         err.to_string().contains("unknown name `omgea` for system `pendulum` (did you mean `omega`?)"),
         "{err}"
     );
     let err = system::driven::find_preset("baker-gollub-period2").unwrap_err();
     assert!(err.to_string().contains("(did you mean `baker-gollub-period-2`?)"), "{err}");
-    let err = system::find("tripple").unwrap_err();
+    let err = pendula::model::find("tripple").unwrap_err();
     assert!(!err.to_string().contains("did you mean"), "{err}");
 }
 

@@ -4,12 +4,12 @@
 
 use pendula::analysis::{EnergyBalance, Growth, OrderEstimate, estimate_order, growth, roundoff_floor};
 use pendula::integrator::explicit_rk::RK4;
-use pendula::system::{self, CATALOGUE};
+use pendula::model::CATALOGUE;
 use pendula::{End, RunSpec};
 
 #[test]
 fn ref_double_pendulum_scale_is_the_well_depth_to_horizontal() {
-    let values = system::find("double").unwrap().values(&[]).unwrap();
+    let values = pendula::model::find("double").unwrap().values(&[]).unwrap();
     let model = values.build();
     // From (90°, 90°) E(0) = 0 J (to rounding): relative to |E(0)| any error is infinite.
     let y = [std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2, 0.0, 0.0];
@@ -39,7 +39,7 @@ fn every_system_declares_a_scale_far_from_zero_even_at_rest() {
 /// max |balance| / scale and max |E − E(0)| / scale of an RK4 run.
 fn balance_of(system: &str, set: &[(&str, f64)], h: f64, t_end: f64) -> (f64, f64) {
     let settings: Vec<(String, f64)> = set.iter().map(|(n, v)| ((*n).to_owned(), *v)).collect();
-    let values = system::find(system).unwrap().values(&settings).unwrap();
+    let values = pendula::model::find(system).unwrap().values(&settings).unwrap();
     let model = values.build();
     let mut balance = EnergyBalance::new(&*model, values.initial_state());
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };

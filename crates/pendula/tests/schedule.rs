@@ -29,10 +29,11 @@ fn last_step_is_shortened_to_land_on_t_end() {
 #[test]
 fn invalid_specs_are_errors() {
     for (spec, name) in [
-        (RunSpec { t0: 0.0, h: 0.0, end: End::Time(1.0) }, "dt"),
-        (RunSpec { t0: 0.0, h: f64::NAN, end: End::Time(1.0) }, "dt"),
-        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(-1.0) }, "t-end"),
-        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(f64::INFINITY) }, "t-end"),
+        // The library names quantities (h, t_end), never the command line's flags.
+        (RunSpec { t0: 0.0, h: 0.0, end: End::Time(1.0) }, "h"),
+        (RunSpec { t0: 0.0, h: f64::NAN, end: End::Time(1.0) }, "h"),
+        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(-1.0) }, "t_end"),
+        (RunSpec { t0: 0.0, h: 0.1, end: End::Time(f64::INFINITY) }, "t_end"),
         (RunSpec { t0: 0.0, h: 0.1, end: End::Steps(0) }, "steps"),
     ] {
         match spec.schedule() {

@@ -2,12 +2,12 @@
 
 use pendula::integrator::Method;
 use pendula::observe::Ignore;
-use pendula::system::{self, Values};
+use pendula::system::Values;
 use pendula::{End, Error, RunSpec};
 
 /// Validated values of a catalogued system with some settings.
 pub fn values(system: &str, settings: &[(&str, f64)]) -> Values {
-    let info = system::find(system).unwrap();
+    let info = pendula::model::find(system).unwrap();
     let settings: Vec<(String, f64)> = settings.iter().map(|(n, v)| (n.to_string(), *v)).collect();
     info.values(&settings).unwrap()
 }

@@ -93,7 +93,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let threads = limits::threads(args.threads.as_deref(), args.common.allow_large)?;
     // What it costs, before the values are made: every value's transient and samples, at the
     // fastest drive along the axis (its most periods), and its rows in memory and in the CSV.
-    let simd = system == "driven-pendulum";
+    let simd = pendula::ensemble::driven::runs(info);
     let drive = |i: usize| {
         let mut s = base.clone();
         s.push((axis.name.clone(), axis.centre(i)));

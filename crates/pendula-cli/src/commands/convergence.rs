@@ -204,7 +204,7 @@ pub fn study_orders(
 
 /// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
-    let tu = pendula::system::find(system).map_or("s", |i| i.time_unit());
+    let tu = pendula::model::find(system).map_or("s", |i| i.time_unit());
     let mut fig = Figure::new(
         format!(
             "{system}: global error at t = {}, against the {reference}",

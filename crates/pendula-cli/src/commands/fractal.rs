@@ -14,15 +14,14 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_fractal_with_progress, flip_times};
-use pendula::ensemble::BatchMethod;
 use pendula::integrator;
-use pendula::system::{self, Model, double::DoublePendulum};
+use pendula::system::{Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
-use crate::commands::sweep::{batch_method, parse_axis, write_npy};
+use crate::commands::sweep::{parse_axis, write_npy};
 use pendula::error::Short;
 
 use crate::config::{f64_arg, parse_settings, positive_arg};
@@ -88,7 +87,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
 /// Draws the fractal from the start, or `resumed` from its checkpoint (`pendula resume`).
 pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result<()> {
     // Parse and validate everything before any work.
-    let info = system::find("double")?;
+    let info = pendula::model::find("double")?;
     let settings = parse_settings(info, &args.set)?;
     for (name, _) in &settings {
         if info.state.iter().any(|q| q.name == *name) {
@@ -130,15 +129,13 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
     }
     let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let Some(batch) = batch_method(method) else {
+    let Some(batch) = pendula::ensemble::BatchMethod::of(method) else {
         bail!(
             "invalid --method {}: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
             method.name
         );
     };
-    if let BatchMethod::Tao(scheme) = batch {
-        integrator::tao::check_binding_step(&scheme, h)?;
-    }
+    crate::config::binding_step(method, h, "--dt")?;
     let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
     if args.out.as_deref() == Some(Path::new("-")) {
         bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");

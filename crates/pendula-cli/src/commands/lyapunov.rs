@@ -77,12 +77,8 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
             Short(renormalise)
         );
     }
-    let names = [
-        ("dt", "--dt"),
-        ("t-end", "--t-end"),
-        ("transient", "--transient"),
-        ("renormalise", "--renormalise"),
-    ];
+    let names =
+        [("h", "--dt"), ("t_end", "--t-end"), ("transient", "--transient"), ("renormalise", "--renormalise")];
     let whole = pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(transient + t_end) };
     crate::config::schedule(&whole, "--dt", "--t-end")?;
     // What it costs: the state and its `count` tangent vectors over the transient and the

@@ -89,9 +89,13 @@ impl Trajectory {
                 && names[n - 1] == "energy"
                 && info.state.iter().zip(&names[1..n - 1]).all(|(q, name)| q.name == name)
         };
-        let info = system
-            .filter(|i| fits(i))
-            .or_else(|| system::CATALOGUE.iter().copied().flat_map(members).find(|i| fits(i)));
+        let info = system.filter(|i| fits(i)).or_else(|| {
+            pendula::model::CATALOGUE
+                .iter()
+                .map(pendula::model::Entry::info)
+                .flat_map(members)
+                .find(|i| fits(i))
+        });
         let mut t = Trajectory {
             title,
             units: vec![String::new(); n],
@@ -398,7 +402,7 @@ fn npy_columns(cols: usize, system_name: Option<&str>) -> Result<(Vec<String>, O
         (names, Some(info))
     };
     if let Some(name) = system_name {
-        let info = system::find(name)?;
+        let info = pendula::model::find(name)?;
         let fit = members(info).into_iter().find(|m| m.state.len() + 2 == cols);
         return match fit {
             Some(m) => Ok(named(m)),
@@ -410,8 +414,12 @@ fn npy_columns(cols: usize, system_name: Option<&str>) -> Result<(Vec<String>, O
     }
     // Every system with a state of this size; one layout of names and units is enough
     // (the double pendulum and the two-link chain share theirs).
-    let fits: Vec<&'static SystemInfo> =
-        system::CATALOGUE.iter().copied().flat_map(members).filter(|m| m.state.len() + 2 == cols).collect();
+    let fits: Vec<&'static SystemInfo> = pendula::model::CATALOGUE
+        .iter()
+        .map(pendula::model::Entry::info)
+        .flat_map(members)
+        .filter(|m| m.state.len() + 2 == cols)
+        .collect();
     let same = |a: &SystemInfo, b: &SystemInfo| {
         a.state.iter().zip(b.state).all(|(p, q)| p.name == q.name && p.unit == q.unit)
     };
@@ -429,7 +437,7 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
     let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     // Positive values over two decades or more (flip times) are coloured by their logarithm.
     let log = grid.flip_times || (lo > 0.0 && hi / lo >= 100.0);
-    let label = |name: &str| match system::find("double").ok().and_then(|i| i.quantity(name).ok()) {
+    let label = |name: &str| match pendula::model::find("double").ok().and_then(|i| i.quantity(name).ok()) {
         Some(q) => pendula_viz::axis_label(name, q.unit),
         None => pendula_viz::pretty(name),
     };
@@ -460,7 +468,7 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
     let path = &args.file;
     let title =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let system = args.system.as_deref().map(system::find).transpose()?;
+    let system = args.system.as_deref().map(pendula::model::find).transpose()?;
     match path.extension().and_then(|e| e.to_str()) {
         Some("csv") => {
             let mut reader =

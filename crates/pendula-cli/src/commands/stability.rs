@@ -166,7 +166,7 @@ pub fn bars_figure(
     rows: &[(&str, Option<f64>, Option<String>)],
 ) -> Figure {
     let (bound, t_end) = (criterion.max_rel_energy_error, criterion.t_end);
-    let info = pendula::system::find(system).ok();
+    let info = pendula::model::find(system).ok();
     let tu = info.map_or("s", |i| i.time_unit());
     let mut bars = Bars::new(
         format!(

@@ -11,12 +11,13 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member};
+use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
+use pendula::ensemble::{self, BatchSpec};
 use pendula::error::{Short, did_you_mean, suggestions};
 use pendula::integrator::{self, Method};
+use pendula::model::EnsemblePath;
 use pendula::observe::{Observer, Sample};
-use pendula::system::double::DoublePendulum;
-use pendula::system::{self, SystemInfo, Values};
+use pendula::system::{SystemInfo, Values};
 use pendula::{End, RunSpec};
 use rayon::prelude::*;
 use serde_json::json;
@@ -202,7 +203,7 @@ pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, t
 }
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
-    let family = system::find(args.system.as_deref().unwrap_or("double"))?;
+    let family = pendula::model::find(args.system.as_deref().unwrap_or("double"))?;
     let base = parse_settings(family, &args.set)?;
     // A family (the chain) resolves to the member the settings choose; an axis may not
     // change the member, since the state's size would change from cell to cell.
@@ -324,7 +325,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         args.allow_large,
         &[
             Estimate::new(
-                if lanes(&sweep) { Cost::LaneSteps } else { Cost::Steps },
+                if matches!(path(&sweep)?, EnsemblePath::Scalar) { Cost::Steps } else { Cost::LaneSteps },
                 cells * sweep.steps as f64,
                 format!("{} cells x {} steps", limits::round(cells), limits::round(sweep.steps as f64)),
             ),
@@ -432,15 +433,12 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let simd = lanes(&sweep);
+    let engine = path(&sweep)?;
     let progress = Progress::new((end - start) as u64);
     let compute = |cells: std::ops::Range<usize>, data: &mut [f64]| {
-        pool.install(|| {
-            if simd {
-                run_simd(&sweep, start + cells.start, data, &progress)
-            } else {
-                run_scalar(&sweep, start + cells.start, data, &progress)
-            }
+        pool.install(|| match engine {
+            EnsemblePath::Scalar => run_scalar(&sweep, start + cells.start, data, &progress),
+            lanes => run_lanes(&sweep, lanes, start + cells.start, data, &progress),
         })
     };
     let chunks = match checkpoint {
@@ -500,7 +498,11 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         "count": end - start,
         "fingerprint": sweep.fingerprint(),
         "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
-        "kernel": if simd { "simd lanes (ensemble engine)" } else { "scalar, per cell" },
+        "kernel": match engine {
+            EnsemblePath::DoubleKernel(_) => "simd lanes (the double pendulum's kernel)",
+            EnsemblePath::Engine(_) => "simd lanes (ensemble engine)",
+            EnsemblePath::Scalar => "scalar, per cell",
+        },
         "threads": threads,
         "wall_s": wall_s,
     });
@@ -531,15 +533,11 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     Ok(())
 }
 
-/// Whether the sweep runs on the ensemble engine's lanes. They implement the free double
-/// pendulum: any damping or drive, in the base values or along an axis, takes the scalar
-/// path.
-fn lanes(sweep: &Sweep) -> bool {
-    let forcing = ["damping", "drive_amplitude"];
-    let forced = sweep.info.name == "double"
-        && (forcing.iter().any(|n| sweep.info.values(&sweep.base).is_ok_and(|v| v.get(n) != 0.0))
-            || sweep.axes.iter().any(|a| forcing.contains(&a.name.as_str())));
-    sweep.info.name == "double" && batch_method(sweep.method).is_some() && !forced
+/// The engine the sweep runs on, as the library decides it for the method, the base values
+/// and the swept quantities.
+fn path(sweep: &Sweep) -> Result<EnsemblePath> {
+    let swept: Vec<&str> = sweep.axes.iter().map(|a| a.name.as_str()).collect();
+    Ok(pendula::model::ensemble_path(sweep.method, &sweep.values(0)?, &swept))
 }
 
 /// Refuses a quantity both set (`--set NAME=…`) and swept (`flag NAME=…`), naming both: the
@@ -586,15 +584,6 @@ fn store(sweep: &Sweep, state: &[f64], flip_time: f64, energy_error: impl FnOnce
     }
 }
 
-/// The ensemble engine's form of `method`, if it has one (rk4, tao-2, tao-4).
-pub(crate) fn batch_method(method: &Method) -> Option<BatchMethod> {
-    match method.scheme {
-        _ if method.name == "rk4" => Some(BatchMethod::Rk4),
-        integrator::Scheme::Tao(scheme) => Some(BatchMethod::Tao(scheme)),
-        _ => None,
-    }
-}
-
 /// A progress bar over the cells (invisible off a terminal), advanced in steps of 1024 cells
 /// so that counting costs nothing measurable.
 struct Progress {
@@ -621,54 +610,88 @@ impl Progress {
     }
 }
 
-fn run_simd(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) -> Result<()> {
-    use pendula::system::Energy;
+/// The cells on lanes: every cell's values (parameters then state, in the catalogue's order)
+/// from the first cell's and the axes, without an allocation per cell.
+fn run_lanes(
+    sweep: &Sweep,
+    path: EnsemblePath,
+    start: usize,
+    data: &mut [f64],
+    progress: &Progress,
+) -> Result<()> {
     let cols = sweep.columns.len();
     let count = data.len() / cols;
-    let spec = BatchSpec {
-        method: batch_method(sweep.method).expect("a method of the ensemble engine"),
-        h: sweep.h,
-        steps: sweep.steps,
-        stop_at_flip: sweep.until_flip,
-        track_flips: sweep.records.contains(&Record::FlipTime),
-    };
-    // The cell's values in catalogue order (m1, m2, l1, l2, g, damping, drive_amplitude,
-    // drive_frequency, θ1, θ2, ω1, ω2), from the base values and the axes: no allocation per
-    // cell. Cell values are in their domains (checked at the corners).
-    let names: Vec<&str> = sweep.info.quantities().map(|q| q.name).collect();
-    let base_values = sweep.info.values(&sweep.base)?;
-    let base: [f64; 12] = std::array::from_fn(|k| base_values.get(names[k]));
-    let slots: Vec<usize> =
-        sweep.axes.iter().map(|a| names.iter().position(|n| *n == a.name).expect("a checked name")).collect();
-    let member = |i: usize| {
-        let mut v = base;
+    let first = sweep.values(0)?;
+    // The member's entry (for the chain, the one with its links): its quantities' order.
+    let info = first.info();
+    let base: Vec<f64> =
+        first.parameters().map(|(_, v)| v).chain(first.initial_state().iter().copied()).collect();
+    let slots: Vec<usize> = sweep
+        .axes
+        .iter()
+        .map(|a| info.quantities().position(|q| q.name == a.name).expect("a checked name"))
+        .collect();
+    let np = info.parameters.len();
+    let fill = |i: usize, v: &mut [f64]| {
+        v.copy_from_slice(&base);
         let mut rest = start + i;
         for (axis, &slot) in sweep.axes.iter().zip(&slots) {
             v[slot] = axis.centre(rest % axis.n);
             rest /= axis.n;
         }
-        Member {
-            pendulum: DoublePendulum {
-                m1: v[0],
-                m2: v[1],
-                l1: v[2],
-                l2: v[3],
-                g: v[4],
-                ..Default::default()
-            },
-            state: [v[8], v[9], v[10], v[11]],
-        }
     };
-    let store_row = |m: &Member, r: &ensemble::MemberResult, row: &mut [f64]| {
-        let energy = || m.pendulum.energy(0.0, &r.state) - m.pendulum.energy(0.0, &m.state);
-        store(sweep, &r.state, r.flip_time, energy, row);
+    let store_row = |i: usize, state: &[f64], flip_time: f64, row: &mut [f64]| {
+        // The energy error (if recorded) from the cell's own model: built only then.
+        let energy = || {
+            let mut v = base.clone();
+            fill(i, &mut v);
+            let settings: Vec<(String, f64)> =
+                info.quantities().map(|q| q.name.to_owned()).zip(v.iter().copied()).collect();
+            info.values(&settings).map_or(f64::NAN, |values| {
+                let model = values.build();
+                model.energy(0.0, state) - model.energy(0.0, &v[np..])
+            })
+        };
+        store(sweep, state, flip_time, energy, row);
         progress.cell_done();
     };
-    ensemble::run_into(count, &member, &spec, data, cols, &store_row).map_err(|e| match e {
-        ensemble::EnsembleError::NonFinite(e) => anyhow::Error::new(pendula::Error::NonFinite { t: e.t })
-            .context(format!("cell {} of the sweep", start + e.member)),
-        other => anyhow::Error::new(other),
-    })
+    let failed = |member: usize, t: f64| {
+        anyhow::Error::new(pendula::Error::NonFinite { t })
+            .context(format!("cell {} of the sweep", start + member))
+    };
+    let track_flips = sweep.records.contains(&Record::FlipTime);
+    match path {
+        EnsemblePath::DoubleKernel(method) => {
+            let spec = BatchSpec {
+                method,
+                h: sweep.h,
+                steps: sweep.steps,
+                stop_at_flip: sweep.until_flip,
+                track_flips,
+            };
+            ensemble::run_values(count, &fill, &spec, data, cols, &store_row).map_err(|e| match e {
+                ensemble::EnsembleError::NonFinite(e) => failed(e.member, e.t),
+                other => anyhow::Error::new(other),
+            })
+        }
+        EnsemblePath::Engine(tableau) => {
+            let spec = LaneSpec {
+                tableau,
+                h: sweep.h,
+                steps: sweep.steps,
+                stop_at_flip: sweep.until_flip,
+                track_flips,
+            };
+            let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
+                store_row(i, &o.state[..info.state.len()], o.flip_time, row)
+            };
+            first.build().ensemble(info, count, &fill, &spec, data, cols, &store).map_err(|e| match e {
+                pendula::Error::NonFiniteMember { member, t } => failed(member, t),
+                other => anyhow::Error::new(other),
+            })
+        }
+        EnsemblePath::Scalar => unreachable!("scalar sweeps run in run_scalar"),
+    }
 }
 
 fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) -> Result<()> {

@@ -275,7 +275,8 @@ fn subcommands() -> Vec<Sub> {
 /// Every name a command line may hold: systems, methods, presets, quantities, and the
 /// words of `list`, `completions`, `--record` and `plot`.
 fn names() -> Vec<String> {
-    use pendula::system::{CATALOGUE, driven::PRESETS};
+    use pendula::model::CATALOGUE;
+    use pendula::system::driven::PRESETS;
     let mut names: Vec<String> = CATALOGUE.iter().map(|s| s.name.to_owned()).collect();
     names.extend(pendula::integrator::METHODS.iter().map(|m| m.name.to_owned()));
     names.extend(PRESETS.iter().map(|p| p.name.to_owned()));

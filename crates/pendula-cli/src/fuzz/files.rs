@@ -339,7 +339,7 @@ fn toml_value() -> BoxedStrategy<String> {
 
 fn quantity_name() -> BoxedStrategy<String> {
     let mut names: Vec<String> =
-        pendula::system::CATALOGUE.iter().flat_map(|s| s.quantities().map(|q| q.name.to_owned())).collect();
+        pendula::model::CATALOGUE.iter().flat_map(|s| s.quantities().map(|q| q.name.to_owned())).collect();
     names.sort();
     names.dedup();
     names.extend(["links", "nope", "theta 1", "\"theta1\"", "θ"].map(str::to_owned));

@@ -3,8 +3,8 @@
 use crate::control::Tolerances;
 use crate::integrator::Method;
 use crate::integrator::embedded::DOP853;
+use crate::model::DynModel;
 use crate::observe::Ignore;
-use crate::system::DynModel;
 use crate::{End, Error, RunSpec};
 
 /// A least-squares line through (ln h, ln error).

@@ -3,8 +3,8 @@
 //! (a finite-time estimate of the largest Lyapunov exponent, without renormalisation).
 
 use crate::integrator::Method;
+use crate::model::DynModel;
 use crate::observe::{Every, Recorder};
-use crate::system::DynModel;
 use crate::{Error, RunSpec};
 
 /// The distance between two runs, sampled.

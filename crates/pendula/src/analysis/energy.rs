@@ -6,8 +6,8 @@ use std::ops::ControlFlow;
 
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
+use crate::model::DynModel;
 use crate::observe::{Observer, Sample};
-use crate::system::DynModel;
 
 /// The error of a run's energy, absolute (J, or the system's units when dimensionless) and
 /// relative to the model's energy scale ([`crate::system::Model::energy_scale`]).

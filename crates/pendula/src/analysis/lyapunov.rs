@@ -101,10 +101,10 @@ pub fn lyapunov(
         allowed,
     };
     if !(spec.h.is_finite() && spec.h > 0.0) {
-        return Err(invalid("dt", spec.h, "must be finite and > 0"));
+        return Err(invalid("h", spec.h, "must be finite and > 0"));
     }
     if !(spec.t_end.is_finite() && spec.t_end > 0.0) {
-        return Err(invalid("t-end", spec.t_end, "must be finite and > 0"));
+        return Err(invalid("t_end", spec.t_end, "must be finite and > 0"));
     }
     if !(spec.transient.is_finite() && spec.transient >= 0.0) {
         return Err(invalid("transient", spec.transient, "must be finite and >= 0"));
@@ -113,7 +113,7 @@ pub fn lyapunov(
         return Err(invalid(
             "renormalise",
             spec.renormalise,
-            "must be at least one step and at most --t-end",
+            "must be at least one step and at most the run's length t_end",
         ));
     }
     if spec.count == 0 || spec.count > n {

@@ -3,7 +3,7 @@
 
 use crate::events::{Direction, EventKind, EventLocator, EventSpec};
 use crate::integrator::Method;
-use crate::system::DynModel;
+use crate::model::DynModel;
 use crate::{End, Error, RunSpec};
 
 /// The period of an oscillation from `y0`: the time from the first to the third zero

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::control::Tolerances;
 use crate::events::{Direction, EventKind, EventLocator, EventSpec};
 use crate::integrator::{Method, Scheme};
-use crate::system::DynModel;
+use crate::model::DynModel;
 use crate::{End, Error, RunSpec};
 
 /// How the orbits are integrated.

@@ -4,8 +4,8 @@ use std::ops::ControlFlow;
 
 use super::energy::EnergyBalance;
 use crate::integrator::Method;
+use crate::model::DynModel;
 use crate::observe::{Observer, Sample};
-use crate::system::DynModel;
 use crate::{End, Error, RunSpec};
 
 /// When a run counts as stable.

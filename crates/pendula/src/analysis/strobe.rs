@@ -6,8 +6,8 @@
 use std::ops::ControlFlow;
 
 use crate::integrator::Method;
+use crate::model::DynModel;
 use crate::observe::{Observer, Sample};
-use crate::system::DynModel;
 use crate::{End, Error, RunSpec};
 
 /// Keeps the state every `every` steps once `from` steps have passed.

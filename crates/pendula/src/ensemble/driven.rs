@@ -27,6 +27,12 @@ pub struct DrivenMember {
     pub transient_periods: u64,
 }
 
+/// Whether the stroboscopic kernel runs members of `info`'s system (the driven pendulum):
+/// callers choose it by this, not by name.
+pub fn runs(info: &crate::system::SystemInfo) -> bool {
+    std::ptr::eq(info, <DrivenPendulum as crate::system::Model>::INFO)
+}
+
 /// How to sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StroboSpec {
@@ -85,7 +91,8 @@ struct Lanes {
     theta: [f64; LANES],
     omega: [f64; LANES],
     h: [f64; LANES],
-    damping: [f64; LANES],
+    /// The quality factor q (the damping rate is 1/q).
+    q: [f64; LANES],
     amplitude: [f64; LANES],
 }
 
@@ -101,7 +108,7 @@ fn run_group(
         theta: std::array::from_fn(|i| pick(i).state[0]),
         omega: std::array::from_fn(|i| pick(i).state[1]),
         h: std::array::from_fn(|i| 2.0 * std::f64::consts::PI / pick(i).pendulum.drive_frequency / m),
-        damping: std::array::from_fn(|i| 1.0 / pick(i).pendulum.q),
+        q: std::array::from_fn(|i| pick(i).pendulum.q),
         amplitude: std::array::from_fn(|i| pick(i).pendulum.drive_amplitude),
     };
     let per_member = spec.samples * 2;
@@ -160,9 +167,14 @@ fn run_group(
 ))]
 fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[f64]) -> bool {
     let steps = (drive.len() - 1) / 2;
-    let Lanes { theta, omega, h, damping, amplitude } = lanes;
-    let accel = |th: f64, w: f64, damping: f64, amplitude: f64, c: f64| {
-        -w * damping - trig::sin_with::<FMA, WIDE>(th) + amplitude * c
+    let Lanes { theta, omega, h, q, amplitude } = lanes;
+    // The system's own equation (`DrivenPendulum::acceleration`), one lane at a time in the
+    // engine arithmetic, with the drive's cosine from the shared table.
+    let accel = |th: f64, w: f64, q: f64, amplitude: f64, c: f64| {
+        let one = |x: f64| -> crate::num::Lanes<1, FMA, WIDE> { crate::num::Lanes([x]) };
+        let pendulum =
+            DrivenPendulum { q: one(q), drive_amplitude: one(amplitude), drive_frequency: one(0.0) };
+        pendulum.acceleration(one(th), one(w), one(c)).0[0]
     };
     // max(x, r) by a comparison, not f64::max: one instruction, and a NaN x (which either path
     // turns into NaN) leaves r as it was.
@@ -172,7 +184,7 @@ fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[
     for k in 0..steps {
         let (c0, c_half, c1) = (drive[2 * k], drive[2 * k + 1], drive[2 * k + 2]);
         for i in 0..LANES {
-            let (th, w, h, b, a) = (theta[i], omega[i], h[i], damping[i], amplitude[i]);
+            let (th, w, h, b, a) = (theta[i], omega[i], h[i], q[i], amplitude[i]);
             let hh = 0.5 * h;
             let k1 = accel(th, w, b, a, c0);
             let (th2, w2) = (th + hh * w, w + hh * k1);
@@ -189,7 +201,7 @@ fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[
             omega[i] = w + h6 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
         }
     }
-    WIDE || (0..LANES).all(|i| stayed_fast(start[i], fastest[i], h[i], damping[i], amplitude[i], steps))
+    WIDE || (0..LANES).all(|i| stayed_fast(start[i], fastest[i], h[i], 1.0 / q[i], amplitude[i], steps))
 }
 
 /// Whether every sine argument of a lane's period was within the fast range, given |θ₀| at the

@@ -1,4 +1,11 @@
-//! The ensemble engine: many double pendulums advanced together, in lanes of
+//! The ensemble engines. [`engine`] runs every catalogued system with every explicit
+//! Runge–Kutta method on lanes, from the systems' own equations ([`crate::num::Lanes`]).
+//! This module keeps the free double pendulum's hand-written RK4 and Tao kernels, the W3
+//! benchmark's path: the general engine's lanes measured 1.9 times slower on W3 (0.75 s
+//! against 0.39 s on one core), so for the free double pendulum its equations are, for now,
+//! written here a second time (issue 13 tracks folding them into one).
+//!
+//! Many double pendulums advanced together, in lanes of
 //! [`LANES`] structure-of-arrays values that the compiler turns into SIMD (8 f64 per AVX-512
 //! vector, 4 per AVX2), with branch-free sine and cosine ([`trig`]), CPU dispatch at run
 //! time (`multiversion`, with a portable fallback), and rayon across cores.
@@ -14,6 +21,7 @@
 //! is an error naming the member and the time.
 
 pub mod driven;
+pub mod engine;
 mod trajectory;
 
 pub use crate::num::trig;
@@ -22,7 +30,6 @@ pub use trajectory::{rk4_trajectory, rk4_trajectory_resumable};
 
 use rayon::prelude::*;
 
-use crate::num::Lanes as L;
 use crate::system::double::DoublePendulum;
 
 /// Values per lane group: two AVX-512 vectors, four AVX2 vectors (16 measured fastest on
@@ -51,6 +58,22 @@ pub enum BatchMethod {
     /// Tao's explicit symplectic map (tao-2, tao-4) on the Hamiltonian form (θ, p), with its
     /// composition weights and binding constant ω (see [`crate::integrator::tao`]).
     Tao(crate::integrator::tao::TaoScheme),
+}
+
+impl BatchMethod {
+    /// The kernel form of `method`, if the double pendulum's kernels run it (RK4, tao-2,
+    /// tao-4).
+    pub fn of(method: &crate::integrator::Method) -> Option<BatchMethod> {
+        use crate::integrator::Scheme;
+        match method.scheme {
+            Scheme::Tao(scheme) => Some(BatchMethod::Tao(scheme)),
+            Scheme::ExplicitRk(t) => match crate::integrator::explicit_rk::RK4.scheme {
+                Scheme::ExplicitRk(rk4) if std::ptr::eq(t, rk4) => Some(BatchMethod::Rk4),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
 }
 
 /// What to run: method, step and length.
@@ -96,16 +119,51 @@ pub enum EnsembleError {
     /// A member's state became non-finite.
     #[error(transparent)]
     NonFinite(#[from] NonFiniteMember),
-    /// A member has damping or a drive, which the lane kernels do not implement (they
-    /// integrate the free double pendulum); such members run on the scalar path
-    /// ([`crate::solve`]).
+    /// A member has damping or a drive, which the Tao lane kernel does not implement (it
+    /// integrates the free double pendulum's Hamiltonian); such members run on the scalar
+    /// path ([`crate::solve`]). RK4 runs them on the general engine ([`engine`]).
     #[error(
-        "member {member} is damped or driven; the ensemble kernels integrate the free double pendulum only (run it with pendula::solve)"
+        "member {member} is damped or driven; the Tao lane kernel integrates the free double pendulum only (run it with pendula::solve)"
     )]
     Forced {
         /// Index of the member.
         member: usize,
     },
+}
+
+/// Stores member i's final state and flip time into its row.
+pub type StoreValues<'a, T> = dyn Fn(usize, &[f64], f64, &mut [T]) + Sync + 'a;
+
+/// Stores member i's result into its row.
+type StoreIndexed<'a, T> = dyn Fn(usize, &Member, &MemberResult, &mut [T]) + Sync + 'a;
+
+/// [`run_into`] with members given by their values, in the order of the double pendulum's
+/// catalogue entry (m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency, θ₁, θ₂, ω₁,
+/// ω₂), written by `member(i, values)`; each result stored with `store(i, state, flip_time,
+/// row)`.
+///
+/// # Errors
+/// As [`run_into`].
+pub fn run_values<T: Send>(
+    count: usize,
+    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    spec: &BatchSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &StoreValues<'_, T>,
+) -> Result<(), EnsembleError> {
+    let of = |i: usize| {
+        let mut v = [0.0; 12];
+        member(i, &mut v);
+        let [m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency, a, b, c, d] = v;
+        Member {
+            pendulum: DoublePendulum { m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency },
+            state: [a, b, c, d],
+        }
+    };
+    run_indexed(count, &of, spec, out, row_len, &|i, _, r: &MemberResult, row: &mut [T]| {
+        store(i, &r.state, r.flip_time, row);
+    })
 }
 
 /// Runs every member, in parallel on rayon's current pool, writing `out[i]` for `members[i]`.
@@ -133,9 +191,25 @@ pub fn run_into<T: Send>(
     row_len: usize,
     store: &(dyn Fn(&Member, &MemberResult, &mut [T]) + Sync),
 ) -> Result<(), EnsembleError> {
+    run_indexed(count, member, spec, out, row_len, &|_, m, r, row| store(m, r, row))
+}
+
+/// [`run_into`], the store told each member's index.
+fn run_indexed<T: Send>(
+    count: usize,
+    member: &(dyn Fn(usize) -> Member + Sync),
+    spec: &BatchSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &StoreIndexed<'_, T>,
+) -> Result<(), EnsembleError> {
     assert_eq!(out.len(), count * row_len, "one row per member");
-    if let Some(member) = (0..count).find(|&i| member(i).pendulum.is_forced()) {
-        return Err(EnsembleError::Forced { member });
+    let forced = (0..count).find(|&i| member(i).pendulum.is_forced());
+    match (spec.method, forced) {
+        // The general engine runs the double pendulum's own equations, forces included.
+        (BatchMethod::Rk4, Some(_)) => return run_rk4_on_engine(count, member, spec, out, row_len, store),
+        (BatchMethod::Tao(_), Some(member)) => return Err(EnsembleError::Forced { member }),
+        _ => {}
     }
     let failures: Vec<NonFiniteMember> = out
         .par_chunks_mut(CHUNK * row_len)
@@ -145,8 +219,8 @@ pub fn run_into<T: Send>(
             let members: Vec<Member> = (start..start + rows.len() / row_len).map(member).collect();
             let mut results = vec![MemberResult { state: [0.0; 4], flip_time: f64::NAN }; members.len()];
             let outcome = run_chunk(&members, spec, &mut results);
-            for ((m, r), row) in members.iter().zip(&results).zip(rows.chunks_mut(row_len)) {
-                store(m, r, row);
+            for (j, ((m, r), row)) in members.iter().zip(&results).zip(rows.chunks_mut(row_len)).enumerate() {
+                store(start + j, m, r, row);
             }
             outcome.err().map(|e| NonFiniteMember { member: start + e.member, ..e })
         })
@@ -157,6 +231,46 @@ pub fn run_into<T: Send>(
     }
 }
 
+/// RK4 on the general engine ([`engine::run`]) for batches with damped or driven members:
+/// the free pendulum's kernel below implements the free equations only.
+fn run_rk4_on_engine<T: Send>(
+    count: usize,
+    member: &(dyn Fn(usize) -> Member + Sync),
+    spec: &BatchSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &StoreIndexed<'_, T>,
+) -> Result<(), EnsembleError> {
+    use crate::system::Model;
+    let crate::integrator::Scheme::ExplicitRk(tableau) = crate::integrator::explicit_rk::RK4.scheme else {
+        unreachable!("RK4 is an explicit Runge-Kutta method")
+    };
+    let lanes = engine::LaneSpec {
+        tableau,
+        h: spec.h,
+        steps: spec.steps,
+        stop_at_flip: spec.stop_at_flip,
+        track_flips: spec.track_flips,
+    };
+    let values = |i: usize, v: &mut [f64]| {
+        let Member { pendulum: d, state } = member(i);
+        let p = [d.m1, d.m2, d.l1, d.l2, d.g, d.damping, d.drive_amplitude, d.drive_frequency];
+        v[..8].copy_from_slice(&p);
+        v[8..].copy_from_slice(&state);
+    };
+    let store = |i: usize, o: &engine::LaneOutcome, row: &mut [T]| {
+        let r = MemberResult { state: std::array::from_fn(|k| o.state[k]), flip_time: o.flip_time };
+        store(i, &member(i), &r, row);
+    };
+    engine::run::<DoublePendulum, T>(DoublePendulum::INFO, count, &values, &lanes, out, row_len, &store)
+        .map_err(|e| match e {
+            crate::Error::NonFiniteMember { member, t } => {
+                EnsembleError::NonFinite(NonFiniteMember { member, t })
+            }
+            other => unreachable!("the engine fails only on a non-finite state: {other}"),
+        })
+}
+
 /// Runs a chunk of members serially, in lane groups; the last group is padded with copies
 /// of its last member, whose results are dropped.
 fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> Result<(), NonFiniteMember> {
@@ -164,7 +278,12 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
     for (g, (group, results)) in members.chunks(LANES).zip(out.chunks_mut(LANES)).enumerate() {
         let pick = |i: usize| group[i.min(group.len() - 1)];
         let mut lanes = Lanes {
-            params: DoublePendulum::transpose(std::array::from_fn(|i| pick(i).pendulum)),
+            params: std::array::from_fn(|p| {
+                std::array::from_fn(|i| {
+                    let d = pick(i).pendulum;
+                    [(d.m1 + d.m2) * d.l1, d.m2 * d.l2, -d.m2 * d.l2, (d.m1 + d.m2) * d.g, d.l1, d.l2, d.g][p]
+                })
+            }),
             state: std::array::from_fn(|k| std::array::from_fn(|i| pick(i).state[k])),
             flip_step: [-1.0; LANES],
             flip_ends: [[[0.0; LANES]; 4]; 2],
@@ -196,11 +315,11 @@ fn run_chunk(members: &[Member], spec: &BatchSpec, out: &mut [MemberResult]) -> 
     first_failure.map_or(Ok(()), Err)
 }
 
-/// A lane group: parameters, state (θ₁, θ₂, ω₁, ω₂), and per-lane records, each an array
-/// over the lanes.
+/// A lane group: parameter products (see `params`), state (θ₁, θ₂, ω₁, ω₂), and per-lane
+/// records, each an array over the lanes.
 struct Lanes {
-    /// The pendulums, lane i's parameters in entry i of each array.
-    params: DoublePendulum<V>,
+    /// m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g, l1, l2, g.
+    params: [[f64; LANES]; 7],
     state: [[f64; LANES]; 4],
     /// The step in which the lane first flipped (−1: none), as a float.
     flip_step: [f64; LANES],
@@ -257,29 +376,39 @@ fn beyond_half_fast(reach: &V) -> bool {
     reach.iter().fold(false, |beyond, &r| beyond | (r > HALF_FAST))
 }
 
-/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane: the double
-/// pendulum's own ([`DoublePendulum::accelerations`]) in the engine arithmetic
-/// ([`crate::num::Lanes`]) (θ' = ω needs no work). Not `WIDE`: the branch-free sine and cosine,
-/// and `reach` = max(reach, |θ₁|, |θ₂|) per lane, data flow only (a test and branch per stage
-/// instead cost the W3 sweep 12–17%, its AVX-512 kernel spilling a third more). `WIDE`: angles
-/// beyond the fast range reduced exactly, per lane. The free pendulum's (the kernels refuse
-/// forced members), so the time is not needed.
+/// The angular accelerations (ω₁', ω₂') at (θ₁, θ₂, ω₁, ω₂) for every lane, in the expression
+/// order of [`DoublePendulum`]'s `rhs` (the bench's SPEC) (θ' = ω needs no work). Not `WIDE`:
+/// the branch-free sine and cosine, and `reach` = max(reach, |θ₁|, |θ₂|) per lane, data flow
+/// only (a test and branch per stage instead cost the W3 sweep 12–17%, its AVX-512 kernel
+/// spilling a third more). `WIDE`: angles beyond the fast range reduced exactly, per lane.
 #[inline(always)]
 fn accelerations<const FMA: bool, const WIDE: bool>(
-    p: &DoublePendulum<V>,
+    p: &[V; 7],
     [th1, th2]: [&V; 2],
     [w1, w2]: [&V; 2],
     [a1, a2]: [&mut V; 2],
     reach: &mut V,
 ) {
-    if !WIDE {
-        for i in 0..LANES {
+    for i in 0..LANES {
+        if !WIDE {
             reach[i] = max_of(th2[i].abs(), max_of(th1[i].abs(), reach[i]));
         }
+        // The parameter products that do not change, computed once per lane group in the same
+        // grouping as the scalar expressions: m11 = (m1 + m2) l1, m2 l2, −m2 l2, (m1 + m2) g.
+        let (m11, m2l2, neg_m2l2, m12g, l1, l2, g) =
+            (p[0][i], p[1][i], p[2][i], p[3][i], p[4][i], p[5][i], p[6][i]);
+        let (sd, cd) = trig::sin_cos_with::<FMA, WIDE>(th1[i] - th2[i]);
+        let (s1, s2) = (trig::sin_with::<FMA, WIDE>(th1[i]), trig::sin_with::<FMA, WIDE>(th2[i]));
+        let m12 = m2l2 * cd;
+        let m21 = l1 * cd;
+        let m22 = l2;
+        let r1 = neg_m2l2 * w2[i] * w2[i] * sd - m12g * s1;
+        let r2 = l1 * w1[i] * w1[i] * sd - g * s2;
+        // One division, two products: division is the slowest vector operation here.
+        let inverse = 1.0 / (m11 * m22 - m12 * m21);
+        a1[i] = (r1 * m22 - m12 * r2) * inverse;
+        a2[i] = (m11 * r2 - m21 * r1) * inverse;
     }
-    let pendulum = p.map(L::<LANES, FMA, WIDE>);
-    let [x1, x2] = pendulum.accelerations(L([0.0; LANES]), &[L(*th1), L(*th2), L(*w1), L(*w2)]);
-    (*a1, *a2) = (x1.0, x2.0);
 }
 
 /// out = y + a k, lane by lane (fused where `FMA`).
@@ -436,24 +565,35 @@ fn rk4_kernel<const FMA: bool, const TRACK: bool, const WIDE: bool>(
 }
 
 /// The gradient (∂H/∂q₁, ∂H/∂q₂, ∂H/∂p₁, ∂H/∂p₂) of the double pendulum's Hamiltonian at
-/// (q, p) for every lane: [`DoublePendulum::hamiltonian_gradient`] in the engine arithmetic;
-/// `reach` as in [`accelerations`].
+/// (q, p) for every lane, in the expressions of `DoublePendulumForm`'s `dh_dq` and `dh_dp`
+/// (raw parameters m₁, m₂, l₁, l₂, g per lane); the trigonometry and `reach` as in
+/// [`accelerations`].
 #[inline(always)]
 fn gradient<const FMA: bool, const WIDE: bool>(
-    p: &DoublePendulum<V>,
+    raw: &[V; 5],
     [q1, q2]: [&V; 2],
     [p1, p2]: [&V; 2],
     out: &mut [V; 4],
     reach: &mut V,
 ) {
-    if !WIDE {
-        for i in 0..LANES {
+    for i in 0..LANES {
+        if !WIDE {
             reach[i] = max_of(q2[i].abs(), max_of(q1[i].abs(), reach[i]));
         }
+        let (m1, m2, l1, l2, g) = (raw[0][i], raw[1][i], raw[2][i], raw[3][i], raw[4][i]);
+        let (s, c) = trig::sin_cos_with::<FMA, WIDE>(q1[i] - q2[i]);
+        let d = m1 + m2 * s * s;
+        let (a, b) = (p1[i], p2[i]);
+        let bracket = m2 * c / (l1 * l1) * a * a - (m2 * c * c + (m1 + m2)) / (l1 * l2) * a * b
+            + (m1 + m2) * c / (l2 * l2) * b * b;
+        let coupling = s / (d * d) * bracket;
+        out[0][i] = -coupling + (m1 + m2) * g * l1 * trig::sin_with::<FMA, WIDE>(q1[i]);
+        out[1][i] = coupling + m2 * g * l2 * trig::sin_with::<FMA, WIDE>(q2[i]);
+        let det = m2 * l1 * l1 * l2 * l2 * d;
+        let bc = m2 * l1 * l2 * c;
+        out[2][i] = (m2 * l2 * l2 * a - bc * b) / det;
+        out[3][i] = (-bc * a + l1 * l1 * (m1 + m2) * b) / det;
     }
-    let pendulum = p.map(L::<LANES, FMA, WIDE>);
-    let g = pendulum.hamiltonian_gradient(L([0.0; LANES]), [L(*q1), L(*q2)], [L(*p1), L(*p2)]);
-    *out = g.map(|x| x.0);
 }
 
 /// Tao steps for a lane group: (θ, ω) → (q, p) with the libm cosine, the extended-space map
@@ -475,7 +615,12 @@ fn tao_lanes(
         z[2][i] = p[0];
         z[3][i] = p[1];
     }
-    let raw = lanes.params;
+    let raw: [V; 5] = std::array::from_fn(|k| {
+        std::array::from_fn(|i| {
+            let d = pendulums[i];
+            [d.m1, d.m2, d.l1, d.l2, d.g][k]
+        })
+    });
     // The fast kernel, and if it gave up (`lanes` and `z` left as they were), the wide one.
     let run = (h, steps);
     let done = if has_fma() {
@@ -530,7 +675,7 @@ fn tao_lanes(
 ))]
 fn tao_kernel<const FMA: bool, const WIDE: bool>(
     lanes: &mut Lanes,
-    raw: &DoublePendulum<V>,
+    raw: &[V; 5],
     z: &mut [V; 4],
     scheme: crate::integrator::tao::TaoScheme,
     (h, steps): (f64, u64),

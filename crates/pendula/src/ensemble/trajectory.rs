@@ -1,9 +1,10 @@
 //! One double pendulum with RK4 through the ensemble engine's arithmetic: the fast path of
-//! `pendula simulate double --method rk4`, resumable like [`crate::resume::solve_resumable`].
+//! `pendula simulate double --method rk4`, resumable like [`crate::simulate::resume::solve_resumable`].
 
 use super::{has_fma, trig};
-use crate::checkpoint::{Leg, Pause, Pausing, Reader, RunState, Words};
+use crate::checkpoint::{Leg, Pause, Reader, RunState, Words};
 use crate::num::Lanes;
+use crate::observe::Pausing;
 use crate::observe::{Observer, Sample};
 use crate::simulate::Schedule;
 use crate::system::double::DoublePendulum;

@@ -91,7 +91,7 @@ pub static DOPRI5: Method = Method {
     requirement: Requirement::Any,
     symplectic: false,
     symmetric: false,
-    description: "adaptive Dormand-Prince 5(4) with a PI step-size controller (--rtol, --atol); 6 evaluations per step",
+    description: "adaptive Dormand-Prince 5(4) with a PI step-size controller (tolerances rtol, atol); 6 evaluations per step",
     reference: "Dormand & Prince, J. Comput. Appl. Math. 6 (1980) 19; Hairer, Norsett, Wanner, Table II.5.2",
     scheme: Scheme::Embedded(&EmbeddedTableau {
         c: &[0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0],
@@ -479,7 +479,8 @@ impl EmbeddedRk {
         let n = y.len();
         let first = usize::from(self.first_stage == Some(t));
         let (a, c) = (&tab.a[..tab.stages], &tab.c[..tab.stages]);
-        super::explicit_rk::explicit_stages(a, c, first, &mut self.k, &mut self.stage, system, t, h, y);
+        let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
+        super::explicit_rk::explicit_stages(a, c, first, &mut self.k, &mut self.stage, &mut f, t, h, y);
         let combine =
             |w: &[f64], j: usize| w.iter().enumerate().map(|(i, w)| w * self.k[i * n + j]).sum::<f64>();
         for (j, yj) in y.iter().enumerate() {
@@ -554,13 +555,14 @@ impl EmbeddedRk {
         }
         if dense {
             let (r0, r1) = r01.split_at(n);
+            let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
             super::explicit_rk::explicit_stages(
                 tab.a,
                 tab.c,
                 tab.new_point + 1,
                 &mut self.k,
                 &mut self.stage,
-                system,
+                &mut f,
                 t,
                 h,
                 r0,

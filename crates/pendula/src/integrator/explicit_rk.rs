@@ -3,6 +3,7 @@
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
+use crate::num::Num;
 use crate::system::System;
 
 /// A Butcher tableau with weights b over a common denominator, so that the update is
@@ -75,112 +76,143 @@ impl ExplicitRk {
 }
 
 /// The stages of an explicit tableau (rows `a`, nodes `c`) from (t, y) with step h: stage i
-/// is kᵢ = f(t + cᵢ h, y + h Σⱼ aᵢⱼ kⱼ), stored at `k[i n .. (i + 1) n]`. Stages before
-/// `first` are taken as already in `k` (first same as last).
+/// is kᵢ = f(t + cᵢ h, y + h Σⱼ aᵢⱼ kⱼ), stored at `k[i n .. (i + 1) n]`, `f` writing the
+/// right-hand side at a stage's time and state. Stages before `first` are taken as already in
+/// `k` (first same as last).
 ///
-/// States of 2 and 4 components (every built-in system) take a path with fixed-size arrays
-/// that the compiler unrolls; the arithmetic, and so the result, is the same on both paths.
+/// Written once over every number type: `f64` for the scalar integrators, the lanes of the
+/// ensemble engine (`crate::ensemble`), where `madd` may fuse. In `f64` a stage is
+/// y + h Σ aᵢⱼ kⱼ with the sum from 0 left to right, zero coefficients skipped. States of 2
+/// and 4 components (the pendulums, the oscillator) take a path with fixed-size arrays that
+/// the compiler unrolls; the arithmetic, and so the result, is the same on both paths.
+/// The right-hand side a stage evaluates: f(t, y) into `dydt`. Closures are one; the ensemble
+/// engine's is a struct whose method is inlined into its kernel, so that what it tracks (how
+/// far the sine and cosine arguments reach) stays in registers.
+pub(crate) trait StageRhs<T> {
+    /// Writes f(t, y) into `dydt`.
+    fn eval(&mut self, t: f64, y: &[T], dydt: &mut [T]);
+}
+
+impl<T, F: FnMut(f64, &[T], &mut [T])> StageRhs<T> for F {
+    #[inline(always)]
+    fn eval(&mut self, t: f64, y: &[T], dydt: &mut [T]) {
+        self(t, y, dydt);
+    }
+}
+
 #[allow(clippy::too_many_arguments)] // the tableau's parts and the stepper's buffers, all needed
-pub(super) fn explicit_stages<S: System + ?Sized>(
+#[inline(always)]
+pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
     a: &[&[f64]],
     c: &[f64],
     first: usize,
-    k: &mut [f64],
-    stage: &mut [f64],
-    system: &S,
+    k: &mut [T],
+    stage: &mut [T],
+    f: &mut F,
     t: f64,
     h: f64,
-    y: &[f64],
+    y: &[T],
 ) {
     match y.len() {
-        2 => fixed_stages::<S, 2>(a, c, first, k, system, t, h, y),
-        4 => fixed_stages::<S, 4>(a, c, first, k, system, t, h, y),
+        2 => fixed_stages::<T, F, 2>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("2")),
+        4 => fixed_stages::<T, F, 4>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("4")),
         n => {
             for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
                 let (done, rest) = k.split_at_mut(i * n);
                 for (j, s) in stage.iter_mut().enumerate() {
-                    let mut acc = 0.0;
+                    let mut acc = T::splat(0.0);
                     for (l, &a) in row.iter().enumerate() {
                         if a != 0.0 {
-                            acc += a * done[l * n + j];
+                            acc = T::splat(a).madd(done[l * n + j], acc);
                         }
                     }
-                    *s = y[j] + h * acc;
+                    *s = T::splat(h).madd(acc, y[j]);
                 }
-                system.rhs(t + c * h, stage, &mut rest[..n]);
+                f.eval(t + c * h, stage, &mut rest[..n]);
             }
         }
     }
 }
 
-/// [`explicit_stages`] for states of N components.
+/// [`explicit_stages`] for states of N components, stage i in `k[i]` (a lane kernel passes
+/// as many as its method has stages, a constant there: the loops unroll).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn fixed_stages<S: System + ?Sized, const N: usize>(
+pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize>(
     a: &[&[f64]],
     c: &[f64],
     first: usize,
-    k: &mut [f64],
-    system: &S,
+    k: &mut [[T; N]],
+    f: &mut F,
     t: f64,
     h: f64,
-    y: &[f64],
+    y: &[T; N],
 ) {
-    let y: &[f64; N] = y.try_into().expect("N components");
-    for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
-        let (done, rest) = k.split_at_mut(i * N);
-        let mut acc = [0.0; N];
-        for (l, &a) in row.iter().enumerate() {
+    for i in first..a.len().min(k.len()) {
+        let (done, rest) = k.split_at_mut(i);
+        let mut acc = [T::splat(0.0); N];
+        for (l, &a) in a[i].iter().enumerate() {
             // Zero coefficients are skipped: adding 0 · k would be exact for finite k, but
             // costs the time of the term.
             if a != 0.0 {
-                let kl: &[f64; N] = done[l * N..(l + 1) * N].try_into().expect("N components");
                 for j in 0..N {
-                    acc[j] += a * kl[j];
+                    acc[j] = T::splat(a).madd(done[l][j], acc[j]);
                 }
             }
         }
-        let stage: [f64; N] = std::array::from_fn(|j| y[j] + h * acc[j]);
-        system.rhs(t + c * h, &stage, &mut rest[..N]);
+        // Loops, not `array::from_fn`: kernels compiled for an instruction set inline these
+        // functions, and from_fn's closure, left out of line, lost the fused multiply-adds.
+        let mut stage = *y;
+        for j in 0..N {
+            stage[j] = T::splat(h).madd(acc[j], y[j]);
+        }
+        f.eval(t + c[i] * h, &stage, &mut rest[0]);
+    }
+}
+
+/// y += scale Σᵢ bᵢ kᵢ (the sum from b₀ k₀, left to right), over every number type; states of
+/// 2 and 4 components with fixed-size arrays (the same arithmetic).
+#[inline(always)]
+pub(crate) fn explicit_update<T: Num>(b: &[f64], k: &[T], scale: f64, y: &mut [T]) {
+    match y.len() {
+        2 => fixed_update::<T, 2>(b, k.as_chunks().0, scale, y.try_into().expect("2")),
+        4 => fixed_update::<T, 4>(b, k.as_chunks().0, scale, y.try_into().expect("4")),
+        n => {
+            for (j, yj) in y.iter_mut().enumerate() {
+                let mut acc = T::splat(b[0]) * k[j];
+                for (i, &b) in b.iter().enumerate().skip(1) {
+                    acc = T::splat(b).madd(k[i * n + j], acc);
+                }
+                *yj = T::splat(scale).madd(acc, *yj);
+            }
+        }
     }
 }
 
 impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
     fn step(&mut self, system: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
         let tab = self.tableau;
-        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, system, t, h, y);
-        let scale = h / tab.denominator;
-        match y.len() {
-            2 => fixed_update::<2>(tab.b, &self.k, scale, y),
-            4 => fixed_update::<4>(tab.b, &self.k, scale, y),
-            n => {
-                for (j, yj) in y.iter_mut().enumerate() {
-                    let mut acc = tab.b[0] * self.k[j];
-                    for (i, &b) in tab.b.iter().enumerate().skip(1) {
-                        acc += b * self.k[i * n + j];
-                    }
-                    *yj += scale * acc;
-                }
-            }
-        }
+        let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
+        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, y);
+        explicit_update(tab.b, &self.k, h / tab.denominator, y);
         Ok(())
     }
 }
 
-/// y += scale Σᵢ bᵢ kᵢ for states of N components (the same arithmetic as the general path).
+/// [`explicit_update`] for states of N components, stage i in `k[i]`.
 #[inline(always)]
-fn fixed_update<const N: usize>(b: &[f64], k: &[f64], scale: f64, y: &mut [f64]) {
-    let y: &mut [f64; N] = y.try_into().expect("N components");
-    let k0: &[f64; N] = k[..N].try_into().expect("N components");
-    let mut acc: [f64; N] = std::array::from_fn(|j| b[0] * k0[j]);
-    for (i, &bi) in b.iter().enumerate().skip(1) {
-        let ki: &[f64; N] = k[i * N..(i + 1) * N].try_into().expect("N components");
+pub(crate) fn fixed_update<T: Num, const N: usize>(b: &[f64], k: &[[T; N]], scale: f64, y: &mut [T; N]) {
+    let mut acc = k[0];
+    for j in 0..N {
+        acc[j] = T::splat(b[0]) * k[0][j];
+    }
+    for (i, ki) in k.iter().enumerate().skip(1) {
         for j in 0..N {
-            acc[j] += bi * ki[j];
+            acc[j] = T::splat(b[i]).madd(ki[j], acc[j]);
         }
     }
     for j in 0..N {
-        y[j] += scale * acc[j];
+        y[j] = T::splat(scale).madd(acc[j], y[j]);
     }
 }
 

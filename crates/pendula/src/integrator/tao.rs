@@ -59,7 +59,7 @@ pub static TAO_2: Method = Method {
     requirement: Requirement::HamiltonianExplicit,
     symplectic: true,
     symmetric: true,
-    description: "explicit symplectic for non-separable H (two bound copies; --binding, default 200, needs binding * dt <= 1)",
+    description: "explicit symplectic for non-separable H (two bound copies; binding constant w, default 200, needs w h <= 1)",
     reference: "Tao, Phys. Rev. E 94 (2016) 043303",
     scheme: Scheme::Tao(TaoScheme { weights: &[1.0], binding: DEFAULT_BINDING }),
 };
@@ -75,7 +75,7 @@ pub static TAO_4: Method = Method {
     requirement: Requirement::HamiltonianExplicit,
     symplectic: true,
     symmetric: true,
-    description: "triple jump of tao-2: explicit, symplectic, order 4; needs binding * dt well below 1",
+    description: "triple jump of tao-2: explicit, symplectic, order 4; needs w h well below 1 (binding constant times step)",
     reference: "Tao, Phys. Rev. E 94 (2016) 043303; Yoshida, Phys. Lett. A 150 (1990) 262",
     scheme: Scheme::Tao(TaoScheme { weights: &YOSHIDA_4_WEIGHTS, binding: DEFAULT_BINDING }),
 };
@@ -88,9 +88,13 @@ pub fn check_binding_step(scheme: &TaoScheme, h: f64) -> Result<(), Error> {
     let product = scheme.binding * h.abs();
     if product > MAX_BINDING_STEP {
         return Err(Error::InvalidValue {
-            name: format!("binding * dt (binding {} 1/s, dt {} s)", Short(scheme.binding), Short(h)),
+            name: format!(
+                "w h (binding constant w = {} 1/s, step h = {} s)",
+                Short(scheme.binding),
+                Short(h)
+            ),
             value: product,
-            allowed: "Tao's methods are unstable above binding * dt = 1: lower --binding or --dt (for chaotic motion keep binding near 200 and dt <= 5 ms)",
+            allowed: "Tao's methods are unstable above w h = 1 (binding constant times step size): lower the binding constant or the step (for chaotic motion keep w near 200 and h <= 5 ms)",
         });
     }
     Ok(())

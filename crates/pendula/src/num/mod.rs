@@ -67,6 +67,15 @@ pub trait Num:
     /// Whether the value is zero (in every lane; with zero derivative): for terms that vanish
     /// for most systems (damping, drives), skipped then at the cost of one test.
     fn is_zero(self) -> bool;
+
+    /// √x.
+    fn sqrt(self) -> Self;
+
+    /// |x| (the value part's, for dual numbers: used for bounds, not differentiated).
+    fn abs(self) -> Self;
+
+    /// The larger of the two (lane by lane), by a comparison: a NaN `self` gives `other`.
+    fn max(self, other: Self) -> Self;
 }
 
 impl Num for f64 {
@@ -90,6 +99,18 @@ impl Num for f64 {
     fn is_zero(self) -> bool {
         self == 0.0
     }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        if self > other { self } else { other }
+    }
 }
 
 impl Num for num_dual::Dual64 {
@@ -104,6 +125,18 @@ impl Num for num_dual::Dual64 {
     #[inline(always)]
     fn is_zero(self) -> bool {
         self.re == 0.0 && self.eps == 0.0
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        num_dual::DualNum::sqrt(&self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        if self.re < 0.0 { -self } else { self }
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        if self.re > other.re { self } else { other }
     }
 }
 
@@ -120,13 +153,21 @@ impl<const N: usize, const FMA: bool, const WIDE: bool> Lanes<N, FMA, WIDE> {
     /// Lane by lane: `f` of each lane.
     #[inline(always)]
     pub fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        Lanes(std::array::from_fn(|i| f(self.0[i])))
+        let mut out = self.0;
+        for v in &mut out {
+            *v = f(*v);
+        }
+        Lanes(out)
     }
 
     /// Lane by lane: `f` of each pair of lanes.
     #[inline(always)]
     pub fn zip(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
-        Lanes(std::array::from_fn(|i| f(self.0[i], other.0[i])))
+        let mut out = self.0;
+        for (v, w) in out.iter_mut().zip(other.0) {
+            *v = f(*v, w);
+        }
+        Lanes(out)
     }
 }
 
@@ -175,7 +216,11 @@ impl<const N: usize, const FMA: bool, const WIDE: bool> Num for Lanes<N, FMA, WI
     }
     #[inline(always)]
     fn madd(self, b: Self, c: Self) -> Self {
-        Lanes(std::array::from_fn(|i| trig::madd::<FMA>(self.0[i], b.0[i], c.0[i])))
+        let mut out = c.0;
+        for ((o, x), y) in out.iter_mut().zip(self.0).zip(b.0) {
+            *o = trig::madd::<FMA>(x, y, *o);
+        }
+        Lanes(out)
     }
     #[inline(always)]
     fn div2(a: Self, b: Self, d: Self) -> (Self, Self) {
@@ -185,5 +230,17 @@ impl<const N: usize, const FMA: bool, const WIDE: bool> Num for Lanes<N, FMA, WI
     #[inline(always)]
     fn is_zero(self) -> bool {
         self.0.iter().fold(true, |zero, &x| zero & (x == 0.0))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.map(f64::sqrt)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        self.map(f64::abs)
+    }
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        self.zip(other, |a, b| if a > b { a } else { b })
     }
 }

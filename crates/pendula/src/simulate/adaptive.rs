@@ -1,7 +1,7 @@
 //! The adaptive loop of the embedded pairs: attempt a step, let the PI controller judge its
 //! error estimate, accept or reject it, and land on the end time exactly. It can pause after
 //! an accepted step and continue from the [`RunState`] it hands back
-//! ([`crate::resume::solve_resumable`]).
+//! ([`crate::simulate::resume::solve_resumable`]).
 
 use crate::Error;
 use crate::checkpoint::{Leg, Pause, Reader, RunState, Snapshot, Words};
@@ -63,7 +63,7 @@ pub(crate) fn run<M: Model>(
     let Scheme::Embedded(tableau) = method.scheme else {
         return Err(Error::UnmetRequirement {
             method: method.name,
-            needs: "fixed steps (--dt)",
+            needs: "fixed steps (a step size h)",
             reason: "tolerances apply to methods with an error estimate".into(),
             suggestion: "dopri5 or dop853 for adaptive steps",
         });
@@ -71,7 +71,7 @@ pub(crate) fn run<M: Model>(
     tol.validate()?;
     if !(t_end.is_finite() && t_end > 0.0) {
         return Err(Error::InvalidValue {
-            name: "t-end".into(),
+            name: "t_end".into(),
             value: t_end,
             allowed: "the end time must be finite and > 0",
         });

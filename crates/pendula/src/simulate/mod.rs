@@ -1,13 +1,15 @@
 //! The run loop: a [`Simulation`] drives a stepper over a system and shows every state to
 //! an observer; [`solve`] does the same for a catalogued [`Model`] and a [`Method`] chosen
-//! at run time, and [`crate::resume::solve_resumable`] also pauses and continues it bit for bit
-//! ([`crate::checkpoint`]). The adaptive loop is in [`crate::adaptive`].
+//! at run time, and [`crate::simulate::resume::solve_resumable`] also pauses and continues it bit for bit
+//! ([`crate::checkpoint`]). The adaptive loop is in [`crate::simulate::adaptive`].
+
+pub mod adaptive;
+pub mod resume;
 
 use std::cell::Cell;
 
 use crate::Error;
-pub use crate::adaptive::solve_adaptive;
-use crate::checkpoint::{Leg, Pause, Pausing, RunState, Snapshot};
+use crate::checkpoint::{Leg, Pause, RunState, Snapshot};
 use crate::control::Tolerances;
 use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::explicit_rk::ExplicitRk;
@@ -15,7 +17,9 @@ use crate::integrator::gauss_legendre::Collocation;
 use crate::integrator::partitioned::PartitionedStepper;
 use crate::integrator::tao::TaoStepper;
 use crate::integrator::{Method, Requirement, Scheme, Stepper};
+use crate::observe::Pausing;
 use crate::observe::{Observer, Sample};
+pub use crate::simulate::adaptive::solve_adaptive;
 use crate::system::{Hamiltonian, Model, System};
 
 /// More steps than this is surely a mistake (10¹³ steps take days).
@@ -59,7 +63,7 @@ impl RunSpec {
             |name: &str, value: f64, allowed| Error::InvalidValue { name: name.to_owned(), value, allowed };
         let h = self.h;
         if !(h.is_finite() && h > 0.0) {
-            return Err(invalid("dt", h, "the step size must be finite and > 0"));
+            return Err(invalid("h", h, "the step size must be finite and > 0"));
         }
         if !self.t0.is_finite() {
             return Err(invalid("t0", self.t0, "the start time must be finite"));
@@ -77,11 +81,11 @@ impl RunSpec {
             End::Time(t_end) => {
                 let span = t_end - self.t0;
                 if !(t_end.is_finite() && span > 0.0) {
-                    return Err(invalid("t-end", t_end, "the end time must be finite and > 0"));
+                    return Err(invalid("t_end", t_end, "the end time must be finite and > 0"));
                 }
                 let ratio = span / h;
                 if ratio > MAX_STEPS {
-                    return Err(invalid("dt", h, "the step size gives more than 10^13 steps"));
+                    return Err(invalid("h", h, "the step size gives more than 10^13 steps"));
                 }
                 // A whole number of steps up to rounding (10/1e-3 = 9999.999…): keep every
                 // step at h, as a fixed-step user expects, and land on t_end exactly.
@@ -269,7 +273,7 @@ pub fn solve<M: Model>(
     spec: &RunSpec,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
-    match crate::resume::solve_resumable(
+    match crate::simulate::resume::solve_resumable(
         model,
         method,
         y0,

@@ -2,9 +2,10 @@
 //! [`crate::solve`] and [`crate::solve_adaptive`] (see [`crate::checkpoint`]).
 
 use crate::Error;
-use crate::checkpoint::{Leg, Pause, Pausing, RunState, Snapshot};
+use crate::checkpoint::{Leg, Pause, RunState, Snapshot};
 use crate::integrator::{Method, Stepper};
 use crate::observe::Observer;
+use crate::observe::Pausing;
 use crate::simulate::{Counted, Drive, Report, RunSpec, Simulation, Stepping, ToVelocities, dispatch};
 use crate::system::Model;
 
@@ -34,7 +35,7 @@ pub fn solve_resumable<M: Model>(
             dispatch(model, method, spec.h, Resumable { y0, spec, observer, from, pause })
         }
         Stepping::Adaptive { t_end, h0, tol } => {
-            crate::adaptive::run(model, method, y0, *t_end, *h0, tol, observer, from, pause)
+            crate::simulate::adaptive::run(model, method, y0, *t_end, *h0, tol, observer, from, pause)
         }
     }
 }

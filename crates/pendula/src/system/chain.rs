@@ -12,10 +12,13 @@
 
 use std::f64::consts::PI;
 
-use num_dual::DualNum;
+use num_dual::Dual64;
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian};
+use super::{
+    Domain, Energy, Equations, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian,
+};
 use crate::Error;
+use crate::num::Num;
 
 /// The most links a chain may have: its matrices live on the stack, sized for it.
 pub const MAX_LINKS: usize = 8;
@@ -25,16 +28,18 @@ pub const MAX_LINKS: usize = 8;
 /// State y = (θ₁…θₙ, ω₁…ωₙ): angles from the downward vertical (rad) and angular
 /// velocities (rad/s). Its Hamiltonian is not separable (for n ≥ 2): symplectic methods
 /// run on [`ChainForm`] (implicit Gauss–Legendre).
+///
+/// The parameters are of any [`Num`] type (its equations are written once, [`Equations`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Chain {
+pub struct Chain<T = f64> {
     /// Number of links n, 1 to [`MAX_LINKS`].
     pub n: usize,
     /// Masses m₁…mₙ, kg (entries past n unused).
-    pub m: [f64; MAX_LINKS],
+    pub m: [T; MAX_LINKS],
     /// Rod lengths l₁…lₙ, m (entries past n unused).
-    pub l: [f64; MAX_LINKS],
+    pub l: [T; MAX_LINKS],
     /// Gravitational acceleration g, m/s².
-    pub g: f64,
+    pub g: T,
 }
 
 macro_rules! link {
@@ -153,7 +158,6 @@ const fn member_info(n: usize, parameters: &'static [Quantity], states: &'static
         description: "planar N-link pendulum (links = 1..8), mass-matrix form M(th) th'' = f and Hamiltonian form",
         parameters: parameters.split_at(2 + 2 * n).0,
         state: states.split_at(2 * n).0,
-        build: |v| Box::new(Chain::from_values(v)),
         variant: None,
         dimensionless: false,
         study_periods: 0.5,
@@ -192,22 +196,32 @@ fn member(settings: &[(String, f64)]) -> Result<&'static SystemInfo, Error> {
     Ok(&MEMBERS[links as usize - 1])
 }
 
-impl Chain {
+impl<T: Copy> Chain<T> {
+    /// The same chain with each parameter converted by `f` (to dual numbers, to lanes).
+    pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> Chain<U> {
+        Chain { n: self.n, m: self.m.map(&f), l: self.l.map(&f), g: f(self.g) }
+    }
+}
+
+/// The equations, written once over every number type.
+impl<T: Num> Chain<T> {
     /// μₖ = Σ_{i ≥ k} mᵢ: the mass below joint k, kg.
-    fn hanging(&self) -> [f64; MAX_LINKS] {
-        let mut mu = [0.0; MAX_LINKS];
-        let mut sum = 0.0;
+    #[inline(always)]
+    fn hanging(&self) -> [T; MAX_LINKS] {
+        let mut mu = [T::splat(0.0); MAX_LINKS];
+        let mut sum = T::splat(0.0);
         for k in (0..self.n).rev() {
-            sum += self.m[k];
+            sum = sum + self.m[k];
             mu[k] = sum;
         }
         mu
     }
 
     /// Mass matrix M(θ) (upper-left n × n block), kg m².
-    fn mass_matrix<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T]) -> [[T; MAX_LINKS]; MAX_LINKS] {
+    #[inline(always)]
+    fn mass_matrix(&self, theta: &[T]) -> [[T; MAX_LINKS]; MAX_LINKS] {
         let mu = self.hanging();
-        let mut mass = [[T::zero(); MAX_LINKS]; MAX_LINKS];
+        let mut mass = [[T::splat(0.0); MAX_LINKS]; MAX_LINKS];
         for i in 0..self.n {
             for j in 0..self.n {
                 mass[i][j] = (theta[i] - theta[j]).cos() * (mu[i.max(j)] * self.l[i] * self.l[j]);
@@ -216,22 +230,23 @@ impl Chain {
         mass
     }
 
-    /// θ'' = M⁻¹ f over any number type: f64 for [`System::rhs`], dual numbers for the
-    /// Jacobian (one code path, so the two cannot disagree).
-    fn accelerations<T: DualNum<Primitive = f64> + Copy>(&self, y: &[T], out: &mut [T]) {
+    /// θ'' = M⁻¹ f at y = (θ, ω).
+    #[inline(always)]
+    pub fn accelerations(&self, y: &[T], out: &mut [T]) {
         let n = self.n;
         let (theta, omega) = y.split_at(n);
         let mu = self.hanging();
         let mass = self.mass_matrix(theta);
-        let mut f = [T::zero(); MAX_LINKS];
+        let mut f = [T::splat(0.0); MAX_LINKS];
         for i in 0..n {
             let mut fi = theta[i].sin() * (-mu[i] * self.g * self.l[i]);
             for j in 0..n {
                 if j != i {
-                    fi -= (theta[i] - theta[j]).sin()
-                        * omega[j]
-                        * omega[j]
-                        * (mu[i.max(j)] * self.l[i] * self.l[j]);
+                    fi = fi
+                        - (theta[i] - theta[j]).sin()
+                            * omega[j]
+                            * omega[j]
+                            * (mu[i.max(j)] * self.l[i] * self.l[j]);
                 }
             }
             f[i] = fi;
@@ -240,6 +255,36 @@ impl Chain {
         out[..n].copy_from_slice(&f[..n]);
     }
 
+    /// ω = M⁻¹ p.
+    #[inline(always)]
+    fn velocities(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        let mut w = [T::splat(0.0); MAX_LINKS];
+        w[..self.n].copy_from_slice(&p[..self.n]);
+        solve_spd(self.n, self.mass_matrix(theta), &mut w);
+        out[..self.n].copy_from_slice(&w[..self.n]);
+    }
+
+    /// ∂H/∂θ (see the module's formula).
+    #[inline(always)]
+    fn dh_dtheta(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        let n = self.n;
+        let mu = self.hanging();
+        let mut w = [T::splat(0.0); MAX_LINKS];
+        self.velocities(theta, p, &mut w);
+        for k in 0..n {
+            let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
+            for j in 0..n {
+                if j != k {
+                    d = d
+                        + (theta[k] - theta[j]).sin() * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
+                }
+            }
+            out[k] = d;
+        }
+    }
+}
+
+impl Chain {
     /// Potential energy V = −Σ μₖ g lₖ cos θₖ, J (zero with every rod horizontal).
     pub fn potential(&self, theta: &[f64]) -> f64 {
         let mu = self.hanging();
@@ -259,50 +304,27 @@ impl Chain {
         t
     }
 
-    /// ω = M⁻¹ p over any number type.
-    fn velocities<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        let mut w = [T::zero(); MAX_LINKS];
-        w[..self.n].copy_from_slice(&p[..self.n]);
-        solve_spd(self.n, self.mass_matrix(theta), &mut w);
-        out[..self.n].copy_from_slice(&w[..self.n]);
-    }
-
-    /// ∂H/∂θ over any number type (see the module's formula).
-    fn dh_dtheta<T: DualNum<Primitive = f64> + Copy>(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        let n = self.n;
-        let mu = self.hanging();
-        let mut w = [T::zero(); MAX_LINKS];
-        self.velocities(theta, p, &mut w);
-        for k in 0..n {
-            let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
-            for j in 0..n {
-                if j != k {
-                    d += (theta[k] - theta[j]).sin() * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
-                }
-            }
-            out[k] = d;
-        }
+    /// The parameters as dual numbers (constants), for Jacobians.
+    fn dual(&self) -> Chain<Dual64> {
+        self.map(Dual64::from)
     }
 }
 
 /// Solves M x = b in place for a symmetric positive definite n × n M by Cholesky
 /// factorisation (M is a mass matrix), on the stack.
-fn solve_spd<T: DualNum<Primitive = f64> + Copy>(
-    n: usize,
-    mut a: [[T; MAX_LINKS]; MAX_LINKS],
-    b: &mut [T; MAX_LINKS],
-) {
+#[inline(always)]
+fn solve_spd<T: Num>(n: usize, mut a: [[T; MAX_LINKS]; MAX_LINKS], b: &mut [T; MAX_LINKS]) {
     for j in 0..n {
         let mut d = a[j][j];
         for &v in &a[j][..j] {
-            d -= v * v;
+            d = d - v * v;
         }
         let d = d.sqrt();
         a[j][j] = d;
         for i in j + 1..n {
             let mut s = a[i][j];
             for (x, y) in a[i][..j].iter().zip(&a[j][..j]) {
-                s -= *x * *y;
+                s = s - *x * *y;
             }
             a[i][j] = s / d;
         }
@@ -310,14 +332,14 @@ fn solve_spd<T: DualNum<Primitive = f64> + Copy>(
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {
-            s -= a[i][k] * b[k];
+            s = s - a[i][k] * b[k];
         }
         b[i] = s / a[i][i];
     }
     for i in (0..n).rev() {
         let mut s = b[i];
         for k in i + 1..n {
-            s -= a[k][i] * b[k];
+            s = s - a[k][i] * b[k];
         }
         b[i] = s / a[i][i];
     }
@@ -326,15 +348,29 @@ fn solve_spd<T: DualNum<Primitive = f64> + Copy>(
 impl Model for Chain {
     type Form = ChainForm;
     const INFO: &'static SystemInfo = &INFO;
+    const DIM: usize = 2 * MAX_LINKS;
+
+    type Over<T: Num> = Chain<T>;
+
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> Chain<T> {
+        self.map(f)
+    }
+
+    fn over<T: Num>(setting: &dyn Fn(&str) -> f64, v: &dyn Fn(&str) -> T) -> Chain<T> {
+        const M: [&str; MAX_LINKS] = ["m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8"];
+        const L: [&str; MAX_LINKS] = ["l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8"];
+        let n = setting("links") as usize;
+        // Links past n are unused (zero).
+        Chain {
+            n,
+            m: std::array::from_fn(|k| if k < n { v(M[k]) } else { T::splat(0.0) }),
+            l: std::array::from_fn(|k| if k < n { v(L[k]) } else { T::splat(0.0) }),
+            g: v("g"),
+        }
+    }
 
     fn from_values(v: &Values) -> Self {
-        let n = v.get("links") as usize;
-        let mut chain = Chain { n, m: [0.0; MAX_LINKS], l: [0.0; MAX_LINKS], g: v.get("g") };
-        for k in 0..n {
-            chain.m[k] = v.get(&format!("m{}", k + 1));
-            chain.l[k] = v.get(&format!("l{}", k + 1));
-        }
-        chain
+        Self::over(&|n| v.get(n), &|n| v.get(n))
     }
 
     fn info(&self) -> &'static SystemInfo {
@@ -372,28 +408,34 @@ impl Model for Chain {
     }
 }
 
-impl System for Chain {
-    fn dim(&self) -> usize {
-        2 * self.n
-    }
-
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+/// θ' = ω, θ'' = M⁻¹ f.
+impl<T: Num> Equations<T> for Chain<T> {
+    #[inline(always)]
+    fn rhs(&self, _t: T, y: &[T], dydt: &mut [T]) {
         let n = self.n;
         dydt[..n].copy_from_slice(&y[n..2 * n]);
         self.accelerations(y, &mut dydt[n..]);
     }
 
-    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
-        let n = self.n;
-        dual_jacobian(
-            2 * n,
-            |y, out| {
-                out[..n].copy_from_slice(&y[n..]);
-                self.accelerations(y, &mut out[n..]);
-            },
-            y,
-            jac,
-        );
+    /// 2 max |θₖ|: the angles and their differences.
+    #[inline(always)]
+    fn trig_reach(&self, _t: T, y: &[T]) -> T {
+        super::reach(&y[..self.n])
+    }
+}
+
+impl System for Chain {
+    fn dim(&self) -> usize {
+        2 * self.n
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        Equations::rhs(self, t, y, dydt);
+    }
+
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {
+        let dual = self.dual();
+        dual_jacobian(2 * self.n, |y, out| Equations::rhs(&dual, Dual64::from(t), y, out), y, jac);
         true
     }
 }
@@ -428,13 +470,14 @@ impl System for ChainForm {
     }
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
         let n = self.chain.n;
+        let dual = self.chain.dual();
         dual_jacobian(
             2 * n,
             |y, out| {
                 let (q, p) = y.split_at(n);
                 let (dq, dp) = out.split_at_mut(n);
-                self.chain.velocities(q, p, dq);
-                self.chain.dh_dtheta(q, p, dp);
+                dual.velocities(q, p, dq);
+                dual.dh_dtheta(q, p, dp);
                 for v in dp.iter_mut() {
                     *v = -*v;
                 }

@@ -5,7 +5,9 @@ use std::f64::consts::PI;
 
 use num_dual::Dual64;
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian};
+use super::{
+    Domain, Energy, Equations, Hamiltonian, Model, Quantity, System, SystemInfo, Values, dual_jacobian,
+};
 use crate::num::Num;
 
 /// Two point masses on massless rigid rods, the second hung from the first.
@@ -149,7 +151,6 @@ pub static INFO: SystemInfo = SystemInfo {
             description: "angular velocity of the second rod",
         },
     ],
-    build: |v| Box::new(DoublePendulum::from_values(v)),
     variant: None,
     dimensionless: false,
     study_periods: 1.0,
@@ -310,8 +311,7 @@ impl<T: Num> DoublePendulum<T> {
 
     /// The rows of [`DoublePendulum::accelerations_from`] with the generalized forces added
     /// (Q₁ / l₁, Q₂ / (m₂ l₂)); out of line, so that they cost the free pendulum nothing.
-    #[cold]
-    #[inline(never)]
+    #[inline(always)]
     fn add_forces(&self, t: T, w1: T, w2: T, r1: T, r2: T) -> (T, T) {
         let [q1, q2] = self.generalized_forces(t, w1, w2);
         (r1 + q1 / self.l1, r2 + q2 / (self.m2 * self.l2))
@@ -360,25 +360,52 @@ impl<T: Num> DoublePendulum<T> {
     }
 }
 
+/// θ' = ω, θ'' from [`DoublePendulum::accelerations`].
+impl<T: Num> Equations<T> for DoublePendulum<T> {
+    #[inline(always)]
+    fn rhs(&self, t: T, y: &[T], dydt: &mut [T]) {
+        let y: &[T; 4] = y.try_into().expect("four state variables");
+        let [a1, a2] = self.accelerations(t, y);
+        dydt.copy_from_slice(&[y[2], y[3], a1, a2]);
+    }
+
+    /// 2 max |θᵢ| (the angles and their difference), and the drive's phase Ω t.
+    #[inline(always)]
+    fn trig_reach(&self, t: T, y: &[T]) -> T {
+        let angles = super::reach(&y[..2]);
+        if self.drive_amplitude.is_zero() { angles } else { angles.max((self.drive_frequency * t).abs()) }
+    }
+}
+
 impl Model for DoublePendulum {
     type Form = DoublePendulumForm;
     const INFO: &'static SystemInfo = &INFO;
+    const DIM: usize = 4;
+    type Over<T: Num> = DoublePendulum<T>;
+
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> DoublePendulum<T> {
+        self.map(f)
+    }
+
+    fn over<T: Num>(_: &dyn Fn(&str) -> f64, v: &dyn Fn(&str) -> T) -> DoublePendulum<T> {
+        DoublePendulum {
+            m1: v("m1"),
+            m2: v("m2"),
+            l1: v("l1"),
+            l2: v("l2"),
+            g: v("g"),
+            damping: v("damping"),
+            drive_amplitude: v("drive_amplitude"),
+            drive_frequency: v("drive_frequency"),
+        }
+    }
 
     fn autonomous(&self) -> bool {
         self.drive_amplitude == 0.0
     }
 
     fn from_values(v: &Values) -> Self {
-        DoublePendulum {
-            m1: v.get("m1"),
-            m2: v.get("m2"),
-            l1: v.get("l1"),
-            l2: v.get("l2"),
-            g: v.get("g"),
-            damping: v.get("damping"),
-            drive_amplitude: v.get("drive_amplitude"),
-            drive_frequency: v.get("drive_frequency"),
-        }
+        Self::over(&|n| v.get(n), &|n| v.get(n))
     }
 
     fn hamiltonian_form(&self) -> Result<DoublePendulumForm, String> {
@@ -427,9 +454,7 @@ impl System for DoublePendulum {
     /// θ' = ω and θ'' from [`DoublePendulum::accelerations`] (bit-identical to the benchmark
     /// peers' C reference).
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        let y: &[f64; 4] = y.try_into().expect("four state variables");
-        let [a1, a2] = self.accelerations(t, y);
-        dydt.copy_from_slice(&[y[2], y[3], a1, a2]);
+        Equations::rhs(self, t, y, dydt);
     }
 
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) -> bool {

@@ -7,7 +7,8 @@
 //! q = 2, ω_D = 2/3 throughout their study, the drive amplitude g choosing the regime.
 
 use super::pendulum::PendulumForm;
-use super::{Domain, Energy, Model, Quantity, System, SystemInfo, Values};
+use super::{Domain, Energy, Equations, Model, Quantity, System, SystemInfo, Values};
+use crate::num::Num;
 
 /// The damped, driven pendulum θ'' = −θ'/q − sin θ + g cos(ω_D t), dimensionless: time in
 /// units of 1/ω₀, energy in units of m g l.
@@ -15,13 +16,13 @@ use super::{Domain, Energy, Model, Quantity, System, SystemInfo, Values};
 /// State y = (θ, ω). Damped, so it has no Hamiltonian form; its Lyapunov spectrum sums to
 /// the trace of the Jacobian, −1/q.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DrivenPendulum {
+pub struct DrivenPendulum<T = f64> {
     /// Quality factor q (the damping rate is 1/q).
-    pub q: f64,
+    pub q: T,
     /// Drive amplitude g.
-    pub drive_amplitude: f64,
+    pub drive_amplitude: T,
     /// Drive angular frequency ω_D, in units of ω₀.
-    pub drive_frequency: f64,
+    pub drive_frequency: T,
 }
 
 /// Catalogue entry of [`DrivenPendulum`]; the defaults are Baker and Gollub's chaotic
@@ -68,7 +69,6 @@ pub static INFO: SystemInfo = SystemInfo {
             description: "angular velocity (in units of the small-angle frequency)",
         },
     ],
-    build: |v| Box::new(DrivenPendulum::from_values(v)),
     variant: None,
     dimensionless: true,
     study_periods: 1.6,
@@ -136,10 +136,34 @@ pub fn find_preset(name: &str) -> Result<&'static Preset, crate::Error> {
     })
 }
 
-impl DrivenPendulum {
+/// The equations, written once over every number type.
+impl<T: Num> DrivenPendulum<T> {
     /// The drive g cos(ω_D t).
-    fn drive(&self, t: f64) -> f64 {
+    #[inline(always)]
+    fn drive(&self, t: T) -> T {
         self.drive_amplitude * (self.drive_frequency * t).cos()
+    }
+
+    /// ω' = −ω/q − sin θ + g c, from c = cos(ω_D t): the ensemble engine's stroboscopic
+    /// kernel (`crate::ensemble::driven`) takes the cosine from a table shared by its lanes.
+    #[inline(always)]
+    pub fn acceleration(&self, theta: T, omega: T, cos_phase: T) -> T {
+        -omega / self.q - theta.sin() + self.drive_amplitude * cos_phase
+    }
+}
+
+/// θ' = ω, ω' = −ω/q − sin θ + g cos(ω_D t).
+impl<T: Num> Equations<T> for DrivenPendulum<T> {
+    #[inline(always)]
+    fn rhs(&self, t: T, y: &[T], dydt: &mut [T]) {
+        dydt[0] = y[1];
+        dydt[1] = self.acceleration(y[0], y[1], (self.drive_frequency * t).cos());
+    }
+
+    /// 2 |θ| and the drive's phase ω_D t.
+    #[inline(always)]
+    fn trig_reach(&self, t: T, y: &[T]) -> T {
+        super::reach(&y[..1]).max((self.drive_frequency * t).abs())
     }
 }
 
@@ -147,17 +171,32 @@ impl Model for DrivenPendulum {
     /// Never built: the damped pendulum has no Hamiltonian form.
     type Form = PendulumForm;
     const INFO: &'static SystemInfo = &INFO;
+    const DIM: usize = 2;
 
     fn autonomous(&self) -> bool {
         self.drive_amplitude == 0.0
     }
 
-    fn from_values(v: &Values) -> Self {
+    type Over<T: Num> = DrivenPendulum<T>;
+
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> DrivenPendulum<T> {
         DrivenPendulum {
-            q: v.get("q"),
-            drive_amplitude: v.get("drive_amplitude"),
-            drive_frequency: v.get("drive_frequency"),
+            q: f(self.q),
+            drive_amplitude: f(self.drive_amplitude),
+            drive_frequency: f(self.drive_frequency),
         }
+    }
+
+    fn over<T: Num>(_: &dyn Fn(&str) -> f64, v: &dyn Fn(&str) -> T) -> DrivenPendulum<T> {
+        DrivenPendulum {
+            q: v("q"),
+            drive_amplitude: v("drive_amplitude"),
+            drive_frequency: v("drive_frequency"),
+        }
+    }
+
+    fn from_values(v: &Values) -> Self {
+        Self::over(&|n| v.get(n), &|n| v.get(n))
     }
 
     fn hamiltonian_form(&self) -> Result<PendulumForm, String> {
@@ -195,8 +234,7 @@ impl System for DrivenPendulum {
     }
 
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = y[1];
-        dydt[1] = -y[1] / self.q - y[0].sin() + self.drive(t);
+        Equations::rhs(self, t, y, dydt);
     }
 
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {

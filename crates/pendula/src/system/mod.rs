@@ -1,10 +1,13 @@
-//! Physical systems: the [`System`] trait and its capabilities, and the [`CATALOGUE`].
+//! Physical systems: the [`System`] trait and its capabilities, and each system (its
+//! catalogue entry [`SystemInfo`] and its equations). The list of them is
+//! `crate::model::CATALOGUE`, in the layer above.
 //!
 //! A system is a first-order ODE y' = f(t, y) ([`System`]). What else it offers is a
 //! separate small trait: [`Energy`] (its mechanical energy T + V) and [`Hamiltonian`]
 //! (its canonical form on (q, p), needed by symplectic methods). [`Model`] ties a catalogued
-//! system to its parameters and to its Hamiltonian form, and [`DynModel`] is its
-//! object-safe face for the command line.
+//! system to its parameters and to its Hamiltonian form, and [`DynSystem`] is its
+//! object-safe face for the command line. This layer imports nothing from the integrators,
+//! the run loop, the observers or the ensemble engine: they are built on it.
 
 pub mod chain;
 pub mod double;
@@ -13,9 +16,7 @@ pub mod oscillator;
 pub mod pendulum;
 
 use crate::Error;
-use crate::integrator::Method;
-use crate::observe::Observer;
-use crate::simulate::{Report, RunSpec};
+use crate::num::Num;
 
 /// A first-order ODE system y' = f(t, y).
 pub trait System {
@@ -31,6 +32,35 @@ pub trait System {
         let _ = (t, y, jac);
         false
     }
+}
+
+/// A system's equations of motion over a number type `T` ([`Num`]: `f64`, dual numbers for
+/// Jacobians, [`crate::num::Lanes`] for the ensemble engine), written once: the scalar
+/// [`System::rhs`] of a catalogued system is its `Equations<f64>::rhs`.
+pub trait Equations<T: Num>: Send + Sync {
+    /// Writes f(t, y) into `dydt`; both slices have the system's dimension.
+    fn rhs(&self, t: T, y: &[T], dydt: &mut [T]);
+
+    /// A bound on |x| over the arguments x of every sine and cosine [`Equations::rhs`] takes
+    /// at (t, y): the lanes' branch-free trigonometry serves |x| ≤ 2²⁰ rad
+    /// ([`crate::num::trig::FAST_RANGE`]), and a lane group whose bound goes beyond runs
+    /// again with the exact reduction. By default 2 maxᵢ |yᵢ| (angles and their differences);
+    /// systems with a drive add its phase.
+    fn trig_reach(&self, t: T, y: &[T]) -> T {
+        let _ = t;
+        reach(y)
+    }
+}
+
+/// 2 maxᵢ |yᵢ|: a bound on every angle of `y` and every difference of two (see
+/// [`Equations::trig_reach`]).
+#[inline(always)]
+pub fn reach<T: Num>(y: &[T]) -> T {
+    let mut r = T::splat(0.0);
+    for &v in y {
+        r = v.abs().max(r);
+    }
+    r + r
 }
 
 /// A system whose mechanical energy T + V can be evaluated, J.
@@ -134,7 +164,7 @@ impl Quantity {
 /// Picks a family's member from (name, value) settings (see [`SystemInfo::variant`]).
 pub type Variant = fn(&[(String, f64)]) -> Result<&'static SystemInfo, Error>;
 
-/// A catalogue entry: a system's name, its quantities, and how to build it.
+/// A catalogue entry: a system's name, its quantities and its units.
 pub struct SystemInfo {
     /// Name used on the command line.
     pub name: &'static str,
@@ -144,8 +174,6 @@ pub struct SystemInfo {
     pub parameters: &'static [Quantity],
     /// State variables (positions, then velocities), in the order of the state vector.
     pub state: &'static [Quantity],
-    /// Builds the system from validated values.
-    pub build: fn(&Values) -> Box<dyn DynModel>,
     /// For a family of systems whose quantities depend on a setting (the chain's `links`):
     /// the member the settings choose, whose entry [`SystemInfo::values`] then uses. This
     /// entry lists the quantities of the largest member, so that names can be checked early.
@@ -167,19 +195,6 @@ impl std::fmt::Debug for SystemInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SystemInfo").field("name", &self.name).finish_non_exhaustive()
     }
-}
-
-/// Every system pendula knows, in the order `pendula list systems` shows them.
-pub static CATALOGUE: &[&SystemInfo] =
-    &[&oscillator::INFO, &pendulum::INFO, &double::INFO, &chain::INFO, &driven::INFO];
-
-/// Looks a system up by name.
-pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
-    CATALOGUE.iter().copied().find(|s| s.name == name).ok_or_else(|| Error::UnknownSystem {
-        name: name.to_owned(),
-        valid: CATALOGUE.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
-        suggestions: crate::error::suggestions(name, CATALOGUE.iter().map(|s| s.name)),
-    })
 }
 
 impl SystemInfo {
@@ -267,11 +282,6 @@ impl Values {
     pub fn initial_state(&self) -> &[f64] {
         &self.values[self.info.parameters.len()..]
     }
-
-    /// Builds the system.
-    pub fn build(&self) -> Box<dyn DynModel> {
-        (self.info.build)(self)
-    }
 }
 
 /// A catalogued system: built from [`Values`], with its Hamiltonian form when it has one.
@@ -283,6 +293,17 @@ pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     type Form: Hamiltonian + Energy;
     /// Catalogue entry of this system.
     const INFO: &'static SystemInfo;
+    /// The dimension of the state (for a family, the largest member's: the chain's 16): the
+    /// ensemble engine's kernels are compiled for it, their loops unrolled.
+    const DIM: usize;
+    /// The same system over another number type ([`Equations`]); `Over<f64>` is `Self`.
+    type Over<T: Num>: Equations<T>;
+    /// The system over `T`, each parameter `name` being `value(name)` (lanes: one member's
+    /// value per lane), structural settings (the chain's `links`, the small-angle flag) read
+    /// from `setting(name)` (the same for every lane).
+    fn over<T: Num>(setting: &dyn Fn(&str) -> f64, value: &dyn Fn(&str) -> T) -> Self::Over<T>;
+    /// This system over `T`, each parameter converted by `f` (one lane, dual numbers).
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> Self::Over<T>;
     /// Builds the system from validated values.
     fn from_values(values: &Values) -> Self;
     /// The Hamiltonian form, or why there is none (for example, damping).
@@ -326,8 +347,9 @@ pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     fn time_scale(&self) -> f64;
 }
 
-/// The object-safe face of a [`Model`], used where the system is chosen at run time.
-pub trait DynModel: Send + Sync {
+/// The object-safe face of a [`Model`]'s physics, used where the system is chosen at run
+/// time; `crate::model::DynModel` adds the runs.
+pub trait DynSystem: Send + Sync {
     /// Catalogue entry.
     fn info(&self) -> &'static SystemInfo;
     /// Mechanical energy at (t, y), J.
@@ -352,40 +374,9 @@ pub trait DynModel: Send + Sync {
     /// Ok when the system is Hamiltonian and autonomous, so that its energy is conserved;
     /// otherwise why not.
     fn conserves_energy(&self) -> Result<(), String>;
-    /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
-    /// (see [`crate::simulate::solve`]).
-    fn solve(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        spec: &RunSpec,
-        observer: &mut dyn Observer,
-    ) -> Result<Report, Error>;
-    /// Runs an embedded pair with adaptive steps to `t_end` (see
-    /// [`crate::simulate::solve_adaptive`]).
-    fn solve_adaptive(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        t_end: f64,
-        h0: Option<f64>,
-        tol: &crate::control::Tolerances,
-        observer: &mut dyn Observer,
-    ) -> Result<Report, Error>;
-    /// Runs `method` from `y0` as `stepping` says, able to pause and to continue from a
-    /// paused state (see [`crate::resume::solve_resumable`]).
-    fn solve_resumable(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        stepping: &crate::simulate::Stepping<'_>,
-        observer: &mut dyn Observer,
-        from: Option<&crate::checkpoint::RunState>,
-        pause: &crate::checkpoint::Pause<'_>,
-    ) -> Result<crate::checkpoint::Leg<Report>, Error>;
 }
 
-impl<M: Model> DynModel for M {
+impl<M: Model> DynSystem for M {
     fn info(&self) -> &'static SystemInfo {
         Model::info(self)
     }
@@ -424,42 +415,11 @@ impl<M: Model> DynModel for M {
         }
         Ok(())
     }
-    fn solve(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        spec: &RunSpec,
-        observer: &mut dyn Observer,
-    ) -> Result<Report, Error> {
-        crate::simulate::solve(self, method, y0, spec, observer)
-    }
-    fn solve_adaptive(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        t_end: f64,
-        h0: Option<f64>,
-        tol: &crate::control::Tolerances,
-        observer: &mut dyn Observer,
-    ) -> Result<Report, Error> {
-        crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
-    }
-    fn solve_resumable(
-        &self,
-        method: &Method,
-        y0: &[f64],
-        stepping: &crate::simulate::Stepping<'_>,
-        observer: &mut dyn Observer,
-        from: Option<&crate::checkpoint::RunState>,
-        pause: &crate::checkpoint::Pause<'_>,
-    ) -> Result<crate::checkpoint::Leg<Report>, Error> {
-        crate::resume::solve_resumable(self, method, y0, stepping, observer, from, pause)
-    }
 }
 
-/// A [`DynModel`]'s (position, velocity) ODE as a [`System`], for analyses written over
+/// A [`DynSystem`]'s (position, velocity) ODE as a [`System`], for analyses written over
 /// plain systems (Lyapunov exponents).
-pub struct AsSystem<'a>(pub &'a dyn DynModel);
+pub struct AsSystem<'a>(pub &'a dyn DynSystem);
 
 impl System for AsSystem<'_> {
     fn dim(&self) -> usize {

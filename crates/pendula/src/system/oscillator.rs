@@ -1,23 +1,24 @@
 //! The harmonic oscillator m x'' + c x' + k x = F cos(Ω t): the paper's §2, with its exact
 //! solution in every damping regime and the forced steady state.
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use super::{Domain, Energy, Equations, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use crate::num::Num;
 
 /// A mass on a linear spring with viscous damping and a harmonic driving force.
 ///
 /// State y = (x, v): displacement (m) and velocity (m/s).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Oscillator {
+pub struct Oscillator<T = f64> {
     /// Mass m, kg.
-    pub m: f64,
+    pub m: T,
     /// Spring constant k, N/m.
-    pub k: f64,
+    pub k: T,
     /// Viscous damping coefficient c, N·s/m.
-    pub c: f64,
+    pub c: T,
     /// Amplitude F of the driving force, N.
-    pub drive_amplitude: f64,
+    pub drive_amplitude: T,
     /// Angular frequency Ω of the driving force, rad/s.
-    pub drive_frequency: f64,
+    pub drive_frequency: T,
 }
 
 /// Catalogue entry of [`Oscillator`].
@@ -59,7 +60,6 @@ pub static INFO: SystemInfo = SystemInfo {
         Quantity { name: "x", unit: "m", default: 1.0, domain: Domain::Real, description: "displacement" },
         Quantity { name: "v", unit: "m/s", default: 0.0, domain: Domain::Real, description: "velocity" },
     ],
-    build: |v| Box::new(Oscillator::from_values(v)),
     variant: None,
     dimensionless: false,
     study_periods: 1.6,
@@ -186,22 +186,55 @@ impl Oscillator {
     }
 }
 
+/// x' = v, v' = (F cos(Ω t) − c v − k x) / m.
+impl<T: Num> Equations<T> for Oscillator<T> {
+    #[inline(always)]
+    fn rhs(&self, t: T, y: &[T], dydt: &mut [T]) {
+        let force = self.drive_amplitude * (self.drive_frequency * t).cos();
+        dydt[0] = y[1];
+        dydt[1] = (force - self.c * y[1] - self.k * y[0]) / self.m;
+    }
+
+    /// The drive's phase Ω t, the only argument of a cosine here.
+    #[inline(always)]
+    fn trig_reach(&self, t: T, _y: &[T]) -> T {
+        (self.drive_frequency * t).abs()
+    }
+}
+
 impl Model for Oscillator {
     type Form = OscillatorForm;
     const INFO: &'static SystemInfo = &INFO;
+    const DIM: usize = 2;
 
     fn autonomous(&self) -> bool {
         self.drive_amplitude == 0.0
     }
 
-    fn from_values(v: &Values) -> Self {
+    type Over<T: Num> = Oscillator<T>;
+
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> Oscillator<T> {
         Oscillator {
-            m: v.get("m"),
-            k: v.get("k"),
-            c: v.get("c"),
-            drive_amplitude: v.get("drive_amplitude"),
-            drive_frequency: v.get("drive_frequency"),
+            m: f(self.m),
+            k: f(self.k),
+            c: f(self.c),
+            drive_amplitude: f(self.drive_amplitude),
+            drive_frequency: f(self.drive_frequency),
         }
+    }
+
+    fn over<T: Num>(_: &dyn Fn(&str) -> f64, v: &dyn Fn(&str) -> T) -> Oscillator<T> {
+        Oscillator {
+            m: v("m"),
+            k: v("k"),
+            c: v("c"),
+            drive_amplitude: v("drive_amplitude"),
+            drive_frequency: v("drive_frequency"),
+        }
+    }
+
+    fn from_values(v: &Values) -> Self {
+        Self::over(&|n| v.get(n), &|n| v.get(n))
     }
 
     fn hamiltonian_form(&self) -> Result<OscillatorForm, String> {
@@ -248,9 +281,7 @@ impl System for Oscillator {
         2
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        let force = self.drive_amplitude * (self.drive_frequency * t).cos();
-        dydt[0] = y[1];
-        dydt[1] = (force - self.c * y[1] - self.k * y[0]) / self.m;
+        Equations::rhs(self, t, y, dydt);
     }
     fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut [f64]) -> bool {
         jac.copy_from_slice(&[0.0, 1.0, -self.k / self.m, -self.c / self.m]);

@@ -3,28 +3,30 @@
 
 use std::f64::consts::{PI, TAU};
 
-use super::{Domain, Energy, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use super::{Domain, Energy, Equations, Hamiltonian, Model, Quantity, System, SystemInfo, Values};
+use crate::num::Num;
 use crate::special::{ellip_f, ellip_k, jacobi};
 
 /// A point mass on a massless rigid rod, with optional damping, drive and small-angle form.
 ///
 /// State y = (θ, ω): angle from the downward vertical (rad) and angular velocity (rad/s).
 /// The potential is V = −m g l cos θ (zero at the pivot's height, so V(0) = −m g l; see
-/// ERRATA), and m g l (θ²/2 − 1), its small-angle expansion, when `linear` is set.
+/// ERRATA), and m g l (θ²/2 − 1), its small-angle expansion, when `linear` is set. The
+/// parameters are of any [`Num`] type (its equations are written once, [`Equations`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pendulum {
+pub struct Pendulum<T = f64> {
     /// Bob mass m, kg (scales energy and momentum, not the motion).
-    pub m: f64,
+    pub m: T,
     /// Rod length l, m.
-    pub l: f64,
+    pub l: T,
     /// Gravitational acceleration g, m/s².
-    pub g: f64,
+    pub g: T,
     /// Damping rate b in θ'' = … − b θ', 1/s.
-    pub damping: f64,
+    pub damping: T,
     /// Amplitude A of the driving angular acceleration A cos(Ω t), rad/s².
-    pub drive_amplitude: f64,
+    pub drive_amplitude: T,
     /// Angular frequency Ω of the drive, rad/s.
-    pub drive_frequency: f64,
+    pub drive_frequency: T,
     /// Small-angle form: sin θ replaced by θ.
     pub linear: bool,
 }
@@ -88,7 +90,6 @@ pub static INFO: SystemInfo = SystemInfo {
             description: "angular velocity",
         },
     ],
-    build: |v| Box::new(Pendulum::from_values(v)),
     variant: None,
     dimensionless: false,
     study_periods: 5.0,
@@ -153,10 +154,6 @@ impl Pendulum {
         }
     }
 
-    fn gravity_term(&self, theta: f64) -> f64 {
-        if self.linear { theta } else { theta.sin() }
-    }
-
     /// d/dθ of [`Pendulum::gravity_term`].
     fn gravity_slope(&self, theta: f64) -> f64 {
         if self.linear { 1.0 } else { theta.cos() }
@@ -166,34 +163,79 @@ impl Pendulum {
         let mgl = self.m * self.g * self.l;
         if self.linear { mgl * (0.5 * theta * theta - 1.0) } else { -mgl * theta.cos() }
     }
+}
 
-    fn drive(&self, t: f64) -> f64 {
-        if self.drive_amplitude == 0.0 {
-            0.0
+/// The equations, written once over every number type.
+impl<T: Num> Pendulum<T> {
+    /// sin θ, or θ in the small-angle form.
+    #[inline(always)]
+    fn gravity_term(&self, theta: T) -> T {
+        if self.linear { theta } else { theta.sin() }
+    }
+
+    /// The driving angular acceleration A cos(Ω t), rad/s².
+    #[inline(always)]
+    fn drive(&self, t: T) -> T {
+        if self.drive_amplitude.is_zero() {
+            T::splat(0.0)
         } else {
             self.drive_amplitude * (self.drive_frequency * t).cos()
         }
     }
 }
 
+/// θ' = ω, ω' = −(g/l) sin θ − b ω + A cos(Ω t).
+impl<T: Num> Equations<T> for Pendulum<T> {
+    #[inline(always)]
+    fn rhs(&self, t: T, y: &[T], dydt: &mut [T]) {
+        dydt[0] = y[1];
+        dydt[1] = -self.g / self.l * self.gravity_term(y[0]) - self.damping * y[1] + self.drive(t);
+    }
+
+    /// 2 |θ| and the drive's phase Ω t.
+    #[inline(always)]
+    fn trig_reach(&self, t: T, y: &[T]) -> T {
+        let angle = super::reach(&y[..1]);
+        if self.drive_amplitude.is_zero() { angle } else { angle.max((self.drive_frequency * t).abs()) }
+    }
+}
+
 impl Model for Pendulum {
     type Form = PendulumForm;
     const INFO: &'static SystemInfo = &INFO;
+    const DIM: usize = 2;
+    type Over<T: Num> = Pendulum<T>;
+
+    fn convert<T: Num>(&self, f: &dyn Fn(f64) -> T) -> Pendulum<T> {
+        Pendulum {
+            m: f(self.m),
+            l: f(self.l),
+            g: f(self.g),
+            damping: f(self.damping),
+            drive_amplitude: f(self.drive_amplitude),
+            drive_frequency: f(self.drive_frequency),
+            linear: self.linear,
+        }
+    }
+
+    fn over<T: Num>(setting: &dyn Fn(&str) -> f64, v: &dyn Fn(&str) -> T) -> Pendulum<T> {
+        Pendulum {
+            m: v("m"),
+            l: v("l"),
+            g: v("g"),
+            damping: v("damping"),
+            drive_amplitude: v("drive_amplitude"),
+            drive_frequency: v("drive_frequency"),
+            linear: setting("linear") == 1.0,
+        }
+    }
 
     fn autonomous(&self) -> bool {
         self.drive_amplitude == 0.0
     }
 
     fn from_values(v: &Values) -> Self {
-        Pendulum {
-            m: v.get("m"),
-            l: v.get("l"),
-            g: v.get("g"),
-            damping: v.get("damping"),
-            drive_amplitude: v.get("drive_amplitude"),
-            drive_frequency: v.get("drive_frequency"),
-            linear: v.get("linear") == 1.0,
-        }
+        Self::over(&|n| v.get(n), &|n| v.get(n))
     }
 
     fn hamiltonian_form(&self) -> Result<PendulumForm, String> {
@@ -244,8 +286,7 @@ impl System for Pendulum {
         2
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = y[1];
-        dydt[1] = -self.g / self.l * self.gravity_term(y[0]) - self.damping * y[1] + self.drive(t);
+        Equations::rhs(self, t, y, dydt);
     }
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut [f64]) -> bool {
         jac.copy_from_slice(&[0.0, 1.0, -self.g / self.l * self.gravity_slope(y[0]), -self.damping]);

@@ -1,0 +1,465 @@
+//! The ensemble engine for every catalogued system and every explicit Runge–Kutta method:
+//! a system's own equations ([`Equations`], written once) over [`Lanes`] of [`LANES`] members,
+//! the integrators' own stages ([`crate::integrator::explicit_rk`], written once), and one run
+//! loop: flips located on the cubic Hermite interpolant, members retired when they flip (if
+//! asked), the first non-finite state an error naming the member and the time.
+//!
+//! A member's bits do not depend on its lane, its lane group, its chunk or the thread count:
+//! lanes never interact. They are the bits of the same member run alone in one lane
+//! (`Lanes<1, …>`, [`solve_one`]): the same operations in the same order.
+
+use rayon::prelude::*;
+
+use super::{CHUNK, has_fma};
+
+/// Members per lane group of the engine: one AVX-512 vector per value (16, two vectors, measured
+/// slower here: every intermediate of the equations then takes two registers, and the kernel spills).
+pub const LANES: usize = 16;
+use crate::integrator::Stepper;
+use crate::integrator::explicit_rk::{
+    StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update,
+};
+use crate::num::{Lanes, Num, trig};
+use crate::observe::Observer;
+use crate::system::{Equations, Model, SystemInfo};
+use crate::{Error, Report, RunSpec, Simulation};
+
+/// The largest state the engine runs (the 8-link chain's 16 variables).
+pub const MAX_DIM: usize = 16;
+
+/// The most stages of an explicit method the engine runs (RK4's 4).
+pub const MAX_STAGES: usize = 4;
+
+type V = [f64; LANES];
+
+/// What an ensemble run of explicit steps does.
+#[derive(Debug, Clone, Copy)]
+pub struct LaneSpec {
+    /// The method's tableau (at most [`MAX_STAGES`] stages).
+    pub tableau: &'static Tableau,
+    /// Step size, s (in the system's units when dimensionless).
+    pub h: f64,
+    /// Number of steps, from t = 0.
+    pub steps: u64,
+    /// Retire a member when it first flips (an angle passes ±π).
+    pub stop_at_flip: bool,
+    /// Record flip times (implied by `stop_at_flip`).
+    pub track_flips: bool,
+}
+
+/// A member's results.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LaneOutcome {
+    /// The state at the end (or where the member retired), the first `dim` entries used.
+    pub state: [f64; MAX_DIM],
+    /// Time of the first flip, s, or NaN: where the cubic Hermite interpolant of the angle
+    /// that crossed (its values and rates at both ends of the step) passes ±π.
+    pub flip_time: f64,
+}
+
+/// Whether the engine runs `tableau` on `info`'s states: at most [`MAX_STAGES`] stages and
+/// [`MAX_DIM`] variables.
+pub fn supports(info: &SystemInfo, tableau: &Tableau) -> bool {
+    tableau.b.len() <= MAX_STAGES && info.state.len() <= MAX_DIM
+}
+
+/// Runs `count` members of the system `M` (the member entry `info`: for the chain, the
+/// member with its number of links), member i's values — every parameter then every state
+/// variable, in the order of `info`'s quantities — written by `member(i, values)`, in
+/// parallel on rayon's pool; each result is stored with `store(i, outcome, row)` into its row
+/// of `out` (rows of `row_len` values).
+///
+/// # Errors
+/// [`Error::NonFiniteMember`] for the first member (in index order) whose state became
+/// non-finite.
+///
+/// # Panics
+/// If the engine does not run the method on the system ([`supports`]): a caller's error.
+#[allow(clippy::too_many_arguments)] // the run, its members and where the results go
+pub fn run<M: Model, T: Send>(
+    info: &'static SystemInfo,
+    count: usize,
+    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    spec: &LaneSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &(dyn Fn(usize, &LaneOutcome, &mut [T]) + Sync),
+) -> Result<(), Error> {
+    assert!(supports(info, spec.tableau), "the engine runs at most 4 stages on at most 16 variables");
+    assert_eq!(out.len(), count * row_len, "one row per member");
+    let width = info.parameters.len() + info.state.len();
+    let failures: Vec<(usize, f64)> = out
+        .par_chunks_mut(CHUNK * row_len)
+        .enumerate()
+        .filter_map(|(c, rows)| {
+            let start = c * CHUNK;
+            let n = rows.len() / row_len;
+            let mut values = vec![0.0; n * width];
+            for (i, v) in values.chunks_mut(width).enumerate() {
+                member(start + i, v);
+            }
+            let mut first: Option<(usize, f64)> = None;
+            for (g, (group, rows)) in
+                values.chunks(LANES * width).zip(rows.chunks_mut(LANES * row_len)).enumerate()
+            {
+                let members: Vec<&[f64]> = group.chunks(width).collect();
+                let (outcomes, failed) = run_group::<M>(info, &members, spec);
+                for (i, (o, row)) in outcomes.iter().zip(rows.chunks_mut(row_len)).enumerate() {
+                    store(start + g * LANES + i, o, row);
+                }
+                if let Some((i, t)) = failed {
+                    first.get_or_insert((start + g * LANES + i, t));
+                }
+            }
+            first
+        })
+        .collect();
+    match failures.into_iter().min_by_key(|&(m, _)| m) {
+        Some((member, t)) => Err(Error::NonFiniteMember { member, t }),
+        None => Ok(()),
+    }
+}
+
+/// A lane group's run: `members` (at most [`LANES`]; the group is padded with copies of the
+/// last, whose results are dropped) from their values. The outcomes, and the first lane whose
+/// state became non-finite with the time.
+pub(crate) fn run_group<M: Model>(
+    info: &'static SystemInfo,
+    members: &[&[f64]],
+    spec: &LaneSpec,
+) -> (Vec<LaneOutcome>, Option<(usize, f64)>) {
+    let np = info.parameters.len();
+    let dim = info.state.len();
+    let pick = |i: usize| members[i.min(members.len() - 1)];
+    let index = |name: &str| {
+        info.parameters
+            .iter()
+            .position(|q| q.name == name)
+            .unwrap_or_else(|| panic!("{} has no {name}", info.name))
+    };
+    let mut record = Record {
+        state: std::array::from_fn(|k| {
+            if k < dim { std::array::from_fn(|i| pick(i)[np + k]) } else { [0.0; LANES] }
+        }),
+        flip_step: [-1.0; LANES],
+        ends: [[[0.0; LANES]; MAX_DIM]; 2],
+        failed_at: [f64::NAN; LANES],
+    };
+    // The angles among the positions (the flips' variables); positions come first and their
+    // rates are the velocities, dim/2 further on (every catalogued state is (q, q')).
+    let angles: Vec<usize> = (0..dim / 2).filter(|&k| info.state[k].is_angle()).collect();
+    let track = spec.track_flips || spec.stop_at_flip;
+    let setting = |name: &str| pick(0)[index(name)];
+    // Kernels are compiled per state dimension (the system's, `M::DIM`) and per number of
+    // stages, so that their loops unroll; the chain's members run padded to 16 variables
+    // (the padding stays zero: the chain's equations read and write its first 2n).
+    macro_rules! with {
+        ($fma:literal, $wide:literal, $d:literal, $s:literal) => {{
+            let eq = M::over::<Lanes<LANES, $fma, $wide>>(&setting, &|name| {
+                let k = index(name);
+                Lanes(std::array::from_fn(|i| pick(i)[k]))
+            });
+            let run = Run {
+                tableau: spec.tableau,
+                dim,
+                angles: &angles,
+                h: spec.h,
+                steps: spec.steps,
+                stop_at_flip: spec.stop_at_flip,
+            };
+            if track {
+                kernel::<_, $d, $s, $fma, $wide, true>(&eq, &run, &mut record)
+            } else {
+                kernel::<_, $d, $s, $fma, $wide, false>(&eq, &run, &mut record)
+            }
+        }};
+    }
+    macro_rules! go {
+        ($fma:literal, $wide:literal) => {{
+            let one = spec.tableau.b.len() == 1;
+            if M::DIM == 2 {
+                if one { with!($fma, $wide, 2, 1) } else { with!($fma, $wide, 2, 4) }
+            } else if M::DIM == 4 {
+                if one { with!($fma, $wide, 4, 1) } else { with!($fma, $wide, 4, 4) }
+            } else if one {
+                with!($fma, $wide, 16, 1)
+            } else {
+                with!($fma, $wide, 16, 4)
+            }
+        }};
+    }
+    // The fast trigonometry alone; if some lane's arguments went beyond its range (the
+    // record is then as it was), again with the exact reduction for those arguments.
+    let fma = has_fma();
+    let done = if fma { go!(true, false) } else { go!(false, false) };
+    if !done {
+        if fma {
+            go!(true, true);
+        } else {
+            go!(false, true);
+        }
+    }
+    let outcomes = (0..members.len())
+        .map(|i| LaneOutcome {
+            state: std::array::from_fn(|k| record.state[k][i]),
+            flip_time: flip_time(&record, &angles, dim, i, spec.h),
+        })
+        .collect();
+    let failed =
+        (0..members.len()).find(|&i| !record.failed_at[i].is_nan()).map(|i| (i, record.failed_at[i]));
+    (outcomes, failed)
+}
+
+/// A lane group's state and per-lane records, arrays over the lanes.
+struct Record {
+    state: [V; MAX_DIM],
+    /// The step in which the lane first flipped (−1: none), as a float.
+    flip_step: [f64; LANES],
+    /// The state at the start and the end of that step.
+    ends: [[V; MAX_DIM]; 2],
+    /// Time at which the lane's state became non-finite (NaN: never).
+    failed_at: [f64; LANES],
+}
+
+/// A run's parameters, for the kernel.
+struct Run<'a> {
+    tableau: &'static Tableau,
+    dim: usize,
+    angles: &'a [usize],
+    h: f64,
+    steps: u64,
+    stop_at_flip: bool,
+}
+
+/// Lane i's flip time, s (NaN: no flip): the first time, within the step of the flip, at
+/// which the cubic Hermite interpolant of an angle that crossed passes ±π.
+fn flip_time(record: &Record, angles: &[usize], dim: usize, i: usize, h: f64) -> f64 {
+    use std::f64::consts::PI;
+    let step = record.flip_step[i];
+    if step < 0.0 {
+        return f64::NAN;
+    }
+    let [before, after] = &record.ends;
+    let mut first = f64::INFINITY;
+    for &k in angles {
+        let (a, b) = (before[k][i], after[k][i]);
+        if a.abs() <= PI && b.abs() > PI {
+            let (da, db) = (before[k + dim / 2][i], after[k + dim / 2][i]);
+            first = first.min(crate::events::hermite_crossing(
+                h,
+                (step + 1.0) * h,
+                [a, da],
+                [b, db],
+                PI.copysign(b),
+            ));
+        }
+    }
+    step * h + first * h
+}
+
+/// The right-hand side of a lane group's stages, tracking (when not `WIDE`) how far the
+/// sine and cosine arguments reach.
+struct LaneRhs<'a, E, const FMA: bool, const WIDE: bool> {
+    eq: &'a E,
+    reach: Lanes<LANES, FMA, WIDE>,
+}
+
+impl<E: Equations<Lanes<LANES, FMA, WIDE>>, const FMA: bool, const WIDE: bool>
+    StageRhs<Lanes<LANES, FMA, WIDE>> for LaneRhs<'_, E, FMA, WIDE>
+{
+    #[inline(always)]
+    fn eval(&mut self, t: f64, y: &[Lanes<LANES, FMA, WIDE>], dydt: &mut [Lanes<LANES, FMA, WIDE>]) {
+        let t = Lanes::splat(t);
+        if !WIDE {
+            self.reach = self.eq.trig_reach(t, y).max(self.reach);
+        }
+        self.eq.rhs(t, y, dydt);
+    }
+}
+
+/// Explicit steps for a lane group, compiled for several instruction sets and chosen at run
+/// time. Branch-free per lane: retired lanes keep computing but their state is not updated; a
+/// flip's step is recorded, and its time interpolated once at the end. Not `WIDE`, the fast
+/// trigonometry alone: false, with `record` untouched, after the first step in which some
+/// lane's sine and cosine arguments ([`Equations::trig_reach`], tracked as data flow) went
+/// beyond its range; `WIDE`, every argument (true).
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx2+fma",
+    "x86_64+avx2+fma",
+    "x86_64+avx",
+    "aarch64+neon"
+))]
+#[allow(clippy::needless_range_loop)] // lane-indexed loops: the form that vectorises over lanes
+fn kernel<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const TRACK: bool>(
+    eq: &E,
+    run: &Run<'_>,
+    record: &mut Record,
+) -> bool
+where
+    E: Equations<Lanes<LANES, FMA, WIDE>>,
+{
+    use std::f64::consts::PI;
+    type L<const FMA: bool, const WIDE: bool> = Lanes<LANES, FMA, WIDE>;
+    let (dim, h, tab) = (run.dim, run.h, run.tableau);
+    let (a, c, b) = (&tab.a[..S], &tab.c[..S], &tab.b[..S]);
+    let zero = L::<FMA, WIDE>::splat(0.0);
+    let mut y: [L<FMA, WIDE>; D] = [zero; D];
+    for (v, s) in y.iter_mut().zip(&record.state) {
+        *v = Lanes(*s);
+    }
+    let mut k = [[zero; D]; S];
+    let mut active = [true; LANES];
+    let mut flip_step = [-1.0; LANES];
+    let [mut before, mut after] = [[[0.0; LANES]; MAX_DIM]; 2];
+    let mut failed_step = [-1.0; LANES];
+    let mut reach = zero;
+    let scale = h / tab.denominator;
+    for step in 0..run.steps {
+        // Times from the step index, as the scalar loop computes them.
+        let t = step as f64 * h;
+        let mut f = LaneRhs { eq, reach };
+        fixed_stages::<_, _, D>(a, c, 0, &mut k, &mut f, t, h, &y);
+        reach = f.reach;
+        let mut next = y;
+        fixed_update::<_, D>(b, &k, scale, &mut next);
+        let step_f = step as f64;
+        // Every loop below runs over the lanes innermost: one vector operation per variable.
+        let mut finite = [true; LANES];
+        for v in &next[..dim] {
+            for i in 0..LANES {
+                finite[i] &= v.0[i].is_finite();
+            }
+        }
+        for i in 0..LANES {
+            failed_step[i] = if active[i] & !finite[i] { step_f } else { failed_step[i] };
+        }
+        if TRACK {
+            let mut crosses = [false; LANES];
+            for &a in run.angles {
+                for i in 0..LANES {
+                    let (o, n) = (y[a].0[i].abs(), next[a].0[i].abs());
+                    crosses[i] |= (o <= PI) & (n > PI);
+                }
+            }
+            let mut flips = [false; LANES];
+            let mut keep = [false; LANES];
+            for i in 0..LANES {
+                flips[i] = active[i] & finite[i] & crosses[i] & (flip_step[i] < 0.0);
+                flip_step[i] = if flips[i] { step_f } else { flip_step[i] };
+                keep[i] = active[i] & finite[i];
+                active[i] = keep[i] & !(run.stop_at_flip & flips[i]);
+            }
+            // Selects, not branches: the crossing itself is located once, after the loop.
+            for c in 0..dim {
+                for i in 0..LANES {
+                    before[c][i] = if flips[i] { y[c].0[i] } else { before[c][i] };
+                    after[c][i] = if flips[i] { next[c].0[i] } else { after[c][i] };
+                    y[c].0[i] = if keep[i] { next[c].0[i] } else { y[c].0[i] };
+                }
+            }
+        } else {
+            // Nothing retires: a non-finite lane makes the whole run an error, so its state
+            // need not be kept; only the step it failed at (once) is.
+            y = next;
+            for i in 0..LANES {
+                active[i] &= finite[i];
+            }
+        }
+        if !WIDE && reach.0.iter().fold(false, |beyond, &r| beyond | (r > trig::FAST_RANGE)) {
+            return false;
+        }
+        if TRACK && !active.iter().any(|&a| a) {
+            break;
+        }
+    }
+    for (at, step) in record.failed_at.iter_mut().zip(failed_step) {
+        if step >= 0.0 {
+            *at = (step + 1.0) * h;
+        }
+    }
+    record.flip_step = flip_step;
+    record.ends = [before, after];
+    for (s, v) in record.state.iter_mut().zip(&y) {
+        *s = v.0;
+    }
+    true
+}
+
+/// One member in the engine arithmetic: an explicit tableau stepping the model's own
+/// equations over one lane (`Lanes<1, FMA, true>`: the polynomial sine and cosine, the exact
+/// reduction where an argument needs it, fused multiply-adds when `FMA`) — the bits a lane of
+/// [`run`] gives the member. A [`Stepper`] of the scalar run loop (the system it is handed is
+/// not used: the stepper holds the model's equations in its own number type).
+struct OneLane<E, const FMA: bool> {
+    tableau: &'static Tableau,
+    eq: E,
+    k: Vec<Lanes<1, FMA, true>>,
+    stage: Vec<Lanes<1, FMA, true>>,
+    y: Vec<Lanes<1, FMA, true>>,
+}
+
+impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> for OneLane<E, FMA> {
+    fn step(&mut self, _: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
+        let tab = self.tableau;
+        for (lane, v) in self.y.iter_mut().zip(y.iter()) {
+            *lane = Lanes([*v]);
+        }
+        let eq = &self.eq;
+        let mut f = |t: f64, y: &[Lanes<1, FMA, true>], dydt: &mut [Lanes<1, FMA, true>]| {
+            eq.rhs(Lanes([t]), y, dydt);
+        };
+        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, &self.y);
+        explicit_update(tab.b, &self.k, h / tab.denominator, &mut self.y);
+        for (v, lane) in y.iter_mut().zip(&self.y) {
+            *v = lane.0[0];
+        }
+        Ok(())
+    }
+}
+
+/// Runs `model` from `y0` with the explicit tableau `tableau` in the engine arithmetic (see
+/// the one-lane stepper: polynomial sine and cosine, fused multiply-adds where the CPU has them), fixed steps as `spec` says, showing every state to `observer` (without an
+/// energy: observers that need one compute it): the single-member form of [`run`], bit for bit
+/// what a lane of a sweep gives the same member.
+///
+/// # Errors
+/// An invalid `spec`; [`Error::NonFinite`] at the first non-finite state.
+pub fn solve_one<M: Model>(
+    model: &M,
+    tableau: &'static Tableau,
+    y0: &[f64],
+    spec: &RunSpec,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    fn go<M: Model, const FMA: bool>(
+        model: &M,
+        tableau: &'static Tableau,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        let n = y0.len();
+        let zero = Lanes([0.0]);
+        let mut stepper = OneLane::<_, FMA> {
+            tableau,
+            eq: model.convert(&|x| Lanes::<1, FMA, true>([x])),
+            k: vec![zero; tableau.b.len() * n],
+            stage: vec![zero; n],
+            y: vec![zero; n],
+        };
+        let mut y = y0.to_vec();
+        let outcome = Simulation { system: &(), spec: *spec }.run(&mut stepper, &mut y, observer)?;
+        Ok(Report {
+            outcome,
+            rhs_evals: tableau.b.len() as u64 * outcome.steps(),
+            state: y,
+            steps_rejected: 0,
+            jacobian_evals: 0,
+        })
+    }
+    if has_fma() {
+        go::<M, true>(model, tableau, y0, spec, observer)
+    } else {
+        go::<M, false>(model, tableau, y0, spec, observer)
+    }
+}

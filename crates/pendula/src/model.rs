@@ -1,0 +1,302 @@
+//! The catalogue: every system pendula knows, chosen by name at run time, and [`DynModel`],
+//! the object-safe face through which the command line builds and runs one.
+//!
+//! This is the top of the library's layers: a system (`crate::system`) knows its equations
+//! and nothing of the methods that integrate it; the run loop (`crate::simulate`) and the
+//! ensemble engine (`crate::ensemble`) are generic over [`Model`]; here the two meet, for
+//! each catalogued system once.
+
+use std::ops::Deref;
+
+use crate::Error;
+use crate::checkpoint::{Leg, Pause, RunState};
+use crate::control::Tolerances;
+use crate::ensemble::engine::{self, LaneOutcome, LaneSpec};
+use crate::integrator::explicit_rk::Tableau;
+use crate::integrator::{Method, Scheme};
+use crate::observe::Observer;
+use crate::simulate::{Report, RunSpec, Stepping};
+use crate::system::{DynSystem, Model, SystemInfo, Values, chain, double, driven, oscillator, pendulum};
+
+/// Every system pendula knows, in the order `pendula list systems` shows them. A new system
+/// is enrolled by one line here (its entry, [`Entry::of`]); the tests that loop over the
+/// catalogue then check it.
+pub static CATALOGUE: &[Entry] = &[
+    Entry::of::<oscillator::Oscillator>(),
+    Entry::of::<pendulum::Pendulum>(),
+    Entry::of::<double::DoublePendulum>(),
+    Entry::of::<chain::Chain>(),
+    Entry::of::<driven::DrivenPendulum>(),
+];
+
+/// A catalogued system: its description ([`SystemInfo`], which the entry derefs to) and how
+/// to build it from validated values.
+pub struct Entry {
+    info: &'static SystemInfo,
+    build: fn(&Values) -> Box<dyn DynModel>,
+    check: fn(&Values) -> Vec<String>,
+}
+
+impl Entry {
+    /// The entry of the system `M`.
+    pub const fn of<M: Model>() -> Entry {
+        Entry { info: M::INFO, build: build::<M>, check: crate::kit::check_values::<M> }
+    }
+
+    /// The system's description.
+    pub fn info(&self) -> &'static SystemInfo {
+        self.info
+    }
+
+    /// The systems test kit's failures for this system with `values` (see [`crate::kit`]):
+    /// empty when it passes.
+    pub fn check(&self, values: &Values) -> Vec<String> {
+        (self.check)(values)
+    }
+}
+
+impl Deref for Entry {
+    type Target = SystemInfo;
+    fn deref(&self) -> &SystemInfo {
+        self.info
+    }
+}
+
+impl std::fmt::Debug for Entry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Entry").field("name", &self.info.name).finish_non_exhaustive()
+    }
+}
+
+fn build<M: Model>(values: &Values) -> Box<dyn DynModel> {
+    Box::new(M::from_values(values))
+}
+
+/// Looks a system up by name.
+///
+/// # Errors
+/// [`Error::UnknownSystem`], with the valid names and the closest ones.
+pub fn find(name: &str) -> Result<&'static SystemInfo, Error> {
+    CATALOGUE.iter().find(|s| s.name == name).map(Entry::info).ok_or_else(|| Error::UnknownSystem {
+        name: name.to_owned(),
+        valid: CATALOGUE.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
+        suggestions: crate::error::suggestions(name, CATALOGUE.iter().map(|s| s.name)),
+    })
+}
+
+impl Values {
+    /// Builds the system.
+    pub fn build(&self) -> Box<dyn DynModel> {
+        let name = self.info().name;
+        let entry = CATALOGUE.iter().find(|e| e.name == name);
+        (entry.unwrap_or_else(|| panic!("{name} is not in the catalogue")).build)(self)
+    }
+}
+
+/// The tableau the ensemble engine runs `method` with on `info`'s system, or `None` when it
+/// does not ([`crate::ensemble::engine::supports`]: explicit Runge–Kutta methods of at most
+/// four stages, on every catalogued system, damped and driven variants included). Answered
+/// before any step is taken: the callers choose the engine by this, never by names.
+pub fn lane_tableau(method: &Method, info: &SystemInfo) -> Option<&'static Tableau> {
+    match method.scheme {
+        Scheme::ExplicitRk(tableau) if engine::supports(info, tableau) => Some(tableau),
+        _ => None,
+    }
+}
+
+/// Which engine an ensemble runs on, decided by the library before any step (callers never
+/// compare names).
+#[derive(Debug, Clone, Copy)]
+pub enum EnsemblePath {
+    /// The free double pendulum's hand-written RK4 or Tao lane kernels
+    /// ([`crate::ensemble::run_values`]).
+    DoubleKernel(crate::ensemble::BatchMethod),
+    /// The general engine ([`DynModel::ensemble`]) with this explicit tableau: every system,
+    /// forces included.
+    Engine(&'static Tableau),
+    /// No lanes for this method: one scalar run per member.
+    Scalar,
+}
+
+/// The engine for an ensemble of `method` runs of the system of `base`, whose members differ
+/// from `base` in the quantities named `swept`.
+pub fn ensemble_path(method: &Method, base: &Values, swept: &[&str]) -> EnsemblePath {
+    let info = base.info();
+    if std::ptr::eq(info, double::DoublePendulum::INFO) {
+        // The hand-written kernels implement the free equations.
+        let forcing = ["damping", "drive_amplitude"];
+        let forced = forcing.iter().any(|n| base.get(n) != 0.0 || swept.contains(n));
+        if let (Some(batch), false) = (crate::ensemble::BatchMethod::of(method), forced) {
+            return EnsemblePath::DoubleKernel(batch);
+        }
+    }
+    match lane_tableau(method, info) {
+        Some(tableau) => EnsemblePath::Engine(tableau),
+        None => EnsemblePath::Scalar,
+    }
+}
+
+/// A catalogued system chosen at run time: its physics ([`DynSystem`]) and its runs.
+pub trait DynModel: DynSystem {
+    /// Runs `count` members of this system (built from the entry `info`, for the chain with
+    /// its links) on the ensemble engine: see [`crate::ensemble::engine::run`]. `out` holds
+    /// `row_len` values per member.
+    ///
+    /// # Errors
+    /// As [`crate::ensemble::engine::run`].
+    #[allow(clippy::too_many_arguments)] // the run, its members and where the results go
+    fn ensemble(
+        &self,
+        info: &'static SystemInfo,
+        count: usize,
+        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        spec: &LaneSpec,
+        out: &mut [f64],
+        row_len: usize,
+        store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
+    ) -> Result<(), Error>;
+    /// Runs this system alone in the engine arithmetic (see
+    /// [`crate::ensemble::engine::solve_one`]): bit for bit what a lane of
+    /// [`DynModel::ensemble`] gives it.
+    ///
+    /// # Errors
+    /// As [`crate::ensemble::engine::solve_one`].
+    fn solve_lane(
+        &self,
+        tableau: &'static Tableau,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
+    /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
+    /// (see [`crate::simulate::solve`]).
+    ///
+    /// # Errors
+    /// As [`crate::simulate::solve`].
+    fn solve(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
+    /// Runs an embedded pair with adaptive steps to `t_end` (see
+    /// [`crate::simulate::solve_adaptive`]).
+    ///
+    /// # Errors
+    /// As [`crate::simulate::solve_adaptive`].
+    fn solve_adaptive(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
+    /// Runs `method` from `y0` as `stepping` says, able to pause and to continue from a
+    /// paused state (see [`crate::simulate::resume::solve_resumable`]).
+    ///
+    /// # Errors
+    /// As [`crate::simulate::resume::solve_resumable`].
+    fn solve_resumable(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&RunState>,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Report>, Error>;
+    /// [`DynModel::solve_resumable`], on the fastest path the library has for this system and
+    /// method: fixed-step RK4 on the free double pendulum runs the ensemble engine's
+    /// single-trajectory kernel ([`crate::ensemble::rk4_trajectory_resumable`]: the engine's
+    /// arithmetic, which differs from the reference by rounding), everything else
+    /// [`DynModel::solve_resumable`]. The choice depends only on the model, the method and
+    /// the stepping, so a run continued from a checkpoint takes the path it was saved on.
+    ///
+    /// # Errors
+    /// As the path taken.
+    fn solve_fastest(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&RunState>,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Report>, Error>;
+}
+
+impl<M: Model> DynModel for M {
+    fn ensemble(
+        &self,
+        info: &'static SystemInfo,
+        count: usize,
+        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        spec: &LaneSpec,
+        out: &mut [f64],
+        row_len: usize,
+        store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
+    ) -> Result<(), Error> {
+        engine::run::<M, f64>(info, count, member, spec, out, row_len, store)
+    }
+    fn solve_lane(
+        &self,
+        tableau: &'static Tableau,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        engine::solve_one(self, tableau, y0, spec, observer)
+    }
+    fn solve(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        spec: &RunSpec,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        crate::simulate::solve(self, method, y0, spec, observer)
+    }
+    fn solve_adaptive(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
+    }
+    fn solve_resumable(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&RunState>,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Report>, Error> {
+        crate::simulate::resume::solve_resumable(self, method, y0, stepping, observer, from, pause)
+    }
+    fn solve_fastest(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        stepping: &Stepping<'_>,
+        observer: &mut dyn Observer,
+        from: Option<&RunState>,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Report>, Error> {
+        let double = (self as &dyn std::any::Any).downcast_ref::<double::DoublePendulum>();
+        if let (Stepping::Fixed(spec), Some(d)) = (stepping, double)
+            && !d.is_forced()
+            && crate::ensemble::BatchMethod::of(method) == Some(crate::ensemble::BatchMethod::Rk4)
+        {
+            return crate::ensemble::rk4_trajectory_resumable(d, y0, spec, observer, from, pause);
+        }
+        self.solve_resumable(method, y0, stepping, observer, from, pause)
+    }
+}
