@@ -150,9 +150,10 @@ pub(crate) fn run_group<M: Model>(
     let angles: Vec<usize> = (0..dim / 2).filter(|&k| info.state[k].is_angle()).collect();
     let track = spec.track_flips || spec.stop_at_flip;
     let setting = |name: &str| pick(0)[index(name)];
-    // Kernels are compiled per state dimension (the system's, `M::DIM`) and per number of
-    // stages, so that their loops unroll; the chain's members run padded to 16 variables
-    // (the padding stays zero: the chain's equations read and write its first 2n).
+    // Kernels are compiled per state dimension (the system's, `M::DIM`; for the chain its
+    // members' up to 4 links, longer chains padded to 16 variables, the padding staying zero:
+    // the chain's equations read and write its first 2n) and per number of stages, so that
+    // their loops unroll.
     macro_rules! with {
         ($fma:literal, $wide:literal, $d:literal, $s:literal) => {{
             let eq = M::over::<Lanes<LANES, $fma, $wide>>(&setting, &|name| {
@@ -181,10 +182,20 @@ pub(crate) fn run_group<M: Model>(
                 if one { with!($fma, $wide, 2, 1) } else { with!($fma, $wide, 2, 4) }
             } else if M::DIM == 4 {
                 if one { with!($fma, $wide, 4, 1) } else { with!($fma, $wide, 4, 4) }
-            } else if one {
-                with!($fma, $wide, 16, 1)
             } else {
-                with!($fma, $wide, 16, 4)
+                // A family (the chain): its members' dimensions, each unrolled.
+                match (dim, one) {
+                    (2, true) => with!($fma, $wide, 2, 1),
+                    (2, false) => with!($fma, $wide, 2, 4),
+                    (4, true) => with!($fma, $wide, 4, 1),
+                    (4, false) => with!($fma, $wide, 4, 4),
+                    (6, true) => with!($fma, $wide, 6, 1),
+                    (6, false) => with!($fma, $wide, 6, 4),
+                    (8, true) => with!($fma, $wide, 8, 1),
+                    (8, false) => with!($fma, $wide, 8, 4),
+                    (_, true) => with!($fma, $wide, 16, 1),
+                    (_, false) => with!($fma, $wide, 16, 4),
+                }
             }
         }};
     }
