@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pendula::integrator::{self, METHODS, Method, Requirement};
+use pendula::integrator::{self, METHODS, Method};
 use pendula::model::DynModel;
 use pendula::system::{self, Values};
 use pendula_viz::Figure;
@@ -218,12 +218,7 @@ pub fn preset_settings(
 /// Methods from a comma-separated list, or every method that applies to `model` at steps up
 /// to `max_h` when `None` (Tao's maps apply only where ω h ≤ 1; `None` for `max_h` keeps
 /// them).
-pub fn methods(
-    list: Option<&str>,
-    model: &dyn DynModel,
-    values: &Values,
-    max_h: Option<f64>,
-) -> Result<Vec<&'static Method>> {
+pub fn methods(list: Option<&str>, model: &dyn DynModel, max_h: Option<f64>) -> Result<Vec<&'static Method>> {
     let stable = |m: &Method| match (m.scheme, max_h) {
         (pendula::integrator::Scheme::Tao(t), Some(h)) => {
             pendula::integrator::tao::check_binding_step(&t, h).is_ok()
@@ -237,7 +232,8 @@ pub fn methods(
                 .split(',')
                 .map(|name| {
                     let method = integrator::find(name.trim())?;
-                    requirement_met(method, model, values)?;
+                    // The library's refusal when the requirement is not met, before any step.
+                    model.check(method)?;
                     Ok(method)
                 })
                 .collect::<Result<Vec<&'static Method>>>()?;
@@ -252,24 +248,7 @@ pub fn methods(
             }
             Ok(methods)
         }
-        None => Ok(METHODS.iter().copied().filter(|m| applies(m, model, values) && stable(m)).collect()),
-    }
-}
-
-/// Whether `method` can run on the model (its requirement is met).
-fn applies(method: &Method, model: &dyn DynModel, values: &Values) -> bool {
-    requirement_met(method, model, values).is_ok()
-}
-
-/// The library's refusal when `method`'s requirement is not met by the model.
-fn requirement_met(method: &Method, model: &dyn DynModel, values: &Values) -> Result<(), pendula::Error> {
-    if method.requirement == Requirement::Any {
-        return Ok(());
-    }
-    let spec = pendula::RunSpec { t0: 0.0, h: 1e-3, end: pendula::End::Steps(1) };
-    match model.solve(method, values.initial_state(), &spec, &mut pendula::observe::Ignore) {
-        Err(e @ pendula::Error::UnmetRequirement { .. }) => Err(e),
-        _ => Ok(()),
+        None => Ok(METHODS.iter().copied().filter(|m| model.check(m).is_ok() && stable(m)).collect()),
     }
 }
 

@@ -58,4 +58,4 @@ pub mod system;
 
 pub use error::Error;
 pub use simulate::resume::solve_resumable;
-pub use simulate::{End, Outcome, Report, RunSpec, Simulation, Stepping, solve, solve_adaptive};
+pub use simulate::{End, Outcome, Report, RunSpec, Simulation, Stepping, check, solve, solve_adaptive};

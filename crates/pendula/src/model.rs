@@ -108,8 +108,7 @@ pub fn lane_tableau(method: &Method, info: &SystemInfo) -> Option<&'static Table
 /// compare names).
 #[derive(Debug, Clone, Copy)]
 pub enum EnsemblePath {
-    /// The free double pendulum's hand-written RK4 or Tao lane kernels
-    /// ([`crate::ensemble::run_values`]).
+    /// Tao's map on lanes for the free double pendulum ([`crate::ensemble::run_values`]).
     DoubleKernel(crate::ensemble::BatchMethod),
     /// The general engine ([`DynModel::ensemble`]) with this explicit tableau: every system,
     /// forces included.
@@ -122,12 +121,14 @@ pub enum EnsemblePath {
 /// from `base` in the quantities named `swept`.
 pub fn ensemble_path(method: &Method, base: &Values, swept: &[&str]) -> EnsemblePath {
     let info = base.info();
-    if std::ptr::eq(info, double::DoublePendulum::INFO) {
-        // The hand-written kernels implement the free equations.
+    if std::ptr::eq(info, double::DoublePendulum::INFO)
+        && let Some(tao @ crate::ensemble::BatchMethod::Tao(_)) = crate::ensemble::BatchMethod::of(method)
+    {
+        // Tao's map on lanes integrates the free pendulum's Hamiltonian; forced members
+        // run one by one.
         let forcing = ["damping", "drive_amplitude"];
-        let forced = forcing.iter().any(|n| base.get(n) != 0.0 || swept.contains(n));
-        if let (Some(batch), false) = (crate::ensemble::BatchMethod::of(method), forced) {
-            return EnsemblePath::DoubleKernel(batch);
+        if !forcing.iter().any(|n| base.get(n) != 0.0 || swept.contains(n)) {
+            return EnsemblePath::DoubleKernel(tao);
         }
     }
     match lane_tableau(method, info) {
@@ -138,6 +139,11 @@ pub fn ensemble_path(method: &Method, base: &Values, swept: &[&str]) -> Ensemble
 
 /// A catalogued system chosen at run time: its physics ([`DynSystem`]) and its runs.
 pub trait DynModel: DynSystem {
+    /// Whether `method` applies to this system: [`crate::simulate::check`], before any step.
+    ///
+    /// # Errors
+    /// As [`crate::simulate::check`].
+    fn check(&self, method: &Method) -> Result<(), Error>;
     /// Runs `count` members of this system (built from the entry `info`, for the chain with
     /// its links) on the ensemble engine: see [`crate::ensemble::engine::run`]. `out` holds
     /// `row_len` values per member.
@@ -229,6 +235,9 @@ pub trait DynModel: DynSystem {
 }
 
 impl<M: Model> DynModel for M {
+    fn check(&self, method: &Method) -> Result<(), Error> {
+        crate::simulate::check(method, self)
+    }
     fn ensemble(
         &self,
         info: &'static SystemInfo,

@@ -122,11 +122,12 @@ fn a_non_finite_member_is_named() {
         let spec =
             BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips };
         let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
-        let ensemble::EnsembleError::NonFinite(err) = ensemble::run(&ms, &spec, &mut out).unwrap_err() else {
-            panic!("expected a non-finite member")
+        let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
+        let pendula::Error::NonFiniteMember { member, t } = err else {
+            panic!("expected a non-finite member, got {err}")
         };
-        assert_eq!(err.member, 13);
-        assert_eq!(err.t, 0.01);
+        assert_eq!(member, 13);
+        assert_eq!(t, 0.01);
         assert!(err.to_string().contains("member 13"), "{err}");
     }
 }

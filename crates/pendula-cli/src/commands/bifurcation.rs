@@ -169,47 +169,50 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let data: Vec<f64> = pool.install(|| -> Result<Vec<f64>> {
-        if simd {
-            let members: Vec<DrivenMember> = all
-                .iter()
-                .zip(&periods)
-                .map(|(v, (_, transient))| DrivenMember {
-                    pendulum: DrivenPendulum::from_values(v),
-                    state: [v.initial_state()[0], v.initial_state()[1]],
-                    transient_periods: *transient,
-                })
-                .collect();
-            let mut data = vec![0.0; members.len() * samples * 2];
-            stroboscopic(&members, &StroboSpec { steps_per_period: m, samples }, &mut data).map_err(|e| {
-                anyhow::Error::new(pendula::Error::NonFinite { t: e.t }).context(format!(
-                    "{} = {}",
-                    axis.name,
-                    pendula::error::Short(axis.centre(e.member))
-                ))
-            })?;
-            Ok(data)
-        } else {
-            let rows: Vec<Vec<f64>> = all
-                .par_iter()
-                .zip(&periods)
-                .map(|(v, (period, transient))| {
-                    let model = v.build();
-                    let mut rows =
-                        scalar_strobe(&*model, &RK4, v.initial_state(), *period, m, *transient, samples)?;
-                    for row in rows.chunks_exact_mut(dim) {
-                        for (x, q) in row.iter_mut().zip(state) {
-                            if q.is_angle() {
-                                *x = pendula::system::wrap_angle(*x);
+    let data: Vec<f64> =
+        pool.install(|| -> Result<Vec<f64>> {
+            if simd {
+                let members: Vec<DrivenMember> = all
+                    .iter()
+                    .zip(&periods)
+                    .map(|(v, (_, transient))| DrivenMember {
+                        pendulum: DrivenPendulum::from_values(v),
+                        state: [v.initial_state()[0], v.initial_state()[1]],
+                        transient_periods: *transient,
+                    })
+                    .collect();
+                let mut data = vec![0.0; members.len() * samples * 2];
+                stroboscopic(&members, &StroboSpec { steps_per_period: m, samples }, &mut data).map_err(
+                    |e| match e {
+                        pendula::Error::NonFiniteMember { member, t } => anyhow::Error::new(
+                            pendula::Error::NonFinite { t },
+                        )
+                        .context(format!("{} = {}", axis.name, pendula::error::Short(axis.centre(member)))),
+                        other => anyhow::Error::new(other),
+                    },
+                )?;
+                Ok(data)
+            } else {
+                let rows: Vec<Vec<f64>> = all
+                    .par_iter()
+                    .zip(&periods)
+                    .map(|(v, (period, transient))| {
+                        let model = v.build();
+                        let mut rows =
+                            scalar_strobe(&*model, &RK4, v.initial_state(), *period, m, *transient, samples)?;
+                        for row in rows.chunks_exact_mut(dim) {
+                            for (x, q) in row.iter_mut().zip(state) {
+                                if q.is_angle() {
+                                    *x = pendula::system::wrap_angle(*x);
+                                }
                             }
                         }
-                    }
-                    Ok(rows)
-                })
-                .collect::<Result<_, pendula::Error>>()?;
-            Ok(rows.concat())
-        }
-    })?;
+                        Ok(rows)
+                    })
+                    .collect::<Result<_, pendula::Error>>()?;
+                Ok(rows.concat())
+            }
+        })?;
     let wall = begin.elapsed().as_secs_f64();
 
     let mut header = vec![axis.name.as_str(), "sample"];

@@ -136,7 +136,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let t_end =
         positive_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     // What it costs: at one step, every method's steps; at equal cost, every method's
     // evaluations, each counted as a step (a step costs at least one).
     let per_method = match steps {

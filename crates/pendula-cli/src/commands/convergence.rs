@@ -84,7 +84,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let values = study::values(system, &args.common.set)?;
     let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     let (runs, levels) = methods.iter().fold((0.0, 0), |(n, k), m| {
         let hs = steps_for(&values, m, &ladder, t_end);
         (n + hs.iter().map(|h| crate::limits::steps(t_end, *h)).sum::<f64>(), k + hs.len())

@@ -216,9 +216,9 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     };
     // A non-finite state is a numerical failure (exit 1) at a pixel, as in sweep.
     let pixel_error = |e| match e {
-        pendula::ensemble::EnsembleError::NonFinite(f) => {
-            let (i, j) = (f.member % theta1.n, f.member / theta1.n);
-            anyhow::Error::new(pendula::Error::NonFinite { t: f.t }).context(format!(
+        pendula::Error::NonFiniteMember { member, t } => {
+            let (i, j) = (member % theta1.n, member / theta1.n);
+            anyhow::Error::new(pendula::Error::NonFinite { t }).context(format!(
                 "fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {}",
                 Short(theta1.centre(i)),
                 Short(theta2.centre(j))

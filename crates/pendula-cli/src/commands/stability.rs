@@ -36,7 +36,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
     crate::config::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     // What it costs, at most: per method, the bisection's runs (both ends of the range, then
     // halvings of log h to 1%), each as long as a run at the smallest step.
     let runs = 2.0 + ((H_RANGE.1 / H_RANGE.0).ln() / 1.01f64.ln()).log2().ceil();

@@ -670,7 +670,7 @@ fn run_lanes(
                 track_flips,
             };
             ensemble::run_values(count, &fill, &spec, data, cols, &store_row).map_err(|e| match e {
-                ensemble::EnsembleError::NonFinite(e) => failed(e.member, e.t),
+                pendula::Error::NonFiniteMember { member, t } => failed(member, t),
                 other => anyhow::Error::new(other),
             })
         }

@@ -72,7 +72,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         args.steps.resolve_or_default(crate::commands::convergence::default_t_end(&values))?;
     let tols = tolerances(args)?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, &values, None)?;
+    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     // Fixed-step methods run their steps; the adaptive ones are estimated per tolerance.
     let period = crate::limits::motion_period(&*model, values.initial_state());
     let runs: f64 = methods

@@ -2,7 +2,8 @@
 //! flip (either rod passes ±π), over a grid of starts, on the ensemble engine — computed at
 //! two step sizes, so that every pixel carries a convergence flag.
 
-use crate::ensemble::{self, BatchMethod, BatchSpec, EnsembleError, Member, MemberResult};
+use crate::Error;
+use crate::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
 use crate::system::double::DoublePendulum;
 
 /// One axis of the grid: `n` cell centres lo + (i + ½)(hi − lo)/n (the convention of
@@ -79,11 +80,12 @@ pub fn converged(coarse: f64, fine: f64, tolerance: f64) -> bool {
 /// Computes the flip fractal, on rayon's current pool: results do not depend on its size.
 ///
 /// # Errors
-/// [`EnsembleError`] for a forced pendulum or a non-finite state (member = pixel index).
+/// [`Error::UnmetRequirement`] for Tao's map on a forced pendulum; [`Error::NonFiniteMember`]
+/// for a non-finite state (member = pixel index).
 ///
 /// # Panics
 /// If `h` or `t_max` is not finite and positive (validated by the caller).
-pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
+pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, Error> {
     flip_fractal_with_progress(spec, &|_| ())
 }
 
@@ -98,7 +100,7 @@ pub fn flip_fractal(spec: &FractalSpec) -> Result<FlipFractal, EnsembleError> {
 pub fn flip_fractal_with_progress(
     spec: &FractalSpec,
     tick: &(dyn Fn(u64) + Sync),
-) -> Result<FlipFractal, EnsembleError> {
+) -> Result<FlipFractal, Error> {
     let pixels = spec.theta1.n * spec.theta2.n;
     let (flip_time, flip_time_half_step) = flip_times(spec, 0..pixels, tick)?;
     Ok(assemble(spec, flip_time, flip_time_half_step))
@@ -119,7 +121,7 @@ pub fn flip_times(
     spec: &FractalSpec,
     pixels: std::ops::Range<usize>,
     tick: &(dyn Fn(u64) + Sync),
-) -> Result<(Vec<f64>, Vec<f64>), EnsembleError> {
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
     let n1 = spec.theta1.n;
     assert!(pixels.end <= n1 * spec.theta2.n, "pixels inside the grid");
@@ -133,7 +135,7 @@ pub fn flip_times(
         })
         .collect();
     tick(2 * (pixels.len() - allowed.len()) as u64);
-    let run = |h: f64| -> Result<Vec<f64>, EnsembleError> {
+    let run = |h: f64| -> Result<Vec<f64>, Error> {
         let steps = (spec.t_max / h).ceil() as u64;
         let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
         let member = |k: usize| {
@@ -146,10 +148,8 @@ pub fn flip_times(
             tick(1);
         };
         ensemble::run_into(allowed.len(), &member, &batch, &mut times, 1, &store).map_err(|e| match e {
-            EnsembleError::NonFinite(f) => {
-                EnsembleError::NonFinite(ensemble::NonFiniteMember { member: allowed[f.member], ..f })
-            }
-            EnsembleError::Forced { member } => EnsembleError::Forced { member: allowed[member] },
+            Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
+            other => other,
         })?;
         let mut image = vec![f64::NAN; pixels.len()];
         for (k, t) in allowed.iter().zip(times) {

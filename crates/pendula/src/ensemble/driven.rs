@@ -13,7 +13,8 @@
 
 use rayon::prelude::*;
 
-use super::{LANES, NonFiniteMember, has_fma, trig};
+use super::{LANES, has_fma, trig};
+use crate::Error;
 use crate::system::driven::DrivenPendulum;
 
 /// One member: a driven pendulum, its start (θ, ω), and how many whole periods to discard.
@@ -52,11 +53,7 @@ const CHUNK: usize = 64;
 ///
 /// # Panics
 /// If `out` does not hold members × samples × 2 values or `steps_per_period < 4`.
-pub fn stroboscopic(
-    members: &[DrivenMember],
-    spec: &StroboSpec,
-    out: &mut [f64],
-) -> Result<(), NonFiniteMember> {
+pub fn stroboscopic(members: &[DrivenMember], spec: &StroboSpec, out: &mut [f64]) -> Result<(), Error> {
     let per_member = spec.samples * 2;
     assert_eq!(out.len(), members.len() * per_member, "members × samples × 2 values");
     assert!(spec.steps_per_period >= 4, "at least 4 steps per period");
@@ -64,24 +61,24 @@ pub fn stroboscopic(
     let two_pi = 2.0 * std::f64::consts::PI;
     // cos(2π j/(2M)) for j = 0 … 2M: the drive at every step and half-step of a period.
     let drive: Vec<f64> = (0..=2 * m).map(|j| (two_pi * j as f64 / (2 * m) as f64).cos()).collect();
-    let failures: Vec<NonFiniteMember> = out
+    let failures: Vec<(usize, f64)> = out
         .par_chunks_mut(CHUNK * per_member)
         .enumerate()
         .filter_map(|(c, rows)| {
             let start = c * CHUNK;
             let chunk = &members[start..start + rows.len() / per_member.max(1)];
-            let mut first: Option<NonFiniteMember> = None;
+            let mut first: Option<(usize, f64)> = None;
             for (g, (group, rows)) in chunk.chunks(LANES).zip(rows.chunks_mut(LANES * per_member)).enumerate()
             {
-                if let Err(e) = run_group(group, spec, &drive, rows) {
-                    first.get_or_insert(NonFiniteMember { member: start + g * LANES + e.member, t: e.t });
+                if let Err((i, t)) = run_group(group, spec, &drive, rows) {
+                    first.get_or_insert((start + g * LANES + i, t));
                 }
             }
             first
         })
         .collect();
-    match failures.into_iter().min_by_key(|e| e.member) {
-        Some(e) => Err(e),
+    match failures.into_iter().min_by_key(|&(member, _)| member) {
+        Some((member, t)) => Err(Error::NonFiniteMember { member, t }),
         None => Ok(()),
     }
 }
@@ -96,12 +93,14 @@ struct Lanes {
     amplitude: [f64; LANES],
 }
 
+/// A lane group's periods; on failure, the lane that became non-finite first (in index
+/// order) and when.
 fn run_group(
     group: &[DrivenMember],
     spec: &StroboSpec,
     drive: &[f64],
     rows: &mut [f64],
-) -> Result<(), NonFiniteMember> {
+) -> Result<(), (usize, f64)> {
     let pick = |i: usize| group[i.min(group.len() - 1)];
     let m = spec.steps_per_period as f64;
     let mut lanes = Lanes {
@@ -133,7 +132,7 @@ fn run_group(
         for (i, member) in group.iter().enumerate() {
             let (theta, omega) = (lanes.theta[i], lanes.omega[i]);
             if !(theta.is_finite() && omega.is_finite()) {
-                return Err(NonFiniteMember { member: i, t: (period + 1) as f64 * lanes.h[i] * m });
+                return Err((i, (period + 1) as f64 * lanes.h[i] * m));
             }
             // Wrap into [−π, π): the equations are 2π-periodic in θ, and the sine's argument
             // stays small however long the run.
@@ -157,14 +156,21 @@ fn run_group(
 /// it), and whether that proves every sine's argument was in the fast range
 /// ([`stayed_fast`]) — if not, the results may be wrong. `WIDE`: angles beyond the fast range
 /// reduced exactly, per lane (true); the others get the same bits.
-#[multiversion::multiversion(targets(
-    "x86_64+avx512f+avx512dq+avx2+fma",
-    "x86_64+avx2+fma",
-    "x86_64+avx+fma",
-    "x86_64+avx",
-    "x86_64+sse4.1",
-    "aarch64+neon"
-))]
+// Compiled for several instruction sets, chosen at run time; debug builds (the tests)
+// for AVX2 with FMA and the portable fallback only: the same arithmetic, a fraction of
+// the build time.
+#[cfg_attr(
+    not(debug_assertions),
+    multiversion::multiversion(targets(
+        "x86_64+avx512f+avx512dq+avx2+fma",
+        "x86_64+avx2+fma",
+        "x86_64+avx+fma",
+        "x86_64+avx",
+        "x86_64+sse4.1",
+        "aarch64+neon",
+    ))
+)]
+#[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
 fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[f64]) -> bool {
     let steps = (drive.len() - 1) / 2;
     let Lanes { theta, omega, h, q, amplitude } = lanes;

@@ -114,8 +114,8 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
     y: &[T],
 ) {
     match y.len() {
-        2 => fixed_stages::<T, F, 2>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("2")),
-        4 => fixed_stages::<T, F, 4>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("4")),
+        2 => fixed_stages::<T, F, 2, _>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("2")),
+        4 => fixed_stages::<T, F, 4, _>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("4")),
         n => {
             for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
                 let (done, rest) = k.split_at_mut(i * n);
@@ -134,12 +134,13 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
     }
 }
 
-/// [`explicit_stages`] for states of N components, stage i in `k[i]` (a lane kernel passes
-/// as many as its method has stages, a constant there: the loops unroll).
+/// [`explicit_stages`] for states of N components, stage i in `k[i]`, from row i of `a` (its
+/// first i coefficients). A lane kernel passes the tableau as fixed-size arrays, and as many
+/// stages as its method has, constants there: the loops unroll.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize>(
-    a: &[&[f64]],
+pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize, R: AsRef<[f64]>>(
+    a: &[R],
     c: &[f64],
     first: usize,
     k: &mut [[T; N]],
@@ -151,7 +152,7 @@ pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize>(
     for i in first..a.len().min(k.len()) {
         let (done, rest) = k.split_at_mut(i);
         let mut acc = [T::splat(0.0); N];
-        for (l, &a) in a[i].iter().enumerate() {
+        for (l, &a) in a[i].as_ref().iter().take(i).enumerate() {
             // Zero coefficients are skipped: adding 0 · k would be exact for finite k, but
             // costs the time of the term.
             if a != 0.0 {

@@ -257,33 +257,83 @@ pub struct Report {
     pub jacobian_evals: u64,
 }
 
-/// Runs `method` on `model` from `y0` (positions, velocities), showing every state to
-/// `observer` in the same coordinates.
+/// Runs `method` on `model` from `y0` (positions, velocities), stepping as `stepping` says
+/// (fixed steps: a [`RunSpec`] or `&RunSpec`; adaptive steps with tolerances:
+/// [`Stepping::Adaptive`]), showing every state to `observer` in the same coordinates: the
+/// library's one entry for a single run ([`solve_adaptive`] and
+/// [`crate::solve_resumable`] are its shorthand and its resumable form).
 ///
 /// Methods that need a Hamiltonian form run on (q, p): the state is converted before the
-/// run, and back for every observed state and at the end.
+/// run, and back for every observed state and at the end. Whether the method applies is
+/// answered by [`check`] before any step is taken.
 ///
 /// # Errors
-/// [`Error::UnmetRequirement`] when the model lacks what the method needs, and everything
-/// [`Simulation::run`] reports.
-pub fn solve<M: Model>(
+/// [`Error::UnmetRequirement`] when the model lacks what the method needs (see [`check`]) or
+/// the stepping does not fit the method (adaptive steps need an error estimate), and
+/// everything [`Simulation::run`] reports.
+pub fn solve<'a, M: Model>(
     model: &M,
     method: &Method,
     y0: &[f64],
-    spec: &RunSpec,
+    stepping: impl Into<Stepping<'a>>,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
     match crate::simulate::resume::solve_resumable(
         model,
         method,
         y0,
-        &Stepping::Fixed(*spec),
+        &stepping.into(),
         observer,
         None,
         &Pause::NEVER,
     )? {
         Leg::Done(report) => Ok(report),
         Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
+    }
+}
+
+/// Whether `method` applies to `model`, answered before any step is taken: the structure its
+/// [`Requirement`] names — a Hamiltonian form (the model's [`Model::hamiltonian_form`]), and
+/// for explicit splittings a separable one. Runs ([`solve`]) and ensembles check with it;
+/// callers ask it to choose, never compare names.
+///
+/// # Errors
+/// [`Error::UnmetRequirement`]: what the method needs, why the model lacks it, and methods
+/// that apply.
+pub fn check<M: Model>(method: &Method, model: &M) -> Result<(), Error> {
+    let unmet = |reason| Error::UnmetRequirement {
+        method: method.name,
+        needs: method.requirement.describe(),
+        reason,
+        suggestion: method.requirement.suggestion(),
+    };
+    match method.requirement {
+        Requirement::Any => Ok(()),
+        Requirement::Hamiltonian | Requirement::HamiltonianExplicit => {
+            model.hamiltonian_form().map(|_| ()).map_err(unmet)
+        }
+        Requirement::Separable => {
+            if model.hamiltonian_form().map_err(unmet)?.separable() {
+                Ok(())
+            } else {
+                Err(unmet(format!(
+                    "the `{}` system's Hamiltonian is not separable (its kinetic energy depends on the positions)",
+                    M::INFO.name
+                )))
+            }
+        }
+    }
+}
+
+impl From<RunSpec> for Stepping<'_> {
+    fn from(spec: RunSpec) -> Self {
+        Stepping::Fixed(spec)
+    }
+}
+
+impl From<&RunSpec> for Stepping<'_> {
+    fn from(spec: &RunSpec) -> Self {
+        Stepping::Fixed(*spec)
     }
 }
 
@@ -336,7 +386,10 @@ pub(crate) fn dispatch<M: Model, D: Drive<M>>(
     h: f64,
     drive: D,
 ) -> Result<D::Output, Error> {
+    check(method, model)?;
     let dim = model.dim();
+    // Checked: the forms the methods below need exist.
+    let form = || model.hamiltonian_form().expect("checked: the model has a Hamiltonian form");
     match method.scheme {
         Scheme::ExplicitRk(tableau) => drive.direct(model, &mut ExplicitRk::new(tableau, dim)),
         Scheme::Embedded(tableau) => drive.direct(model, &mut EmbeddedRk::new(tableau, dim)),
@@ -347,30 +400,11 @@ pub(crate) fn dispatch<M: Model, D: Drive<M>>(
             Err(_) => drive.direct(model, &mut Collocation::new(tableau, dim)),
         },
         Scheme::Tao(scheme) => {
-            let form = model.hamiltonian_form().map_err(|reason| Error::UnmetRequirement {
-                method: method.name,
-                needs: method.requirement.describe(),
-                reason,
-                suggestion: method.requirement.suggestion(),
-            })?;
             crate::integrator::tao::check_binding_step(&scheme, h)?;
-            drive.on_form(model, &form, &mut TaoStepper::new(scheme, dim / 2))
+            drive.on_form(model, &form(), &mut TaoStepper::new(scheme, dim / 2))
         }
         Scheme::Partitioned(partition) => {
-            let unmet = |reason| Error::UnmetRequirement {
-                method: method.name,
-                needs: method.requirement.describe(),
-                reason,
-                suggestion: method.requirement.suggestion(),
-            };
-            let form = model.hamiltonian_form().map_err(unmet)?;
-            if method.requirement == Requirement::Separable && !form.separable() {
-                return Err(unmet(format!(
-                    "the `{}` system's Hamiltonian is not separable (its kinetic energy depends on the positions)",
-                    M::INFO.name
-                )));
-            }
-            drive.on_form(model, &form, &mut PartitionedStepper::new(partition, dim / 2))
+            drive.on_form(model, &form(), &mut PartitionedStepper::new(partition, dim / 2))
         }
     }
 }
