@@ -258,8 +258,7 @@ pub struct Report {
 }
 
 /// Runs `method` on `model` from `y0` (positions, velocities), stepping as `stepping` says
-/// (fixed steps: a [`RunSpec`] or `&RunSpec`; adaptive steps with tolerances:
-/// [`Stepping::Adaptive`]), showing every state to `observer` in the same coordinates: the
+/// (fixed steps: `&RunSpec`; adaptive steps with tolerances: `&Stepping::Adaptive { .. }`), showing every state to `observer` in the same coordinates: the
 /// library's one entry for a single run ([`solve_adaptive`] and
 /// [`crate::solve_resumable`] are its shorthand and its resumable form).
 ///
@@ -271,18 +270,18 @@ pub struct Report {
 /// [`Error::UnmetRequirement`] when the model lacks what the method needs (see [`check`]) or
 /// the stepping does not fit the method (adaptive steps need an error estimate), and
 /// everything [`Simulation::run`] reports.
-pub fn solve<'a, M: Model>(
+pub fn solve<'a, M: Model, S: Into<Stepping<'a>> + Copy>(
     model: &M,
     method: &Method,
     y0: &[f64],
-    stepping: impl Into<Stepping<'a>>,
+    stepping: &S,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
     match crate::simulate::resume::solve_resumable(
         model,
         method,
         y0,
-        &stepping.into(),
+        &(*stepping).into(),
         observer,
         None,
         &Pause::NEVER,
@@ -328,12 +327,6 @@ pub fn check<M: Model>(method: &Method, model: &M) -> Result<(), Error> {
 impl From<RunSpec> for Stepping<'_> {
     fn from(spec: RunSpec) -> Self {
         Stepping::Fixed(spec)
-    }
-}
-
-impl From<&RunSpec> for Stepping<'_> {
-    fn from(spec: &RunSpec) -> Self {
-        Stepping::Fixed(*spec)
     }
 }
 
