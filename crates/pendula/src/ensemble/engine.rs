@@ -154,11 +154,11 @@ pub(crate) fn run_group<M: Model>(
     // Kernels are compiled per state dimension (the system's, `M::DIM`; for the chain its
     // members', padded) and per number of stages, so that their loops unroll.
     macro_rules! call {
-        (true, $d:tt, $s:tt, $wide:tt, $track:tt, $eq:ident, $run:ident, $record:ident) => {
-            kernel_fused::<_, $d, $s, $wide, $track>(&$eq, &$run, &mut $record)
+        (true, $d:tt, $s:tt, $wide:tt, $eq:ident, $run:ident, $record:ident) => {
+            kernel_fused::<_, $d, $s, $wide>(&$eq, &$run, &mut $record)
         };
-        (false, $d:tt, $s:tt, $wide:tt, $track:tt, $eq:ident, $run:ident, $record:ident) => {
-            kernel_plain::<_, $d, $s, $wide, $track>(&$eq, &$run, &mut $record)
+        (false, $d:tt, $s:tt, $wide:tt, $eq:ident, $run:ident, $record:ident) => {
+            kernel_plain::<_, $d, $s, $wide>(&$eq, &$run, &mut $record)
         };
     }
     macro_rules! with {
@@ -176,12 +176,9 @@ pub(crate) fn run_group<M: Model>(
                 h: spec.h,
                 steps: spec.steps,
                 stop_at_flip: spec.stop_at_flip,
+                track,
             };
-            if track {
-                call!($fma, $d, $s, $wide, true, eq, run, record)
-            } else {
-                call!($fma, $d, $s, $wide, false, eq, run, record)
-            }
+            call!($fma, $d, $s, $wide, eq, run, record)
         }};
     }
     macro_rules! go {
@@ -220,7 +217,14 @@ pub(crate) fn run_group<M: Model>(
     let outcomes = (0..members.len())
         .map(|i| LaneOutcome {
             state: std::array::from_fn(|k| record.state[k][i]),
-            flip_time: flip_time(&record, &angles, dim, i, spec.h),
+            flip_time: flip_time(
+                record.flip_step[i],
+                [&record.ends[0], &record.ends[1]],
+                &angles,
+                dim,
+                i,
+                spec.h,
+            ),
         })
         .collect();
     let failed =
@@ -247,17 +251,27 @@ struct Run<'a> {
     h: f64,
     steps: u64,
     stop_at_flip: bool,
+    /// Whether flips are located (a run-time flag, not a compiled variant: with nothing to
+    /// watch the probe never calls for the lane-by-lane step).
+    track: bool,
 }
 
-/// Lane i's flip time, s (NaN: no flip): the first time, within the step of the flip, at
-/// which the cubic Hermite interpolant of an angle that crossed passes ±π.
-fn flip_time(record: &Record, angles: &[usize], dim: usize, i: usize, h: f64) -> f64 {
+/// Lane i's flip time, s (NaN: no flip, `step` < 0): the first time, within the step of the
+/// flip (step number `step`, of size `h`), at which the cubic Hermite interpolant of an angle
+/// that crossed passes ±π, from the state at both ends of that step (`before`, `after`: the
+/// positions `angles`, and their rates `dim / 2` further on). Shared with Tao's lanes.
+pub(crate) fn flip_time(
+    step: f64,
+    [before, after]: [&[[f64; LANES]]; 2],
+    angles: &[usize],
+    dim: usize,
+    i: usize,
+    h: f64,
+) -> f64 {
     use std::f64::consts::PI;
-    let step = record.flip_step[i];
     if step < 0.0 {
         return f64::NAN;
     }
-    let [before, after] = &record.ends;
     let mut first = f64::INFINITY;
     for &k in angles {
         let (a, b) = (before[k][i], after[k][i]);
@@ -331,7 +345,7 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
     ))
 )]
 #[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
-fn kernel_fused<E, const D: usize, const S: usize, const WIDE: bool, const TRACK: bool>(
+fn kernel_fused<E, const D: usize, const S: usize, const WIDE: bool>(
     eq: &[E; 2],
     run: &Run<'_>,
     record: &mut Record,
@@ -339,13 +353,13 @@ fn kernel_fused<E, const D: usize, const S: usize, const WIDE: bool, const TRACK
 where
     E: Equations<Lanes<HALF, true, WIDE>>,
 {
-    kernel::<E, D, S, true, WIDE, TRACK>(eq, run, record)
+    kernel::<E, D, S, true, WIDE>(eq, run, record)
 }
 
 /// [`kernel`] without fused multiply-adds, for CPUs without them (AVX, or the portable
 /// fallback).
 #[cfg_attr(not(debug_assertions), multiversion::multiversion(targets("x86_64+avx")))]
-fn kernel_plain<E, const D: usize, const S: usize, const WIDE: bool, const TRACK: bool>(
+fn kernel_plain<E, const D: usize, const S: usize, const WIDE: bool>(
     eq: &[E; 2],
     run: &Run<'_>,
     record: &mut Record,
@@ -353,12 +367,12 @@ fn kernel_plain<E, const D: usize, const S: usize, const WIDE: bool, const TRACK
 where
     E: Equations<Lanes<HALF, false, WIDE>>,
 {
-    kernel::<E, D, S, false, WIDE, TRACK>(eq, run, record)
+    kernel::<E, D, S, false, WIDE>(eq, run, record)
 }
 
 #[allow(clippy::needless_range_loop)] // lane-indexed loops: the form that vectorises over lanes
 #[inline(always)]
-fn kernel<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const TRACK: bool>(
+fn kernel<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool>(
     eq: &[E; 2],
     run: &Run<'_>,
     record: &mut Record,
@@ -388,7 +402,7 @@ where
     let mut retired = false;
     // Per lane, how far an angle may go before the step needs a closer look: π while the lane
     // may still flip, beyond every angle once it has (or has retired).
-    let mut watch = [PI; LANES];
+    let mut watch = [if run.track { PI } else { f64::INFINITY }; LANES];
     let mut flip_step = [-1.0; LANES];
     let [mut before, mut after] = [[[0.0; LANES]; MAX_DIM]; 2];
     let mut failed_step = [-1.0; LANES];
@@ -415,11 +429,9 @@ where
         for i in 0..LANES {
             notable[i] = probe[i].is_nan();
         }
-        if TRACK {
-            for &a in run.angles {
-                for i in 0..LANES {
-                    notable[i] |= next[a].0[i].abs() > watch[i];
-                }
+        for &a in run.angles {
+            for i in 0..LANES {
+                notable[i] |= next[a].0[i].abs() > watch[i];
             }
         }
         let mut any = false;
@@ -448,7 +460,7 @@ where
             for i in 0..LANES {
                 failed_step[i] = if active[i] & !finite[i] { step_f } else { failed_step[i] };
             }
-            if TRACK {
+            if run.track {
                 let mut crosses = [false; LANES];
                 for &a in run.angles {
                     for i in 0..LANES {
@@ -495,7 +507,7 @@ where
                 return false;
             }
         }
-        if TRACK && retired {
+        if retired {
             let mut any = false;
             for i in 0..LANES {
                 any |= active[i];

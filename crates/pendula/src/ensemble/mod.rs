@@ -129,14 +129,17 @@ pub fn run_values<T: Send>(
     row_len: usize,
     store: &StoreValues<'_, T>,
 ) -> Result<(), Error> {
+    use crate::system::Model;
+    let info = DoublePendulum::INFO;
+    let np = info.parameters.len();
     let of = |i: usize| {
         let mut v = [0.0; 12];
         member(i, &mut v);
-        let [m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency, a, b, c, d] = v;
-        Member {
-            pendulum: DoublePendulum { m1, m2, l1, l2, g, damping, drive_amplitude, drive_frequency },
-            state: [a, b, c, d],
-        }
+        let value = |name: &str| {
+            let k = info.parameters.iter().position(|q| q.name == name);
+            v[k.unwrap_or_else(|| panic!("the double pendulum has no {name}"))]
+        };
+        Member { pendulum: DoublePendulum::over(&value, &value), state: std::array::from_fn(|k| v[np + k]) }
     };
     run_indexed(count, &of, spec, out, row_len, &|i, _, r: &MemberResult, row: &mut [T]| {
         store(i, &r.state, r.flip_time, row);
@@ -271,7 +274,14 @@ fn run_chunk(
         for (i, r) in results.iter_mut().enumerate() {
             *r = MemberResult {
                 state: std::array::from_fn(|k| lanes.state[k][i]),
-                flip_time: flip_time(&lanes, i, spec.h),
+                flip_time: engine::flip_time(
+                    lanes.flip_step[i],
+                    [&lanes.flip_ends[0], &lanes.flip_ends[1]],
+                    &[0, 1],
+                    4,
+                    i,
+                    spec.h,
+                ),
             };
             if !lanes.failed_at[i].is_nan() && first_failure.is_none() {
                 first_failure = Some((g * LANES + i, lanes.failed_at[i]));
@@ -295,32 +305,6 @@ struct Lanes {
 }
 
 type V = [f64; LANES];
-
-/// Lane i's flip time, s (NaN: no flip): the first time, within the step of the flip, at
-/// which the cubic Hermite interpolant of an angle that crossed passes ±π.
-fn flip_time(lanes: &Lanes, i: usize, h: f64) -> f64 {
-    use std::f64::consts::PI;
-    let step = lanes.flip_step[i];
-    if step < 0.0 {
-        return f64::NAN;
-    }
-    let [before, after] = &lanes.flip_ends;
-    let mut first = f64::INFINITY;
-    for k in 0..2 {
-        let (a, b) = (before[k][i], after[k][i]);
-        if a.abs() <= PI && b.abs() > PI {
-            let (da, db) = (before[k + 2][i], after[k + 2][i]);
-            first = first.min(crate::events::hermite_crossing(
-                h,
-                (step + 1.0) * h,
-                [a, da],
-                [b, db],
-                PI.copysign(b),
-            ));
-        }
-    }
-    step * h + first * h
-}
 
 /// Half the trigonometry's fast range: while |θ₁| and |θ₂| are within it, so are θ₁, θ₂ and
 /// θ₁ − θ₂, and the fast path serves every sine and cosine the kernels take.
