@@ -18,7 +18,7 @@ use super::{CHUNK, has_fma};
 pub const LANES: usize = 16;
 use crate::integrator::Stepper;
 use crate::integrator::explicit_rk::{
-    StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update,
+    Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update,
 };
 use crate::num::{Lanes, Num, trig};
 use crate::observe::Observer;
@@ -308,20 +308,35 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
     #[inline(always)]
     fn eval(&mut self, t: f64, y: &[Lanes<LANES, FMA, WIDE>], dydt: &mut [Lanes<LANES, FMA, WIDE>]) {
         let t = Lanes::splat(t);
-        for half in 0..2 {
-            let mut yh = [Lanes([0.0; HALF]); D];
-            for (v, w) in yh.iter_mut().zip(y) {
-                v.0.copy_from_slice(&w.0[half * HALF..][..HALF]);
-            }
-            let eq = &self.eqs[half];
-            if !WIDE {
-                self.reach[half] = eq.trig_reach(t, &yh).max(self.reach[half]);
-            }
-            let mut dh = [Lanes([0.0; HALF]); D];
-            eq.rhs(t, &yh, &mut dh);
-            for (v, w) in dydt.iter_mut().zip(&dh) {
-                v.0[half * HALF..][..HALF].copy_from_slice(&w.0);
-            }
+        // The halves written out, not a loop: each half's equations (and the products of
+        // parameters they form) are then values the compiler keeps across the steps.
+        self.half::<0>(t, y, dydt);
+        self.half::<1>(t, y, dydt);
+    }
+}
+
+impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, const WIDE: bool>
+    LaneRhs<'_, E, D, FMA, WIDE>
+{
+    #[inline(always)]
+    fn half<const H: usize>(
+        &mut self,
+        t: Lanes<HALF, FMA, WIDE>,
+        y: &[Lanes<LANES, FMA, WIDE>],
+        dydt: &mut [Lanes<LANES, FMA, WIDE>],
+    ) {
+        let mut yh = [Lanes([0.0; HALF]); D];
+        for (v, w) in yh.iter_mut().zip(y) {
+            v.0.copy_from_slice(&w.0[H * HALF..][..HALF]);
+        }
+        let eq = &self.eqs[H];
+        if !WIDE {
+            self.reach[H] = eq.trig_reach(t, &yh).max(self.reach[H]);
+        }
+        let mut dh = [Lanes([0.0; HALF]); D];
+        eq.rhs(t, &yh, &mut dh);
+        for (v, w) in dydt.iter_mut().zip(&dh) {
+            v.0[H * HALF..][..HALF].copy_from_slice(&w.0);
         }
     }
 }
@@ -391,6 +406,10 @@ where
         c[i] = tab.c[i];
         b[i] = tab.b[i];
     }
+    let mut plan = [Row::Sum; S];
+    for (i, p) in plan.iter_mut().enumerate() {
+        *p = Row::of(&a[i][..i]);
+    }
     let zero = L::<FMA, WIDE>::splat(0.0);
     let mut y: [L<FMA, WIDE>; D] = [zero; D];
     for (v, s) in y.iter_mut().zip(&record.state) {
@@ -412,22 +431,24 @@ where
         // Times from the step index, as the scalar loop computes them.
         let t = step as f64 * h;
         let mut f = LaneRhs::<_, D, FMA, WIDE> { eqs: eq, reach };
-        fixed_stages::<_, _, D, _>(&a, &c, 0, &mut k, &mut f, t, h, &y);
+        fixed_stages::<_, _, D, _>(&a, &plan, &c, 0, &mut k, &mut f, t, h, &y);
         reach = f.reach;
         let mut next = y;
         fixed_update::<_, D>(&b, &k, scale, &mut next);
-        // One probe per lane for the common step, in which nothing happens: 0 · x is NaN
-        // exactly when x is not finite, and no watched angle went beyond π. Every loop runs
-        // over the lanes innermost: one vector operation per variable.
-        let mut probe = [0.0; LANES];
-        for v in &next[..dim] {
+        // One probe per lane for the common step, in which nothing happens: the sum of the
+        // state's components is finite (so is every component; a sum that overflows only
+        // sends the step to the closer look), and no watched angle went beyond π. Every loop
+        // runs over the lanes innermost: one vector operation per variable.
+        let mut probe = next[0].0;
+        for v in &next[1..dim] {
             for i in 0..LANES {
-                probe[i] += 0.0 * v.0[i];
+                probe[i] += v.0[i];
             }
         }
         let mut notable = [false; LANES];
         for i in 0..LANES {
-            notable[i] = probe[i].is_nan();
+            // 0 · x is NaN exactly when x is not finite.
+            notable[i] = (0.0 * probe[i]).is_nan();
         }
         for &a in run.angles {
             for i in 0..LANES {

@@ -114,19 +114,55 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
     y: &[T],
 ) {
     match y.len() {
-        2 => fixed_stages::<T, F, 2, _>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("2")),
-        4 => fixed_stages::<T, F, 4, _>(a, c, first, k.as_chunks_mut().0, f, t, h, y.try_into().expect("4")),
+        2 | 4 => {
+            let mut plan = [Row::Sum; MAX_PLANNED];
+            for (i, (p, row)) in plan.iter_mut().zip(a).enumerate().skip(first) {
+                *p = Row::of(&row[..i]);
+            }
+            let plan = &plan[..a.len()];
+            if y.len() == 2 {
+                fixed_stages::<T, F, 2, _>(
+                    a,
+                    plan,
+                    c,
+                    first,
+                    k.as_chunks_mut().0,
+                    f,
+                    t,
+                    h,
+                    y.try_into().expect("2"),
+                )
+            } else {
+                fixed_stages::<T, F, 4, _>(
+                    a,
+                    plan,
+                    c,
+                    first,
+                    k.as_chunks_mut().0,
+                    f,
+                    t,
+                    h,
+                    y.try_into().expect("4"),
+                )
+            }
+        }
         n => {
             for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
                 let (done, rest) = k.split_at_mut(i * n);
+                let plan = Row::of(&row[..i]);
                 for (j, s) in stage.iter_mut().enumerate() {
-                    let mut acc = T::splat(0.0);
-                    for (l, &a) in row.iter().enumerate() {
-                        if a != 0.0 {
-                            acc = T::splat(a).madd(done[l * n + j], acc);
+                    *s = match plan {
+                        Row::Single(l, a) => T::splat(a * h).madd(done[l * n + j], y[j]),
+                        Row::Sum => {
+                            let mut acc = T::splat(0.0);
+                            for (l, &a) in row[..i].iter().enumerate() {
+                                if a != 0.0 {
+                                    acc = T::splat(a).madd(done[l * n + j], acc);
+                                }
+                            }
+                            T::splat(h).madd(acc, y[j])
                         }
-                    }
-                    *s = T::splat(h).madd(acc, y[j]);
+                    };
                 }
                 f.eval(t + c * h, stage, &mut rest[..n]);
             }
@@ -141,6 +177,7 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
 #[inline(always)]
 pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize, R: AsRef<[f64]>>(
     a: &[R],
+    plan: &[Row],
     c: &[f64],
     first: usize,
     k: &mut [[T; N]],
@@ -151,25 +188,68 @@ pub(crate) fn fixed_stages<T: Num, F: StageRhs<T>, const N: usize, R: AsRef<[f64
 ) {
     for i in first..a.len().min(k.len()) {
         let (done, rest) = k.split_at_mut(i);
-        let mut acc = [T::splat(0.0); N];
-        for (l, &a) in a[i].as_ref().iter().take(i).enumerate() {
-            // Zero coefficients are skipped: adding 0 · k would be exact for finite k, but
-            // costs the time of the term.
-            if a != 0.0 {
-                for j in 0..N {
-                    acc[j] = T::splat(a).madd(done[l][j], acc[j]);
-                }
-            }
-        }
+        let row = &a[i].as_ref()[..i];
         // Loops, not `array::from_fn`: kernels compiled for an instruction set inline these
         // functions, and from_fn's closure, left out of line, lost the fused multiply-adds.
         let mut stage = *y;
-        for j in 0..N {
-            stage[j] = T::splat(h).madd(acc[j], y[j]);
+        if let Row::Single(l, a) = plan[i] {
+            let factor = T::splat(a * h);
+            for j in 0..N {
+                stage[j] = factor.madd(done[l][j], y[j]);
+            }
+        } else {
+            let mut acc = [T::splat(0.0); N];
+            for (l, &a) in row.iter().enumerate() {
+                // Zero coefficients are skipped: adding 0 · k would be exact for finite k, but
+                // costs the time of the term.
+                if a != 0.0 {
+                    for j in 0..N {
+                        acc[j] = T::splat(a).madd(done[l][j], acc[j]);
+                    }
+                }
+            }
+            for j in 0..N {
+                stage[j] = T::splat(h).madd(acc[j], y[j]);
+            }
         }
         f.eval(t + c[i] * h, &stage, &mut rest[0]);
     }
 }
+
+/// How a stage's state is formed from its row of the tableau.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Row {
+    /// The row's one nonzero coefficient aᵢₗ (index l), a power of two (RK4's ½ and 1,
+    /// Euler's and Heun's 1): then h (a k) = (a h) k exactly, and the stage y + (a h) kₗ is one
+    /// multiply-add per component, with the same result as the sum.
+    Single(usize, f64),
+    /// y + h Σ aᵢⱼ kⱼ, the sum from 0 left to right, zero coefficients skipped.
+    Sum,
+}
+
+impl Row {
+    /// The form of the stage whose row (its coefficients before the diagonal) is `row`.
+    #[inline(always)]
+    pub(crate) fn of(row: &[f64]) -> Row {
+        let mut found = None;
+        for (l, &a) in row.iter().enumerate() {
+            if a != 0.0 {
+                if found.is_some() {
+                    return Row::Sum;
+                }
+                found = Some((l, a));
+            }
+        }
+        match found {
+            // A normal number with an all-zero significand: ±2ᵉ.
+            Some((l, a)) if a.is_normal() && a.to_bits() & ((1 << 52) - 1) == 0 => Row::Single(l, a),
+            _ => Row::Sum,
+        }
+    }
+}
+
+/// The most stages whose forms [`explicit_stages`] plans on the stack (DOP853 has 12).
+const MAX_PLANNED: usize = 16;
 
 /// y += scale Σᵢ bᵢ kᵢ (the sum from b₀ k₀, left to right), over every number type; states of
 /// 2 and 4 components with fixed-size arrays (the same arithmetic).
@@ -180,7 +260,7 @@ pub(crate) fn explicit_update<T: Num>(b: &[f64], k: &[T], scale: f64, y: &mut [T
         4 => fixed_update::<T, 4>(b, k.as_chunks().0, scale, y.try_into().expect("4")),
         n => {
             for (j, yj) in y.iter_mut().enumerate() {
-                let mut acc = T::splat(b[0]) * k[j];
+                let mut acc = if b[0] == 1.0 { k[j] } else { T::splat(b[0]) * k[j] };
                 for (i, &b) in b.iter().enumerate().skip(1) {
                     acc = T::splat(b).madd(k[i * n + j], acc);
                 }
@@ -204,8 +284,11 @@ impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
 #[inline(always)]
 pub(crate) fn fixed_update<T: Num, const N: usize>(b: &[f64], k: &[[T; N]], scale: f64, y: &mut [T; N]) {
     let mut acc = k[0];
-    for j in 0..N {
-        acc[j] = T::splat(b[0]) * k[0][j];
+    // b₀ = 1 (RK4, Euler): b₀ k₀ is k₀ itself, without the product.
+    if b[0] != 1.0 {
+        for j in 0..N {
+            acc[j] = T::splat(b[0]) * k[0][j];
+        }
     }
     for (i, ki) in k.iter().enumerate().skip(1) {
         for j in 0..N {
