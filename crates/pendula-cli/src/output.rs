@@ -252,12 +252,17 @@ impl WriteError {
         ) || self.source.raw_os_error() == Some(EIO)
     }
 
-    /// The write error in `err`'s chain, if any (also inside an `io::Error`).
+    /// The write error in `err`'s chain, if any (also inside an `io::Error`, or a trajectory
+    /// row that could not be written, which ended the run).
     pub fn find(err: &anyhow::Error) -> Option<&WriteError> {
         err.chain().find_map(|e| {
-            e.downcast_ref::<WriteError>().or_else(|| {
-                e.downcast_ref::<io::Error>().and_then(|io| io.get_ref()?.downcast_ref::<WriteError>())
-            })
+            e.downcast_ref::<WriteError>()
+                .or_else(|| {
+                    e.downcast_ref::<io::Error>().and_then(|io| io.get_ref()?.downcast_ref::<WriteError>())
+                })
+                .or_else(|| {
+                    e.downcast_ref::<crate::watch::RowFailure>().and_then(|row| WriteError::find(&row.0))
+                })
         })
     }
 

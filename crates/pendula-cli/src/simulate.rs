@@ -125,13 +125,8 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
     // energy balance E − E(0) − W.
     let energy = EnergyBalance::new(&*model, values.initial_state());
     let progress = Progress::new(spec.t0, spec.schedule()?.t_end);
-    let writer = Writer {
-        model: &*model,
-        sink,
-        rows: 0,
-        kept: kept.or_else(|| plot.is_some().then(Vec::new)),
-        failure: None,
-    };
+    let writer =
+        Writer { model: &*model, sink, rows: 0, kept: kept.or_else(|| plot.is_some().then(Vec::new)) };
     let specs = args
         .events
         .iter()
@@ -188,9 +183,6 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
         // general run loop).
         let leg = model.solve_fastest(method, y0, &stepping, observers, from, &pause);
         *events = chain.events;
-        if let Some(err) = watch.rows.writer().failure.take() {
-            return Err(err);
-        }
         let state = match leg {
             Ok(Leg::Done(report)) => break report,
             Ok(Leg::Paused(state)) => state,
@@ -241,10 +233,7 @@ pub(crate) fn execute(args: &SimulateArgs, resumed: Option<Resumed>) -> Result<(
     let wall_s = earlier_wall + start.elapsed().as_secs_f64();
     let Watch { events, energy, rows, progress } = watch;
     progress.finish();
-    let mut writer = rows.into_writer();
-    if let Some(err) = writer.failure.take() {
-        return Err(err);
-    }
+    let writer = rows.into_writer();
     let energy_unit = info.energy_unit();
     let rows = writer.rows;
     writer.sink.finish()?;

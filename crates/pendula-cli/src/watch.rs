@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis::EnergyBalance;
 use pendula::checkpoint::{Snapshot, Words};
 use pendula::events::EventLocator;
-use pendula::observe::{Every, Observer, Resample, Sample};
+use pendula::observe::{Every, Flow, Observer, Resample, Sample, Stop};
 
 use crate::sink::Sink;
 
@@ -19,22 +19,42 @@ pub(crate) struct Writer<'a> {
     pub(crate) rows: u64,
     /// The rows, flat, when the run is to be drawn.
     pub(crate) kept: Option<Vec<f64>>,
-    pub(crate) failure: Option<anyhow::Error>,
 }
 
 impl Observer for Writer<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let e = s.energy.unwrap_or_else(|| self.model.energy(s.t, s.y));
         let row = || std::iter::once(s.t).chain(s.y.iter().copied()).chain(std::iter::once(e));
         if let Err(err) = self.sink.row(row()) {
-            self.failure = Some(err);
-            return ControlFlow::Break(());
+            // The run ends with this error (`pendula::Error::Observer`, whose cause it is).
+            return ControlFlow::Break(Stop::failed(RowFailure(err)));
         }
         if let Some(kept) = &mut self.kept {
             kept.extend(row());
         }
         self.rows += 1;
         ControlFlow::Continue(())
+    }
+}
+
+/// A row of the trajectory that could not be written: the sink's error, as the cause of the
+/// run's `pendula::Error::Observer`. A type of its own, so that [`WriteError::find`] can
+/// reach the write that failed through it (an `anyhow::Error` made into a boxed error hides
+/// its own type).
+///
+/// [`WriteError::find`]: crate::output::WriteError::find
+#[derive(Debug)]
+pub(crate) struct RowFailure(pub(crate) anyhow::Error);
+
+impl std::fmt::Display for RowFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for RowFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
     }
 }
 
@@ -138,7 +158,7 @@ impl Snapshot for Rows<'_> {
 }
 
 impl Observer for Progress {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         self.at(s.step, s.t);
         ControlFlow::Continue(())
     }

@@ -122,6 +122,47 @@ pub enum Error {
         /// What does not fit, in words.
         reason: String,
     },
+    /// An observer could not take a state of the run (its output failed) and ended the run
+    /// ([`crate::observe::Stop::Failed`]): its message, and its error as the source.
+    #[error(transparent)]
+    Observer(ObserverFailure),
+}
+
+/// The error with which an observer ended a run ([`Error::Observer`]): shared, so that the
+/// library error stays `Clone`; equal only to itself (its clones).
+#[derive(Debug, Clone)]
+pub struct ObserverFailure(std::sync::Arc<dyn std::error::Error + Send + Sync>);
+
+impl ObserverFailure {
+    /// The failure `err`.
+    pub fn new(err: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        ObserverFailure(std::sync::Arc::from(err.into()))
+    }
+
+    /// The observer's own error.
+    pub fn error(&self) -> &(dyn std::error::Error + Send + Sync + 'static) {
+        &*self.0
+    }
+}
+
+impl PartialEq for ObserverFailure {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+/// Its message is the observer's error's; its source is that error itself, so that a chain
+/// of causes walked from the run's error reaches the observer's (and what it wraps).
+impl fmt::Display for ObserverFailure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for ObserverFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&*self.0)
+    }
 }
 
 impl Error {

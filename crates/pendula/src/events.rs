@@ -14,7 +14,7 @@ use std::ops::ControlFlow;
 
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
-use crate::observe::{Observer, Sample};
+use crate::observe::{Flow, Observer, Sample, Stop};
 use crate::system::DynSystem;
 
 /// Which crossings of zero count.
@@ -267,7 +267,7 @@ impl EventLocator<'_> {
 }
 
 impl Observer for EventLocator<'_> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         // `simulate` always carries a locator: with nothing to watch it costs nothing per step.
         if self.specs.is_empty() {
             return ControlFlow::Continue(());
@@ -347,7 +347,7 @@ impl Observer for EventLocator<'_> {
             }
             None => self.previous = Some((sample.t, sample.y.to_vec(), self.f.clone())),
         }
-        if stop { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        if stop { ControlFlow::Break(Stop::Enough) } else { ControlFlow::Continue(()) }
     }
 
     fn wants_dense(&self) -> bool {
@@ -368,14 +368,17 @@ pub struct EndAtEvent<'a, O> {
 }
 
 impl<O: Observer> Observer for EndAtEvent<'_, O> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         // The locator breaks only at a terminal event, which it then reports.
         if self.events.observe(sample).is_break() {
             if let Some(e) = self.events.stopped_at() {
                 let at = Sample { t: e.t, y: &e.state, last: true, energy: None, ..*sample };
-                let _ = self.inner.observe(&at);
+                // The event ends the run either way; only a failure to take it matters.
+                if let ControlFlow::Break(Stop::Failed(f)) = self.inner.observe(&at) {
+                    return ControlFlow::Break(Stop::Failed(f));
+                }
             }
-            return ControlFlow::Break(());
+            return ControlFlow::Break(Stop::Enough);
         }
         self.inner.observe(sample)
     }

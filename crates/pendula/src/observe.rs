@@ -1,10 +1,14 @@
 //! Observers: who watches a run. The run loop shows each step to an [`Observer`], which may
-//! stop the run by returning [`ControlFlow::Break`]. Recording, thinning, energy tracking
-//! and early stopping are observers, composed with tuples.
+//! end the run by returning [`ControlFlow::Break`] with a [`Stop`]: [`Stop::Enough`] (the run
+//! ends as stopped) or [`Stop::Failed`] (the observer could not take the state, a write that
+//! failed: the run ends with [`Error::Observer`], the failure as its source). Recording,
+//! thinning, energy tracking and early stopping are observers, composed with tuples.
 
 use std::ops::ControlFlow;
 
 use crate::Error;
+use crate::error::ObserverFailure;
+
 use crate::checkpoint::{Pause, Reader, Snapshot, Words};
 
 /// One state of a run, as an observer sees it.
@@ -72,10 +76,42 @@ impl<'a> DenseStep<'a> {
     }
 }
 
+/// Why an observer ends a run before its end.
+#[derive(Debug)]
+pub enum Stop {
+    /// It has seen what it needed: the run ends as [`crate::Outcome::Stopped`].
+    Enough,
+    /// It could not take the state (its output failed): the run ends with
+    /// [`Error::Observer`], which carries this failure.
+    Failed(ObserverFailure),
+}
+
+impl Stop {
+    /// A failure of the observer from any error (an I/O error, an `anyhow::Error`).
+    pub fn failed(err: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Stop {
+        Stop::Failed(ObserverFailure::new(err))
+    }
+
+    /// `Ok` when the observer had enough, the run's error when it failed.
+    ///
+    /// # Errors
+    /// [`Error::Observer`] for [`Stop::Failed`].
+    pub fn into_result(self) -> Result<(), Error> {
+        match self {
+            Stop::Enough => Ok(()),
+            Stop::Failed(failure) => Err(Error::Observer(failure)),
+        }
+    }
+}
+
+/// What an observer says after seeing a state: go on, or [`Stop`] and why.
+pub type Flow = ControlFlow<Stop>;
+
 /// Watches a run step by step.
 pub trait Observer {
-    /// Sees one state; `Break` ends the run early (as [`crate::Outcome::Stopped`]).
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()>;
+    /// Sees one state; `Break` ends the run early: as [`crate::Outcome::Stopped`] with
+    /// [`Stop::Enough`], as the error [`Error::Observer`] with [`Stop::Failed`].
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow;
 
     /// Whether this observer uses [`Sample::dense`]; methods that must spend evaluations on
     /// dense output (DOP853) do so only then.
@@ -85,7 +121,7 @@ pub trait Observer {
 }
 
 impl<O: Observer + ?Sized> Observer for &mut O {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         (**self).observe(sample)
     }
     fn wants_dense(&self) -> bool {
@@ -94,10 +130,17 @@ impl<O: Observer + ?Sized> Observer for &mut O {
 }
 
 impl<A: Observer, B: Observer> Observer for (A, B) {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         let a = self.0.observe(sample);
         let b = self.1.observe(sample);
-        if a.is_break() || b.is_break() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        // A failure outranks having seen enough; the first observer's, if both failed.
+        match (a, b) {
+            (ControlFlow::Continue(()), ControlFlow::Continue(())) => ControlFlow::Continue(()),
+            (ControlFlow::Break(Stop::Failed(f)), _) | (_, ControlFlow::Break(Stop::Failed(f))) => {
+                ControlFlow::Break(Stop::Failed(f))
+            }
+            _ => ControlFlow::Break(Stop::Enough),
+        }
     }
     fn wants_dense(&self) -> bool {
         self.0.wants_dense() || self.1.wants_dense()
@@ -109,7 +152,7 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 pub struct Ignore;
 
 impl Observer for Ignore {
-    fn observe(&mut self, _: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, _: &Sample<'_>) -> Flow {
         ControlFlow::Continue(())
     }
 }
@@ -118,8 +161,8 @@ impl Observer for Ignore {
 #[derive(Debug, Clone, Copy)]
 pub struct FromFn<F>(pub F);
 
-impl<F: FnMut(&Sample<'_>) -> ControlFlow<()>> Observer for FromFn<F> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+impl<F: FnMut(&Sample<'_>) -> Flow> Observer for FromFn<F> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         (self.0)(sample)
     }
 }
@@ -134,7 +177,7 @@ pub struct Every<O> {
 }
 
 impl<O: Observer> Observer for Every<O> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         if self.n == 1 {
             self.inner.observe(sample)
         } else if sample.step.is_multiple_of(self.n) || sample.last {
@@ -157,7 +200,7 @@ pub struct Recorder {
 }
 
 impl Observer for Recorder {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         self.rows.push(sample.t);
         self.rows.extend_from_slice(sample.y);
         ControlFlow::Continue(())
@@ -217,7 +260,7 @@ impl<F: FnMut(f64, &[f64]) -> f64> EnergyTracker<F> {
 }
 
 impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergyTracker<F> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         match sample.energy {
             Some(e) => self.record(e),
             None => {
@@ -233,8 +276,8 @@ impl<F: FnMut(f64, &[f64]) -> f64> Observer for EnergyTracker<F> {
 pub struct StopWhen<F>(pub F);
 
 impl<F: FnMut(&Sample<'_>) -> bool> Observer for StopWhen<F> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        if (self.0)(sample) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
+        if (self.0)(sample) { ControlFlow::Break(Stop::Enough) } else { ControlFlow::Continue(()) }
     }
 }
 
@@ -283,7 +326,7 @@ impl<O> Resample<O> {
 }
 
 impl<O: Observer> Observer for Resample<O> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         let t = sample.t;
         let merge = 1e-12 * t.abs().max(1.0);
         let Some(_) = self.origin else {
@@ -305,9 +348,7 @@ impl<O: Observer> Observer for Resample<O> {
             let Some(dense) = &sample.dense else { continue };
             dense.at(tk, &mut self.y);
             let at = Sample { t: tk, y: &self.y, last: false, dense: None, energy: None, ..*sample };
-            if self.inner.observe(&at).is_break() {
-                return ControlFlow::Break(());
-            }
+            self.inner.observe(&at)?;
         }
         if sample.last {
             while self.time(self.next).is_some_and(|tk| tk <= t + merge) {
@@ -361,14 +402,12 @@ impl<'a, 'p, O: ?Sized> Pausing<'a, 'p, O> {
 }
 
 impl<O: Observer + ?Sized> Observer for Pausing<'_, '_, O> {
-    fn observe(&mut self, sample: &Sample<'_>) -> ControlFlow<()> {
-        if self.inner.observe(sample).is_break() {
-            return ControlFlow::Break(());
-        }
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
+        self.inner.observe(sample)?;
         // Not at the initial state: a run resumed from step 0 would show it again.
         if sample.step > 0 && !sample.last && self.pause.due(sample.t) {
             self.paused = true;
-            return ControlFlow::Break(());
+            return ControlFlow::Break(Stop::Enough);
         }
         ControlFlow::Continue(())
     }

@@ -13,7 +13,7 @@ use pendula::control::Tolerances;
 use pendula::events::{EventLocator, EventSpec};
 use pendula::integrator::{self, METHODS, Method};
 use pendula::model::DynModel;
-use pendula::observe::{Grid, Observer, Resample, Sample};
+use pendula::observe::{Flow, Grid, Observer, Resample, Sample};
 use pendula::system::{Model, Values, double::DoublePendulum};
 use pendula::{End, Error, Report, RunSpec, Stepping};
 
@@ -24,7 +24,7 @@ use crate::support::values;
 struct Tape(Vec<u64>);
 
 impl Observer for Tape {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         self.0.push(s.step);
         self.0.push(s.t.to_bits());
         self.0.extend(s.y.iter().map(|v| v.to_bits()));
@@ -42,7 +42,7 @@ struct PauseEvery<'a> {
 }
 
 impl Observer for PauseEvery<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         if s.step > 0 && s.step.is_multiple_of(self.every) {
             self.flag.store(true, Ordering::Relaxed);
         }

@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 
 use pendula::integrator::{self, Method, Requirement, Scheme};
 use pendula::model::DynModel;
-use pendula::observe::{Observer, Sample};
+use pendula::observe::{Flow, Observer, Sample};
 use pendula::{End, Error, RunSpec};
 
 use crate::support::values;
@@ -25,7 +25,7 @@ pub(crate) struct Tenths<'a> {
 }
 
 impl Observer for Tenths<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let e = self.model.energy(s.t, s.y);
         let err = (e - *self.e0.get_or_insert(e)).abs();
         if s.step <= self.steps / 10 {

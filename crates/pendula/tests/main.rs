@@ -26,6 +26,7 @@ mod implicit;
 mod kit;
 mod lyapunov;
 mod messages;
+mod observe;
 mod poincare;
 mod scales;
 mod schedule;

@@ -14,7 +14,7 @@ use anyhow::Result;
 use clap::Args;
 use pendula::analysis::{EnergySeries, Growth, drift_rate, envelope, first_exceeding, growth};
 use pendula::integrator::Method;
-use pendula::observe::{Every, Observer, Recorder, Sample};
+use pendula::observe::{Every, Flow, Observer, Recorder, Sample};
 use pendula::system::Values;
 use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_unit};
@@ -402,11 +402,11 @@ struct GiveUp<'a, 'b> {
 }
 
 impl Observer for GiveUp<'_, '_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let _ = self.series.observe(s);
         if self.series.max_abs > GIVE_UP {
             self.stopped_at = Some(s.t);
-            return ControlFlow::Break(());
+            return ControlFlow::Break(pendula::observe::Stop::Enough);
         }
         ControlFlow::Continue(())
     }
@@ -540,7 +540,7 @@ struct Until<O> {
 }
 
 impl<O: Observer> Observer for Until<O> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         if s.t <= self.t_max {
             let _ = self.inner.observe(s);
         }

@@ -269,7 +269,7 @@ struct HarmonicFit {
 }
 
 impl pendula::observe::Observer for HarmonicFit {
-    fn observe(&mut self, sample: &pendula::observe::Sample<'_>) -> std::ops::ControlFlow<()> {
+    fn observe(&mut self, sample: &pendula::observe::Sample<'_>) -> pendula::observe::Flow {
         if sample.t >= self.from {
             let (s, c) = (self.w * sample.t).sin_cos();
             let x = sample.y[0];

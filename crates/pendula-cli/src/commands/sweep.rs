@@ -362,7 +362,7 @@ struct FlipWatch {
 }
 
 impl Observer for FlipWatch {
-    fn observe(&mut self, s: &Sample<'_>) -> std::ops::ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> pendula::observe::Flow {
         use std::f64::consts::PI;
         if s.step > 0 && self.flip_time.is_nan() {
             let mut fraction = f64::INFINITY;
@@ -375,7 +375,7 @@ impl Observer for FlipWatch {
             if fraction.is_finite() {
                 self.flip_time = self.t_previous + fraction * (s.t - self.t_previous);
                 if self.stop {
-                    return std::ops::ControlFlow::Break(());
+                    return std::ops::ControlFlow::Break(pendula::observe::Stop::Enough);
                 }
             }
         }

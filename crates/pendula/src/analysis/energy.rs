@@ -7,7 +7,7 @@ use std::ops::ControlFlow;
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::model::DynModel;
-use crate::observe::{Observer, Sample};
+use crate::observe::{Flow, Observer, Sample};
 
 /// The error of a run's energy, absolute (J, or the system's units when dimensionless) and
 /// relative to the model's energy scale ([`crate::system::Model::energy_scale`]).
@@ -107,7 +107,7 @@ impl<'a> EnergyBalance<'a> {
 }
 
 impl Observer for EnergyBalance<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         self.track(s.t, s.y, s.energy);
         ControlFlow::Continue(())
     }
@@ -173,7 +173,7 @@ impl<'a> EnergySeries<'a> {
 }
 
 impl Observer for EnergySeries<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let err = self.balance.track(s.t, s.y, s.energy) / self.balance.scale;
         self.max_abs = self.max_abs.max(err.abs());
         if s.step.is_multiple_of(self.every) || s.last {

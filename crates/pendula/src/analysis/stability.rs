@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use super::energy::EnergyBalance;
 use crate::integrator::Method;
 use crate::model::DynModel;
-use crate::observe::{Observer, Sample};
+use crate::observe::{Flow, Observer, Sample, Stop};
 use crate::{End, Error, RunSpec};
 
 /// When a run counts as stable.
@@ -26,11 +26,11 @@ struct Guard<'a> {
 }
 
 impl Observer for Guard<'_> {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let error = self.balance.track(s.t, s.y, s.energy);
         if error.abs() > self.bound * self.balance.scale {
             self.exceeded = true;
-            return ControlFlow::Break(());
+            return ControlFlow::Break(Stop::Enough);
         }
         ControlFlow::Continue(())
     }

@@ -7,7 +7,7 @@ use std::ops::ControlFlow;
 
 use crate::integrator::Method;
 use crate::model::DynModel;
-use crate::observe::{Observer, Sample};
+use crate::observe::{Flow, Observer, Sample};
 use crate::{End, Error, RunSpec};
 
 /// Keeps the state every `every` steps once `from` steps have passed.
@@ -18,7 +18,7 @@ struct Strobe {
 }
 
 impl Observer for Strobe {
-    fn observe(&mut self, s: &Sample<'_>) -> ControlFlow<()> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
         if s.step >= self.from && s.step > 0 && s.step.is_multiple_of(self.every) {
             self.rows.extend_from_slice(s.y);
         }

@@ -5,6 +5,8 @@ use super::{has_fma, trig};
 use crate::checkpoint::{Leg, Pause, Reader, RunState, Words};
 use crate::num::Lanes;
 use crate::observe::Pausing;
+use std::ops::ControlFlow;
+
 use crate::observe::{Observer, Sample};
 use crate::simulate::Schedule;
 use crate::system::double::DoublePendulum;
@@ -213,10 +215,10 @@ fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
     let (t0, h) = (spec.t0, spec.h);
     let mut tr = trig_of::<FMA>(y);
     if done == 0
-        && observer
-            .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(0, t0, y, false) })
-            .is_break()
+        && let ControlFlow::Break(stop) =
+            observer.observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(0, t0, y, false) })
     {
+        stop.into_result()?;
         return Ok((0, Outcome::Stopped { steps: 0, t: t0 }));
     }
     let m = trig::madd::<FMA>;
@@ -236,10 +238,10 @@ fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
             return Err(Error::NonFinite { t });
         }
         tr = trig_of::<FMA>(y);
-        if observer
-            .observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(k, t, y, last) })
-            .is_break()
+        if let ControlFlow::Break(stop) =
+            observer.observe(&Sample { energy: Some(energy_from(p, y, &tr)), ..Sample::new(k, t, y, last) })
         {
+            stop.into_result()?;
             return Ok((k, Outcome::Stopped { steps: k, t }));
         }
     }

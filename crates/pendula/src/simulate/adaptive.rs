@@ -8,6 +8,8 @@ use crate::checkpoint::{Leg, Pause, Reader, RunState, Snapshot, Words};
 use crate::control::{PiController, Tolerances, Verdict};
 use crate::integrator::embedded::EmbeddedRk;
 use crate::integrator::{Method, Scheme};
+use std::ops::ControlFlow;
+
 use crate::observe::{Observer, Sample};
 use crate::simulate::{Counted, Outcome, Report};
 use crate::system::{Model, System};
@@ -93,7 +95,8 @@ pub(crate) fn run<M: Model>(
             if y.iter().any(|v| !v.is_finite()) {
                 return Err(Error::NonFinite { t: 0.0 });
             }
-            if observer.observe(&Sample::new(0, 0.0, &y, false)).is_break() {
+            if let ControlFlow::Break(stop) = observer.observe(&Sample::new(0, 0.0, &y, false)) {
+                stop.into_result()?;
                 return Ok(Leg::Done(report(Outcome::Stopped { steps: 0, t: 0.0 }, y, 0, &system)));
             }
             let h =
@@ -149,7 +152,8 @@ pub(crate) fn run<M: Model>(
                 }
                 let sample =
                     Sample { dense: stepper.dense_output(), ..Sample::new(at.accepted, t_new, &y, last) };
-                if observer.observe(&sample).is_break() {
+                if let ControlFlow::Break(stop) = observer.observe(&sample) {
+                    stop.into_result()?;
                     let outcome = Outcome::Stopped { steps: at.accepted, t: t_new };
                     return Ok(Leg::Done(report(outcome, y, at.rejected, &system)));
                 }

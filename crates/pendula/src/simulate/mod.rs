@@ -18,6 +18,8 @@ use crate::integrator::partitioned::PartitionedStepper;
 use crate::integrator::tao::TaoStepper;
 use crate::integrator::{Method, Requirement, Scheme, Stepper};
 use crate::observe::Pausing;
+use std::ops::ControlFlow;
+
 use crate::observe::{Observer, Sample};
 pub use crate::simulate::adaptive::solve_adaptive;
 use crate::system::{Hamiltonian, Model, System};
@@ -220,7 +222,8 @@ impl<S: ?Sized> Simulation<'_, S> {
         }
         if done == 0 {
             let first = Sample::new(0, t0, y, false);
-            if observer.observe(&first).is_break() {
+            if let ControlFlow::Break(stop) = observer.observe(&first) {
+                stop.into_result()?;
                 return Ok(Outcome::Stopped { steps: 0, t: t0 });
             }
         }
@@ -233,7 +236,8 @@ impl<S: ?Sized> Simulation<'_, S> {
             if y.iter().any(|v| !v.is_finite()) {
                 return Err(Error::NonFinite { t: t_next });
             }
-            if observer.observe(&Sample::new(k, t_next, y, last)).is_break() {
+            if let ControlFlow::Break(stop) = observer.observe(&Sample::new(k, t_next, y, last)) {
+                stop.into_result()?;
                 return Ok(Outcome::Stopped { steps: k, t: t_next });
             }
         }
@@ -410,7 +414,7 @@ pub(crate) struct ToVelocities<'a, M> {
 }
 
 impl<M: Model> Observer for ToVelocities<'_, M> {
-    fn observe(&mut self, sample: &Sample<'_>) -> std::ops::ControlFlow<()> {
+    fn observe(&mut self, sample: &Sample<'_>) -> crate::observe::Flow {
         self.model.to_velocities(sample.y, &mut self.y);
         self.inner.observe(&Sample { y: &self.y, dense: None, energy: None, ..*sample })
     }
