@@ -23,47 +23,60 @@ over the limits without --allow-large); 130, 143, 129 interrupted by SIGINT, SIG
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Integrate one system with one method and write its trajectory and a summary.
+    #[command(mut_args(|a| crate::config::SIMULATE.document(a)))]
     Simulate(Box<SimulateArgs>),
     /// Compare methods on one problem: energy error, trajectories, phase portraits, cost.
     #[command(mut_arg("set", |a| a.help(SET_COMPARE)))]
+    #[command(mut_args(|a| crate::commands::compare::DEFAULTS.document(a)))]
     Compare(Box<crate::commands::compare::CompareArgs>),
     /// Global error against step size, with the fitted order of each method.
     #[command(mut_arg("set", |a| a.help(SET_CONVERGENCE)))]
+    #[command(mut_args(|a| crate::commands::convergence::DEFAULTS.document(a)))]
     Convergence(Box<crate::commands::convergence::ConvergenceArgs>),
     /// The largest stable step of each method.
     #[command(mut_arg("set", |a| a.help(SET_STABILITY)))]
+    #[command(mut_args(|a| crate::commands::stability::DEFAULTS.document(a)))]
     Stability(Box<crate::commands::stability::StabilityArgs>),
     /// Error against cost (rhs evaluations, wall time) of each method over a range of steps.
     #[command(mut_arg("set", |a| a.help(SET_WORK_PRECISION)))]
+    #[command(mut_args(|a| crate::commands::work_precision::DEFAULTS.document(a)))]
     WorkPrecision(Box<crate::commands::work_precision::WorkPrecisionArgs>),
     /// The simple pendulum's period against amplitude: simulated, exact and small-angle.
     #[command(mut_arg("set", |a| a.help(SET_PERIOD)))]
+    #[command(mut_args(|a| crate::commands::period::DEFAULTS.document(a)))]
     Period(Box<crate::commands::period::PeriodArgs>),
     /// The oscillator's damping regimes and forced resonance, exact and simulated.
     #[command(mut_arg("set", |a| a.help(SET_OSCILLATOR_REGIMES)))]
     OscillatorRegimes(Box<crate::commands::regimes::RegimesArgs>),
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
+    #[command(mut_args(|a| crate::commands::animate::DEFAULTS.document(a)))]
     Animate(Box<crate::commands::animate::AnimateArgs>),
     /// Distance between two trajectories started close together, and its growth rate.
     #[command(mut_arg("set", |a| a.help(SET_DIVERGENCE)))]
+    #[command(mut_args(|a| crate::commands::divergence::DEFAULTS.document(a)))]
     Divergence(Box<crate::commands::divergence::DivergenceArgs>),
     /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
     /// plot of the running estimate and an uncertainty.
     #[command(mut_arg("set", |a| a.help(SET_LYAPUNOV)))]
+    #[command(mut_args(|a| crate::commands::lyapunov::DEFAULTS.document(a)))]
     Lyapunov(Box<crate::commands::lyapunov::LyapunovArgs>),
     /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
     /// surface and their crossings of a section, located by events.
     #[command(mut_arg("set", |a| a.help(SET_POINCARE)))]
+    #[command(mut_args(|a| crate::commands::poincare::DEFAULTS.document(a)))]
     Poincare(Box<crate::commands::poincare::PoincareArgs>),
     /// Stroboscopic orbit diagram of a driven system against a swept parameter (SIMD lanes for
     /// the driven pendulum).
     #[command(mut_arg("set", |a| a.help(SET_BIFURCATION)))]
+    #[command(mut_args(|a| crate::commands::bifurcation::DEFAULTS.document(a)))]
     Bifurcation(Box<crate::commands::bifurcation::BifurcationArgs>),
     /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
+    #[command(mut_args(|a| crate::commands::fractal::DEFAULTS.document(a)))]
     Fractal(Box<crate::commands::fractal::FractalArgs>),
     /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
     /// pendulum with rk4) into one .npy array, or one shard of it.
+    #[command(mut_args(|a| crate::commands::sweep::DEFAULTS.document(a)))]
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.
     Merge(Box<crate::commands::merge::MergeArgs>),
@@ -128,20 +141,17 @@ pub enum ListWhat {
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SimulateArgs {
-    /// System to integrate (see `pendula list systems`) [default: double].
-    pub system: Option<String>,
-    /// Integration method (see `pendula list methods`) [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s; for adaptive methods the first step to try [default: 0.001]. The run may
-    /// take at most 10^11 steps (10^13 with --allow-large).
-    #[arg(long, allow_hyphen_values = true, value_name = "H")]
-    pub dt: Option<String>,
-    /// End time, s; the last step is shortened to land on it [default: 10].
-    #[arg(long, allow_hyphen_values = true, value_name = "T", conflicts_with = "steps")]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub system: crate::args::SystemArg,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub stepping: crate::args::MethodArgs,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub end: crate::args::EndArg,
     /// Number of steps, instead of --t-end: 1 to 10^13.
-    #[arg(long, allow_hyphen_values = true, value_name = "N")]
+    #[arg(long, allow_hyphen_values = true, value_name = "N", conflicts_with = "t_end")]
     pub steps: Option<String>,
     /// Binding constant ω of tao-2 and tao-4, 1/s [default: 200]: larger holds the two copies
     /// closer on chaotic orbits; binding * dt must be <= 1.

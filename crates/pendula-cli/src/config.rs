@@ -15,10 +15,20 @@ use serde::Deserialize;
 use crate::cli::SimulateArgs;
 use crate::limits::{self, Cost, Estimate};
 
-/// Default step size, s.
-const DEFAULT_DT: f64 = 1e-3;
-/// Default end time, s.
-const DEFAULT_T_END: f64 = 10.0;
+/// What simulate runs without arguments or scenario file.
+pub const SIMULATE: crate::args::Defaults = crate::args::Defaults {
+    system: "double",
+    method: Some("rk4"),
+    dt: Some(1e-3),
+    t_end: Some(10.0),
+    notes: &[
+        (
+            "dt",
+            "For adaptive methods the first step to try. The run may take at most 10^11 steps (10^13 with --allow-large).",
+        ),
+        ("t_end", "The last step is shortened to land on it."),
+    ],
+};
 /// Default trajectory file.
 pub const DEFAULT_OUT: &str = "trajectory.csv";
 
@@ -616,13 +626,19 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
     let preset = args.preset.as_deref().map(system::driven::find_preset).transpose()?;
     let system_name = args
         .system
+        .system
         .clone()
         .or(scenario.system)
         .or_else(|| preset.map(|p| p.system.to_owned()))
-        .unwrap_or_else(|| "double".into());
+        .unwrap_or_else(|| SIMULATE.system.into());
     let info: &'static SystemInfo = pendula::model::find(&system_name)?;
-    let mut method =
-        *integrator::find(args.method.as_deref().or(scenario.method.as_deref()).unwrap_or("rk4"))?;
+    let mut method = *integrator::find(
+        args.stepping
+            .method
+            .as_deref()
+            .or(scenario.method.as_deref())
+            .unwrap_or(SIMULATE.method.expect("a default method")),
+    )?;
     if let Some(text) = &args.binding {
         let omega = parse_float("--binding", text, "a number > 0, in 1/s")?;
         method = method.with_binding(omega).map_err(|e| flag_error(e, &[("binding", "--binding")]))?;
@@ -639,26 +655,27 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
     settings.extend(parse_settings(info, &args.set)?);
     let values = info.values(&settings)?;
 
-    let given_dt = match &args.dt {
+    let given_dt = match &args.stepping.dt {
         Some(text) => Some(parse_float("--dt", text, "a step size in seconds")?),
         None => scenario.dt,
     };
-    let h = given_dt.unwrap_or(DEFAULT_DT);
+    let h = given_dt.unwrap_or(SIMULATE.dt.expect("a default step"));
     let t_eval = args.t_eval.as_deref().map(parse_times).transpose()?;
-    let end = match (&args.t_end, &args.steps) {
+    let end = match (&args.end.t_end, &args.steps) {
         (Some(t), _) => End::Time(parse_float("--t-end", t, "an end time in seconds")?),
         (None, Some(n)) => End::Steps(parse_count("--steps", n, 1, limits::MAX_STEPS, "steps")?),
         (None, None) => match (scenario.t_end, scenario.steps) {
             (_, Some(n)) => End::Steps(n),
             (t, None) => End::Time(
-                t.or_else(|| t_eval.as_ref().and_then(|v| v.last().copied())).unwrap_or(DEFAULT_T_END),
+                t.or_else(|| t_eval.as_ref().and_then(|v| v.last().copied()))
+                    .unwrap_or(SIMULATE.t_end.expect("a default end")),
             ),
         },
     };
     let spec = RunSpec { t0: 0.0, h, end };
     // Name where each value came from: a flag, or the scenario file.
-    let dt_flag = if args.dt.is_none() && scenario.dt.is_some() { "dt" } else { "--dt" };
-    let end_flag = match (&args.t_end, &args.steps, end) {
+    let dt_flag = if args.stepping.dt.is_none() && scenario.dt.is_some() { "dt" } else { "--dt" };
+    let end_flag = match (&args.end.t_end, &args.steps, end) {
         (Some(_), _, _) => "--t-end",
         (None, Some(_), _) => "--steps",
         (None, None, End::Steps(_)) => "steps",

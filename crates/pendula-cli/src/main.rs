@@ -4,6 +4,7 @@
 #[macro_use]
 mod study;
 
+mod args;
 mod checkpoint;
 mod chunks;
 mod cli;

@@ -9,28 +9,23 @@ use std::process::{Command, Stdio};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::EnergySeries;
-use pendula::integrator;
 use pendula::observe::{Every, Recorder};
 use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
-use crate::config::{f64_arg, parse_value};
+use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
+use crate::config::parse_value;
 use crate::output::{AtomicFile, CreatedDirs, WatchedChild};
 use crate::study;
 
 #[derive(Debug, Clone, Args)]
 pub struct AnimateArgs {
-    /// System: pendulum or double [default: double].
-    pub system: Option<String>,
-    /// Integration method [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s [default: 0.001].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
-    /// Length of the animation in simulated seconds [default: 10].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
+    #[command(flatten)]
+    pub stepping: MethodArgs,
+    #[command(flatten)]
+    pub end: EndArg,
     /// Set a parameter or initial-state variable: `--set theta1=120deg` for the double pendulum,
     /// `--set theta=120deg` for the pendulum (bare angles are radians).
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -52,14 +47,26 @@ pub struct AnimateArgs {
     pub allow_large: bool,
 }
 
+/// What animate runs without arguments.
+pub const DEFAULTS: Defaults = Defaults {
+    system: "double",
+    method: Some("rk4"),
+    dt: Some(1e-3),
+    t_end: Some(10.0),
+    notes: &[
+        ("system", "A pendulum or the double pendulum."),
+        ("t_end", "The length of the animation in simulated seconds."),
+    ],
+};
+
 pub fn run(args: &AnimateArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("double");
+    let system = args.system.name(&DEFAULTS);
     if !matches!(system, "pendulum" | "double") {
         bail!("invalid system `{system}` for animate: it draws pendulums; use pendulum or double");
     }
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 10.0, "a time in seconds")?;
+    let method = args.stepping.method(&DEFAULTS)?;
+    let h = args.stepping.dt(&DEFAULTS)?;
+    let t_end = args.end.t_end(&DEFAULTS)?;
     let fps = match &args.fps {
         Some(text) => {
             crate::config::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32

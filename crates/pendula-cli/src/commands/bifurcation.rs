@@ -17,6 +17,7 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_u
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::args::{Defaults, SystemArg};
 use crate::commands::sweep::{parse_axis, refuse_set_and_swept};
 use crate::config::{f64_arg, parse_count};
 use crate::limits::{self, Cost, Estimate};
@@ -24,8 +25,8 @@ use crate::study::{self, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct BifurcationArgs {
-    /// A driven system [default: driven-pendulum, or the preset's].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// The swept parameter: NAME=LO:HI:N, N cell centres as in `pendula sweep`
     /// [default: drive_amplitude=1.0:1.5:800 for driven-pendulum].
     #[arg(long, value_name = "NAME=LO:HI:N")]
@@ -52,13 +53,22 @@ pub struct BifurcationArgs {
     pub common: study::Common,
 }
 
+/// What bifurcation runs on without a system or preset named.
+pub const DEFAULTS: Defaults = Defaults {
+    system: "driven-pendulum",
+    method: None,
+    dt: None,
+    t_end: None,
+    notes: &[("system", "A driven system; with --preset, the preset's.")],
+};
+
 pub fn run(args: &BifurcationArgs) -> Result<()> {
     // Validate everything first.
     let (info, base) = study::preset_settings(
-        args.system.as_deref(),
+        args.system.system.as_deref(),
         args.preset.as_deref(),
         &args.common.set,
-        "driven-pendulum",
+        DEFAULTS.system,
     )?;
     let system = info.name;
     if info.quantity("drive_frequency").is_err() {

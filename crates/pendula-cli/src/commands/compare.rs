@@ -23,14 +23,15 @@ use serde_json::json;
 
 use pendula::error::Short;
 
+use crate::args::{Defaults, SystemArg};
 use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate, round};
 use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct CompareArgs {
-    /// System [default: double].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
@@ -121,8 +122,11 @@ pub fn default_t_end(system: &str) -> f64 {
     if system == "double" { 100_000.0 } else { 500.0 }
 }
 
+/// What compare runs on without a system named (its methods and steps are its own).
+pub const DEFAULTS: Defaults = Defaults { system: "double", method: None, dt: None, t_end: None, notes: &[] };
+
 pub fn run(args: &CompareArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("double");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
     let steps = match &args.dt {
         Some(text) => Steps::Equal(positive_arg("--dt", Some(text), 0.0, "a step size in seconds")?),

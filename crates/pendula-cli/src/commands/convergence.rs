@@ -16,13 +16,14 @@ use pendula::system::Values;
 use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
 use serde_json::json;
 
+use crate::args::{Defaults, SystemArg};
 use crate::commands::compare::refusal;
 use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
-    /// System [default: oscillator].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
@@ -79,8 +80,12 @@ pub fn default_t_end(values: &Values) -> f64 {
     values.info().study_periods * values.build().time_scale()
 }
 
+/// What convergence runs on without a system named (its methods and steps are its own).
+pub const DEFAULTS: Defaults =
+    Defaults { system: "oscillator", method: None, dt: None, t_end: None, notes: &[] };
+
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("oscillator");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
     let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
     let model = values.build();

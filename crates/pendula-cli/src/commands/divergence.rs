@@ -4,7 +4,6 @@
 use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::{divergence, growth_rate};
-use pendula::integrator;
 use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
@@ -12,27 +11,23 @@ use serde_json::json;
 use crate::config::f64_arg;
 use pendula::error::Short;
 
+use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct DivergenceArgs {
-    /// System [default: double].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// The initial separation, added to the first state variable (or `--variable`) [default: 1e-9].
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub delta: Option<String>,
     /// The state variable to perturb [default: the first, e.g. theta1].
     #[arg(long, value_name = "NAME")]
     pub variable: Option<String>,
-    /// Method [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s [default: 0.001].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
-    /// End time, s [default: 30].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub stepping: MethodArgs,
+    #[command(flatten)]
+    pub end: EndArg,
     /// The fit uses the distances before they first exceed this [default: 0.01].
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub saturation: Option<String>,
@@ -40,8 +35,12 @@ pub struct DivergenceArgs {
     pub common: Common,
 }
 
+/// What divergence runs without arguments.
+pub const DEFAULTS: Defaults =
+    Defaults { system: "double", method: Some("rk4"), dt: Some(1e-3), t_end: Some(30.0), notes: &[] };
+
 pub fn run(args: &DivergenceArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("double");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
     let info = values.info();
     let delta = f64_arg("--delta", args.delta.as_deref(), 1e-9, "a separation")?;
@@ -76,9 +75,9 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             crate::limits::sci(spacing)
         );
     }
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 30.0, "an end time in seconds")?;
+    let method = args.stepping.method(&DEFAULTS)?;
+    let h = args.stepping.dt(&DEFAULTS)?;
+    let t_end = args.end.t_end(&DEFAULTS)?;
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
     let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
     crate::limits::check(

@@ -14,11 +14,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_fractal_with_progress, flip_times};
-use pendula::integrator;
 use pendula::system::{Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
+use crate::args::{Defaults, MethodArgs};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
 use crate::commands::sweep::{parse_axis, write_npy};
@@ -38,12 +38,9 @@ pub struct FractalArgs {
     /// Longest time followed, s; no flip by then is NaN [default: 100].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_max: Option<String>,
-    /// Step size, s; the convergence check runs at half of it [default: 0.01].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
-    /// Method: rk4, tao-2 or tao-4 (the ensemble engine's) [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub stepping: MethodArgs,
     /// A pixel is converged when its flip times at dt and dt/2 differ by at most this, s
     /// (and both or neither flip) [default: 0.01].
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -79,6 +76,18 @@ fn beside(path: &Path, suffix: &str) -> PathBuf {
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fractal");
     path.with_file_name(format!("{stem}{suffix}"))
 }
+
+/// What fractal runs without arguments (always on the double pendulum).
+pub const DEFAULTS: Defaults = Defaults {
+    system: "double",
+    method: Some("rk4"),
+    dt: Some(0.01),
+    t_end: None,
+    notes: &[
+        ("dt", "The convergence check runs at half of it."),
+        ("method", "rk4, tao-2 or tao-4 (the ensemble engine's)."),
+    ],
+};
 
 pub fn run(args: &FractalArgs) -> Result<()> {
     execute(args, None)
@@ -120,7 +129,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         seen.push(axis.name);
     }
     let t_max = positive_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
-    let h = positive_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    let h = args.stepping.positive_dt(&DEFAULTS)?;
     if h > t_max {
         bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
     }
@@ -128,7 +137,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     if tolerance < 0.0 {
         bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
     }
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let method = args.stepping.method(&DEFAULTS)?;
     let Some(batch) = pendula::ensemble::BatchMethod::of(method) else {
         bail!(
             "invalid --method {}: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",

@@ -5,11 +5,11 @@
 use anyhow::{Result, bail};
 use clap::Args;
 use pendula::analysis::{LyapunovSpec, lyapunov};
-use pendula::integrator;
 use pendula::system::AsSystem;
 use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
+use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::config::{f64_arg, positive_arg};
 use pendula::error::Short;
 
@@ -17,21 +17,15 @@ use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct LyapunovArgs {
-    /// System [default: double, or the preset's].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Start from a named preset (`pendula list presets`); --set applies over it.
     #[arg(long, value_name = "NAME")]
     pub preset: Option<String>,
-    /// Method for the state and its tangent vectors: an explicit Runge–Kutta method, an
-    /// embedded pair at fixed steps, or Gauss–Legendre [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s [default: 0.001].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
-    /// Time over which the exponents are averaged, s [default: 200].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub stepping: MethodArgs,
+    #[command(flatten)]
+    pub end: EndArg,
     /// Time run first and discarded, s [default: 10].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub transient: Option<String>,
@@ -45,14 +39,34 @@ pub struct LyapunovArgs {
     pub common: Common,
 }
 
+/// What lyapunov runs without arguments.
+pub const DEFAULTS: Defaults = Defaults {
+    system: "double",
+    method: Some("rk4"),
+    dt: Some(1e-3),
+    t_end: Some(200.0),
+    notes: &[
+        ("system", "With --preset, the preset's system."),
+        (
+            "method",
+            "For the state and its tangent vectors: an explicit Runge–Kutta method, an embedded pair at fixed steps, or Gauss–Legendre.",
+        ),
+        ("t_end", "The time over which the exponents are averaged."),
+    ],
+};
+
 pub fn run(args: &LyapunovArgs) -> Result<()> {
-    let values =
-        study::preset_values(args.system.as_deref(), args.preset.as_deref(), &args.common.set, "double")?;
+    let values = study::preset_values(
+        args.system.system.as_deref(),
+        args.preset.as_deref(),
+        &args.common.set,
+        DEFAULTS.system,
+    )?;
     let info = values.info();
     let system = info.name;
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let h = positive_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
-    let t_end = positive_arg("--t-end", args.t_end.as_deref(), 200.0, "a time in seconds")?;
+    let method = args.stepping.method(&DEFAULTS)?;
+    let h = args.stepping.positive_dt(&DEFAULTS)?;
+    let t_end = args.end.positive_t_end(&DEFAULTS)?;
     let transient = f64_arg("--transient", args.transient.as_deref(), 10.0, "a time in seconds")?;
     if transient < 0.0 {
         bail!("invalid --transient {}: must be finite and >= 0", Short(transient));

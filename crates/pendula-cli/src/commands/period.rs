@@ -5,23 +5,19 @@
 use anyhow::Result;
 use clap::Args;
 use pendula::analysis::measure_period;
-use pendula::integrator;
 use pendula::system::Model;
 use pendula::system::pendulum::Pendulum;
 use pendula_viz::{Figure, Kind, REFERENCE, Scale, method_style, palette};
 use serde_json::json;
 
+use crate::args::{Defaults, MethodArgs};
 use crate::config::f64_arg;
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PeriodArgs {
-    /// Method for the simulated periods [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s [default: 0.001].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
+    #[command(flatten)]
+    pub stepping: MethodArgs,
     /// Largest amplitude, degrees, from 5 to below 180 (a libration: at 180 the pendulum
     /// balances upright and never swings back); amplitudes run in 5° steps up to it
     /// [default: 175].
@@ -39,9 +35,18 @@ pub struct PeriodRow {
     pub small_angle: f64,
 }
 
+/// What period runs without arguments (always on the simple pendulum).
+pub const DEFAULTS: Defaults = Defaults {
+    system: "pendulum",
+    method: Some("rk4"),
+    dt: Some(1e-3),
+    t_end: None,
+    notes: &[("method", "For the simulated periods.")],
+};
+
 pub fn run(args: &PeriodArgs) -> Result<()> {
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
-    let h = f64_arg("--dt", args.dt.as_deref(), 1e-3, "a step size in seconds")?;
+    let method = args.stepping.method(&DEFAULTS)?;
+    let h = args.stepping.dt(&DEFAULTS)?;
     let text = args.max_amplitude.as_deref().unwrap_or("175");
     let max = f64_arg("--max-amplitude", args.max_amplitude.as_deref(), 175.0, "degrees (5 to < 180)")?;
     if !(5.0..180.0).contains(&max) {

@@ -8,18 +8,19 @@ use clap::Args;
 use pendula::analysis::poincare::{PoincareSpec, Stepping, poincare};
 use pendula::control::Tolerances;
 use pendula::error::{did_you_mean, suggestions};
-use pendula::integrator::{self, Scheme};
+use pendula::integrator::Scheme;
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
+use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::config::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
 use crate::limits::{self, Cost, Estimate};
 use crate::study::{self, Common, OutDir, Summary, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PoincareArgs {
-    /// System: double, or chain with --set links=2 [default: double].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Energy of every orbit, J [default: -15, regular and chaotic orbits side by side].
     #[arg(long, value_name = "E", allow_hyphen_values = true)]
     pub energy: Option<String>,
@@ -30,16 +31,10 @@ pub struct PoincareArgs {
     /// increases through the value (mod 2 pi) [default: theta1=0].
     #[arg(long, value_name = "NAME=VALUE")]
     pub section: Option<String>,
-    /// Length of each orbit, s [default: 300].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
-    /// Method: dop853 or dopri5 (adaptive, dense output) or any fixed-step method with --dt
-    /// (gauss-legendre-4: symplectic) [default: dop853].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Fixed step size, s (required by fixed-step methods).
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
+    #[command(flatten)]
+    pub end: EndArg,
+    #[command(flatten)]
+    pub stepping: MethodArgs,
     /// Relative and absolute tolerance of adaptive methods, 1e-15 (round-off) to 1 [default:
     /// 1e-10].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
@@ -48,8 +43,25 @@ pub struct PoincareArgs {
     pub common: Common,
 }
 
+/// What poincare runs without arguments.
+pub const DEFAULTS: Defaults = Defaults {
+    system: "double",
+    method: Some("dop853"),
+    dt: None,
+    t_end: Some(300.0),
+    notes: &[
+        ("system", "The double pendulum, or the chain with --set links=2."),
+        (
+            "method",
+            "dop853 or dopri5 (adaptive, dense output) or any fixed-step method with --dt (gauss-legendre-4: symplectic).",
+        ),
+        ("dt", "Fixed steps, required by fixed-step methods."),
+        ("t_end", "The length of each orbit."),
+    ],
+};
+
 pub fn run(args: &PoincareArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("double");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
     let info = values.info();
     let state: Vec<&str> = info.state.iter().map(|q| q.name).collect();
@@ -83,9 +95,9 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
         );
     };
     let value = parse_value(name, value, Some(&info.state[section]))?;
-    let t_end = crate::config::positive_arg("--t-end", args.t_end.as_deref(), 300.0, "a time in seconds")?;
-    let method = integrator::find(args.method.as_deref().unwrap_or("dop853"))?;
-    let stepping = match (&args.dt, method.scheme) {
+    let t_end = args.end.positive_t_end(&DEFAULTS)?;
+    let method = args.stepping.method(&DEFAULTS)?;
+    let stepping = match (&args.stepping.dt, method.scheme) {
         (Some(text), _) => {
             let h = parse_float("--dt", text, "a step size in seconds")?;
             if !(h > 0.0 && h <= t_end) {

@@ -6,20 +6,20 @@ use pendula::analysis::{StabilityCriterion, largest_stable_step};
 use pendula_viz::{Bar, Bars, Figure, Scale, axis_label, method_color, with_unit};
 use serde_json::json;
 
-use crate::config::{f64_arg, positive_arg};
+use crate::args::{Defaults, EndArg, SystemArg};
+use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate};
 use crate::study::{self, Common, OutDir, Summary, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct StabilityArgs {
-    /// System [default: pendulum].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
-    /// Length of each test run, s [default: 20].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    pub end: EndArg,
     /// Largest allowed relative energy error for a run to count as stable [default: 0.1].
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub max_energy_error: Option<String>,
@@ -27,10 +27,19 @@ pub struct StabilityArgs {
     pub common: Common,
 }
 
+/// What stability runs without arguments.
+pub const DEFAULTS: Defaults = Defaults {
+    system: "pendulum",
+    method: None,
+    dt: None,
+    t_end: Some(20.0),
+    notes: &[("t_end", "The length of each test run.")],
+};
+
 pub fn run(args: &StabilityArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("pendulum");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
-    let t_end = f64_arg("--t-end", args.t_end.as_deref(), 20.0, "a time in seconds")?;
+    let t_end = args.end.t_end(&DEFAULTS)?;
     let bound =
         positive_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };

@@ -22,16 +22,18 @@ use pendula::{End, RunSpec};
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
-use crate::config::{clip, f64_arg, parse_count, parse_settings, parse_value};
+use crate::config::{clip, parse_count, parse_settings, parse_value};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SweepArgs {
-    /// System [default: double].
-    pub system: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub system: SystemArg,
     /// An axis: NAME=LO:HI:N samples the N cell centres LO + (i + 1/2)(HI - LO)/N of a
     /// parameter or initial-state variable (`pi` and `deg` accepted for angles). Repeat for
     /// more axes; the first varies fastest in the output.
@@ -40,19 +42,16 @@ pub struct SweepArgs {
     /// Set a parameter or initial-state variable for every cell (`--set m2=2`).
     #[arg(long, value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Integration method [default: rk4].
-    #[arg(long, value_name = "NAME")]
-    pub method: Option<String>,
-    /// Step size, s [default: 0.01].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub stepping: MethodArgs,
     /// Number of steps, 1 to 10^13 (the sweep's cells x steps at most 10^13 on the SIMD
     /// engine, 10^11 on the scalar path, without --allow-large).
     #[arg(long, value_name = "N", conflicts_with = "t_end")]
     pub steps: Option<String>,
-    /// End time, s [default: 10].
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub end: EndArg,
     /// Stop each cell when it first flips (an angle passes ±π): `flip`.
     #[arg(long, value_name = "EVENT")]
     pub until: Option<String>,
@@ -203,7 +202,7 @@ pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, t
 }
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
-    let family = pendula::model::find(args.system.as_deref().unwrap_or("double"))?;
+    let family = pendula::model::find(args.system.name(&DEFAULTS))?;
     let base = parse_settings(family, &args.set)?;
     // A family (the chain) resolves to the member the settings choose; an axis may not
     // change the member, since the state's size would change from cell to cell.
@@ -241,14 +240,14 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             axes.iter().map(|a| a.n.to_string()).collect::<Vec<_>>().join(" x ")
         );
     }
-    let method = integrator::find(args.method.as_deref().unwrap_or("rk4"))?;
+    let method = args.stepping.method(&DEFAULTS)?;
     if matches!(method.scheme, integrator::Scheme::Embedded(_)) {
         bail!("sweep takes fixed steps: {} runs here as a fixed-step method only with --dt", method.name);
     }
-    let h = f64_arg("--dt", args.dt.as_deref(), 0.01, "a step size in seconds")?;
+    let h = args.stepping.dt(&DEFAULTS)?;
     let end = match &args.steps {
         Some(text) => End::Steps(parse_count("--steps", text, 1, limits::MAX_STEPS, "steps")?),
-        None => End::Time(f64_arg("--t-end", args.t_end.as_deref(), 10.0, "an end time in seconds")?),
+        None => End::Time(args.end.t_end(&DEFAULTS)?),
     };
     let end_flag = if args.steps.is_some() { "--steps" } else { "--t-end" };
     let schedule = crate::config::schedule(&RunSpec { t0: 0.0, h, end }, "--dt", end_flag)?;
@@ -386,6 +385,10 @@ impl Observer for FlipWatch {
         std::ops::ControlFlow::Continue(())
     }
 }
+
+/// What sweep runs without arguments.
+pub const DEFAULTS: Defaults =
+    Defaults { system: "double", method: Some("rk4"), dt: Some(0.01), t_end: Some(10.0), notes: &[] };
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     execute(args, None)

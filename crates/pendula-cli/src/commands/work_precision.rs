@@ -8,6 +8,7 @@ use pendula::analysis::{self, WorkPoint};
 use pendula_viz::{Figure, Kind, Scale, method_style, with_unit};
 use serde_json::json;
 
+use crate::args::{Defaults, SystemArg};
 use crate::commands::compare::refusal;
 use crate::config::{f64_arg, parse_count};
 use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
@@ -15,8 +16,8 @@ use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
 pub struct WorkPrecisionArgs {
-    /// System [default: pendulum].
-    pub system: Option<String>,
+    #[command(flatten)]
+    pub system: SystemArg,
     /// Comma-separated methods [default: every method that applies].
     #[arg(long, value_name = "LIST")]
     pub methods: Option<String>,
@@ -65,8 +66,12 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
         .collect())
 }
 
+/// What work-precision runs on without a system named (its methods and steps are its own).
+pub const DEFAULTS: Defaults =
+    Defaults { system: "pendulum", method: None, dt: None, t_end: None, notes: &[] };
+
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
-    let system = args.system.as_deref().unwrap_or("pendulum");
+    let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set)?;
     let (ladder, t_end) =
         args.steps.resolve_or_default(crate::commands::convergence::default_t_end(&values))?;

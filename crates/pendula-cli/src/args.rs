@@ -1,0 +1,185 @@
+//! The argument groups several commands share, declared once (ripgrep's low-level arguments,
+//! converted in one step into validated values): the system to run (a positional name), the
+//! method and its step (`--method`, `--dt`), and the end time (`--t-end`).
+//!
+//! Each command states its defaults once, in a [`Defaults`]. Its help text and its conversion
+//! both read them: [`Defaults::document`] writes `[default: …]` into the help of the shared
+//! arguments the command has (`cli.rs` applies it to every argument of the command), and the
+//! groups' `resolve` methods fall back to the same values. What the help says is what runs
+//! (`tests/cli.rs` checks the help of every command against its `Defaults`).
+
+use anyhow::Result;
+use clap::Args;
+use pendula::error::Short;
+use pendula::integrator::{self, Method};
+
+use crate::config::{f64_arg, positive_arg};
+
+/// A command's defaults for the shared arguments it takes; fields it does not take are
+/// not shown (`document` touches only the arguments the command has).
+#[derive(Debug, Clone, Copy)]
+pub struct Defaults {
+    /// The system run without a name (`pendula list systems`).
+    pub system: &'static str,
+    /// The method run without `--method` (`pendula list methods`; `None`: the command
+    /// takes none).
+    pub method: Option<&'static str>,
+    /// The step without `--dt`, s (`None`: the command needs none, or says in a note what
+    /// it does without one).
+    pub dt: Option<f64>,
+    /// The end time without `--t-end`, s (`None`: as for `dt`).
+    pub t_end: Option<f64>,
+    /// A sentence the command adds to an argument's help, by argument id (`dt`, `t_end`, …).
+    pub notes: &'static [(&'static str, &'static str)],
+}
+
+impl Defaults {
+    /// `arg` with its help stating this command's default, when it is one of the shared
+    /// arguments; other arguments unchanged.
+    pub fn document(&self, arg: clap::Arg) -> clap::Arg {
+        let id = arg.get_id().as_str().to_owned();
+        let (what, default) = match id.as_str() {
+            "system" => ("System to run (see `pendula list systems`)", Some(self.system.to_owned())),
+            "method" => ("Integration method (see `pendula list methods`)", self.method.map(str::to_owned)),
+            "dt" => ("Step size, s", self.dt.map(|v| Short(v).to_string())),
+            "t_end" => ("End time, s", self.t_end.map(|v| Short(v).to_string())),
+            _ => return arg,
+        };
+        let note = self.notes.iter().find(|(n, _)| *n == id);
+        if default.is_none() && note.is_none() {
+            // Not the group's argument but the command's own of the same name (compare's
+            // `--dt`, one step for every method): its own help stays.
+            return arg;
+        }
+        // One sentence is shown without its period, as clap shows a doc comment's.
+        let default = default.map_or(String::new(), |d| format!(" [default: {d}]"));
+        let note = note.map_or(String::new(), |(_, text)| format!(". {text}"));
+        arg.help(format!("{what}{default}{note}"))
+    }
+}
+
+/// The system, by name (positional).
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct SystemArg {
+    /// System to run (see `pendula list systems`).
+    pub system: Option<String>,
+}
+
+impl SystemArg {
+    /// The name given, or the command's default.
+    pub fn name<'a>(&'a self, defaults: &'a Defaults) -> &'a str {
+        self.system.as_deref().unwrap_or(defaults.system)
+    }
+}
+
+/// The method and its step size.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct MethodArgs {
+    /// Integration method (see `pendula list methods`).
+    #[arg(long, value_name = "NAME")]
+    pub method: Option<String>,
+    /// Step size, s.
+    #[arg(long, value_name = "H", allow_hyphen_values = true)]
+    pub dt: Option<String>,
+}
+
+impl MethodArgs {
+    /// The method named, or the command's default.
+    pub fn method(&self, defaults: &Defaults) -> Result<&'static Method> {
+        Ok(integrator::find(self.method.as_deref().unwrap_or(defaults.method.expect("a default method")))?)
+    }
+
+    /// The step given (any finite number: the run's schedule judges it, naming `--dt`), or
+    /// the command's default.
+    pub fn dt(&self, defaults: &Defaults) -> Result<f64> {
+        f64_arg("--dt", self.dt.as_deref(), defaults.dt.expect("a default step"), "a step size in seconds")
+    }
+
+    /// The step given, which must be > 0, or the command's default.
+    pub fn positive_dt(&self, defaults: &Defaults) -> Result<f64> {
+        positive_arg(
+            "--dt",
+            self.dt.as_deref(),
+            defaults.dt.expect("a default step"),
+            "a step size in seconds",
+        )
+    }
+}
+
+/// The end time.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct EndArg {
+    /// End time, s.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t_end: Option<String>,
+}
+
+impl EndArg {
+    /// The end time given (any finite number: the run's schedule judges it), or the
+    /// command's default.
+    pub fn t_end(&self, defaults: &Defaults) -> Result<f64> {
+        f64_arg(
+            "--t-end",
+            self.t_end.as_deref(),
+            defaults.t_end.expect("a default end"),
+            "an end time in seconds",
+        )
+    }
+
+    /// The end time given, which must be > 0, or the command's default.
+    pub fn positive_t_end(&self, defaults: &Defaults) -> Result<f64> {
+        positive_arg(
+            "--t-end",
+            self.t_end.as_deref(),
+            defaults.t_end.expect("a default end"),
+            "a time in seconds",
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// Every command that takes a shared argument states its default in the help, from its
+    /// `Defaults`: a command whose variant in `cli.rs` lacks `mut_args(… .document(a))`
+    /// shows the group's bare doc comment instead, and fails here.
+    #[test]
+    fn every_shared_argument_is_documented_by_its_commands_defaults() {
+        let bare = [
+            "System to run (see `pendula list systems`)",
+            "Integration method (see `pendula list methods`)",
+            "Step size, s",
+            "End time, s",
+        ];
+        let cli = crate::cli::Cli::command();
+        let mut documented = 0;
+        for command in cli.get_subcommands() {
+            for arg in command.get_arguments() {
+                let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+                let name = command.get_name();
+                assert!(!bare.contains(&help.as_str()), "`pendula {name}`: {} undocumented", arg.get_id());
+                if bare.iter().any(|b| help.starts_with(b)) {
+                    documented += 1;
+                }
+            }
+        }
+        // 13 commands take the system, 8 the method and the step, 7 the end time.
+        assert!(documented >= 30, "only {documented} shared arguments documented");
+    }
+
+    /// What the help states is what the conversion uses.
+    #[test]
+    fn the_help_states_the_default_the_conversion_takes() {
+        use super::{EndArg, MethodArgs, SystemArg};
+        let d = crate::commands::divergence::DEFAULTS;
+        let help = d.document(clap::Arg::new("t_end")).get_help().unwrap().to_string();
+        let t_end = EndArg::default().t_end(&d).unwrap();
+        assert!(help.contains(&format!("[default: {t_end}]")), "{help}");
+        let m = MethodArgs::default();
+        assert_eq!(m.method(&d).unwrap().name, d.method.unwrap());
+        let dt_help = d.document(clap::Arg::new("dt")).get_help().unwrap().to_string();
+        assert!(dt_help.contains(&format!("[default: {}]", m.dt(&d).unwrap())), "{dt_help}");
+        assert_eq!(SystemArg::default().name(&d), "double");
+    }
+}
