@@ -223,8 +223,15 @@ impl<T: Num> Chain<T> {
         let mu = self.hanging();
         let mut mass = [[T::splat(0.0); MAX_LINKS]; MAX_LINKS];
         for i in 0..self.n {
-            for j in 0..self.n {
-                mass[i][j] = (theta[i] - theta[j]).cos() * (mu[i.max(j)] * self.l[i] * self.l[j]);
+            // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
+            mass[i][i] = mu[i] * self.l[i] * self.l[i];
+            // Each pair's cosine once, the entry (j, i) by symmetry (cos is even, exactly so in
+            // the platform's trigonometry and the lanes' alike): n (n − 1) / 2 cosines where
+            // each entry took one (3 for three links instead of 9).
+            for j in i + 1..self.n {
+                let c = (theta[i] - theta[j]).cos();
+                mass[i][j] = c * (mu[j] * self.l[i] * self.l[j]);
+                mass[j][i] = c * (mu[j] * self.l[j] * self.l[i]);
             }
         }
         mass
