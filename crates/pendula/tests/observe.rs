@@ -11,7 +11,7 @@ use pendula::control::Tolerances;
 use pendula::events::{EndAtEvent, EventLocator, EventSpec};
 use pendula::integrator::{self, Method};
 use pendula::observe::{Flow, Observer, Sample, Stop, StopWhen};
-use pendula::{End, Error, Outcome, RunSpec, Stepping};
+use pendula::{End, Error, Outcome, Report, RunSpec, Stepping};
 
 use crate::support::values;
 
@@ -33,7 +33,7 @@ impl Observer for FailAt {
 }
 
 /// The run's error is the observer's: its message, and its error as the source.
-fn assert_observer_failure(result: Result<Leg<pendula::Report>, Error>, context: &str) {
+fn assert_observer_failure(result: Result<Leg<Report>, Error>, context: &str) {
     let err = match result {
         Err(err) => err,
         Ok(leg) => panic!("{context}: the run went on past its observer's failure: {leg:?}"),
@@ -47,6 +47,19 @@ fn assert_observer_failure(result: Result<Leg<pendula::Report>, Error>, context:
 
 fn fixed(h: f64, t_end: f64) -> Stepping<'static> {
     Stepping::Fixed(RunSpec { t0: 0.0, h, end: End::Time(t_end) })
+}
+
+/// The catalogued `system` on its defaults, with RK4 at step `h` to `t_end`, shown to `observer`.
+fn rk4(system: &str, h: f64, t_end: f64, observer: &mut dyn Observer) -> Result<Leg<Report>, Error> {
+    let v = values(system, &[]);
+    v.build().solve_fastest(
+        &integrator::explicit_rk::RK4,
+        v.initial_state(),
+        &fixed(h, t_end),
+        observer,
+        None,
+        &Pause::NEVER,
+    )
 }
 
 #[test]
@@ -79,19 +92,8 @@ fn a_failing_observer_ends_every_run_loop_with_its_error() {
 
 #[test]
 fn having_seen_enough_still_stops_the_run_without_error() {
-    let v = values("double", &[]);
-    let model = v.build();
     let mut enough = StopWhen(|s: &Sample<'_>| s.step == 5);
-    let leg = model
-        .solve_fastest(
-            &integrator::explicit_rk::RK4,
-            v.initial_state(),
-            &fixed(0.01, 1.0),
-            &mut enough,
-            None,
-            &Pause::NEVER,
-        )
-        .unwrap();
+    let leg = rk4("double", 0.01, 1.0, &mut enough).unwrap();
     let Leg::Done(report) = leg else { panic!("paused") };
     assert_eq!(report.outcome, Outcome::Stopped { steps: 5, t: 0.05 });
 }
@@ -99,31 +101,13 @@ fn having_seen_enough_still_stops_the_run_without_error() {
 /// In a tuple a failure outranks having seen enough, whichever comes first.
 #[test]
 fn a_failure_outranks_enough_in_a_tuple() {
-    let v = values("pendulum", &[]);
-    let model = v.build();
     for first in [false, true] {
         let enough = StopWhen(|s: &Sample<'_>| s.step == 3);
         let failing = FailAt { at: Some(3), seen: 0 };
         let result = if first {
-            let mut pair = (failing, enough);
-            model.solve_fastest(
-                &integrator::explicit_rk::RK4,
-                v.initial_state(),
-                &fixed(0.01, 1.0),
-                &mut pair,
-                None,
-                &Pause::NEVER,
-            )
+            rk4("pendulum", 0.01, 1.0, &mut (failing, enough))
         } else {
-            let mut pair = (enough, failing);
-            model.solve_fastest(
-                &integrator::explicit_rk::RK4,
-                v.initial_state(),
-                &fixed(0.01, 1.0),
-                &mut pair,
-                None,
-                &Pause::NEVER,
-            )
+            rk4("pendulum", 0.01, 1.0, &mut (enough, failing))
         };
         assert_observer_failure(result, &format!("failing observer first: {first}"));
     }
@@ -138,27 +122,11 @@ fn a_failure_at_a_terminal_event_is_the_runs_error() {
     let specs = vec![EventSpec::parse("zero:theta2", &*model, true).unwrap()];
     let mut wrapped =
         EndAtEvent { events: EventLocator::new(&*model, specs.clone()), inner: FailAt { at: None, seen: 0 } };
-    let result = model.solve_fastest(
-        &integrator::explicit_rk::RK4,
-        v.initial_state(),
-        &fixed(0.001, 10.0),
-        &mut wrapped,
-        None,
-        &Pause::NEVER,
-    );
+    let result = rk4("double", 0.001, 10.0, &mut wrapped);
     assert_observer_failure(result, "failing at the event");
     // Control: the same event with an observer that does not fail stops the run there.
     let mut quiet = EndAtEvent { events: EventLocator::new(&*model, specs), inner: pendula::observe::Ignore };
-    let leg = model
-        .solve_fastest(
-            &integrator::explicit_rk::RK4,
-            v.initial_state(),
-            &fixed(0.001, 10.0),
-            &mut quiet,
-            None,
-            &Pause::NEVER,
-        )
-        .unwrap();
+    let leg = rk4("double", 0.001, 10.0, &mut quiet).unwrap();
     let Leg::Done(report) = leg else { panic!("paused") };
     assert!(matches!(report.outcome, Outcome::Stopped { .. }), "{:?}", report.outcome);
 }

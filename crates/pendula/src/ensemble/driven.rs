@@ -151,26 +151,12 @@ fn run_group(
     Ok(())
 }
 
+dispatched! {
 /// One drive period of RK4 steps for every lane. Not `WIDE`: the fast sine alone, tracking per
 /// lane the largest |ω| at the steps' starts (data flow only: a branch in the loop would slow
 /// it), and whether that proves every sine's argument was in the fast range
 /// ([`stayed_fast`]) — if not, the results may be wrong. `WIDE`: angles beyond the fast range
 /// reduced exactly, per lane (true); the others get the same bits.
-// Compiled for several instruction sets, chosen at run time; debug builds (the tests)
-// for AVX2 with FMA and the portable fallback only: the same arithmetic, a fraction of
-// the build time.
-#[cfg_attr(
-    not(debug_assertions),
-    multiversion::multiversion(targets(
-        "x86_64+avx512f+avx512dq+avx2+fma",
-        "x86_64+avx2+fma",
-        "x86_64+avx+fma",
-        "x86_64+avx",
-        "x86_64+sse4.1",
-        "aarch64+neon",
-    ))
-)]
-#[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
 fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[f64]) -> bool {
     let steps = (drive.len() - 1) / 2;
     let Lanes { theta, omega, h, q, amplitude } = lanes;
@@ -208,6 +194,7 @@ fn period_kernel<const FMA: bool, const WIDE: bool>(lanes: &mut Lanes, drive: &[
         }
     }
     WIDE || (0..LANES).all(|i| stayed_fast(start[i], fastest[i], h[i], 1.0 / q[i], amplitude[i], steps))
+}
 }
 
 /// Whether every sine argument of a lane's period was within the fast range, given |θ₀| at the

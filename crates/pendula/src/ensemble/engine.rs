@@ -454,12 +454,6 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
     }
 }
 
-/// Explicit steps for a lane group, compiled for several instruction sets and chosen at run
-/// time. Branch-free per lane: retired lanes keep computing but their state is not updated; a
-/// flip's step is recorded, and its time interpolated once at the end. Not `WIDE`, the fast
-/// trigonometry alone: false, with `record` untouched, after the first step in which some
-/// lane's sine and cosine arguments ([`Equations::trig_reach`], tracked as data flow) went
-/// beyond its range; `WIDE`, every argument (true).
 /// [`kernel`] with fused multiply-adds, compiled for the instruction sets that have them and
 /// chosen at run time (debug builds, the tests: AVX2 with FMA and the portable fallback only,
 /// the same arithmetic — `mul_add` is correctly rounded everywhere — in a fraction of the
@@ -500,6 +494,12 @@ where
     kernel::<St, W, false, WIDE>(eqs, step, run, record)
 }
 
+/// The run loop of a lane group: `run.steps` steps of `method` from `record`'s state.
+/// Branch-free per lane: retired lanes keep computing but their state is not updated; a
+/// flip's step is recorded, and its time interpolated once at the end. Not `WIDE`, the fast
+/// trigonometry alone: false, with `record` untouched, after the first step in which some
+/// lane's sine and cosine arguments ([`Equations::trig_reach`], tracked as data flow) went
+/// beyond its range; `WIDE`, every argument (true).
 #[allow(clippy::needless_range_loop)] // lane-indexed loops: the form that vectorises over lanes
 #[inline(always)]
 fn kernel<St, const W: usize, const FMA: bool, const WIDE: bool>(

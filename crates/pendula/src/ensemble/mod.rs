@@ -21,6 +21,28 @@
 //! (branch-free) but its state stays at the step where the flip was seen. A non-finite state
 //! is an error naming the member and the time.
 
+/// `item`, a kernel function, compiled for every instruction set the scalar-per-lane kernels
+/// run on and chosen at run time (`multiversion`); debug builds (the tests) for AVX2 with FMA
+/// and the portable fallback only: the same arithmetic, a fraction of the build time. (The
+/// engine's kernels split their targets by whether they fuse multiply-adds instead.)
+macro_rules! dispatched {
+    ($item:item) => {
+        #[cfg_attr(
+            not(debug_assertions),
+            multiversion::multiversion(targets(
+                "x86_64+avx512f+avx512dq+avx2+fma",
+                "x86_64+avx2+fma",
+                "x86_64+avx+fma",
+                "x86_64+avx",
+                "x86_64+sse4.1",
+                "aarch64+neon",
+            ))
+        )]
+        #[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
+        $item
+    };
+}
+
 pub mod driven;
 pub mod engine;
 mod trajectory;

@@ -187,21 +187,7 @@ fn accelerations_one_with<const FMA: bool, const WIDE: bool>(p: &DoublePendulum,
     [y[2], y[3], a1.0[0], a2.0[0]]
 }
 
-// Compiled for several instruction sets, chosen at run time; debug builds (the tests)
-// for AVX2 with FMA and the portable fallback only: the same arithmetic, a fraction of
-// the build time.
-#[cfg_attr(
-    not(debug_assertions),
-    multiversion::multiversion(targets(
-        "x86_64+avx512f+avx512dq+avx2+fma",
-        "x86_64+avx2+fma",
-        "x86_64+avx+fma",
-        "x86_64+avx",
-        "x86_64+sse4.1",
-        "aarch64+neon",
-    ))
-)]
-#[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
+dispatched! {
 /// Steps from `done` (showing the initial state first when it is 0): the steps taken and how
 /// the run ended.
 fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
@@ -246,4 +232,5 @@ fn trajectory_kernel<const FMA: bool, O: Observer + ?Sized>(
         }
     }
     Ok((schedule.steps, Outcome::ReachedEnd { steps: schedule.steps, t: schedule.t_end }))
+}
 }
