@@ -55,7 +55,7 @@ pub const DEFAULTS: Defaults = Defaults {
             "method",
             "dop853 or dopri5 (adaptive, dense output) or any fixed-step method with --dt (gauss-legendre-4: symplectic).",
         ),
-        ("dt", "Fixed steps, required by fixed-step methods."),
+        ("dt", "Required by fixed-step methods; given, every method takes fixed steps of it."),
         ("t_end", "The length of each orbit."),
     ],
 };
