@@ -203,35 +203,103 @@ impl<T: Copy> Chain<T> {
     }
 }
 
+/// Runs `$body` with `$N` a const array capacity for `$n` links: the link count itself up to
+/// four links (the chains most used: every loop then has a constant trip count and unrolls,
+/// and every array entry is written once), [`MAX_LINKS`] beyond. The equations' temporaries
+/// (the mass matrix, the pairs' trigonometry) are sized by it, so that a short chain neither
+/// fills nor copies arrays sized for eight links (on lanes of 8 members an 8 × 8 matrix is
+/// 4 KiB: filling it took a fifth of the three-link chain's time).
+macro_rules! by_capacity {
+    ($n:expr, $N:ident => $body:expr) => {
+        match $n {
+            1 => {
+                const $N: usize = 1;
+                $body
+            }
+            2 => {
+                const $N: usize = 2;
+                $body
+            }
+            3 => {
+                const $N: usize = 3;
+                $body
+            }
+            4 => {
+                const $N: usize = 4;
+                $body
+            }
+            _ => {
+                const $N: usize = MAX_LINKS;
+                $body
+            }
+        }
+    };
+}
+
+/// sin and cos of θᵢ − θⱼ for each pair i < j (entries with i ≥ j unused): one `sin_cos` per
+/// pair, shared by the mass matrix and the forces. The pairs j < i take −sin and cos of the
+/// pair (j, i): sin is odd and cos even exactly (in the platform's trigonometry, the lanes'
+/// and the dual numbers' alike), so this is what evaluating them would give.
+struct Pairs<T, const N: usize> {
+    sin: [[T; N]; N],
+    cos: [[T; N]; N],
+}
+
 /// The equations, written once over every number type.
 impl<T: Num> Chain<T> {
+    /// The number of links for arrays of capacity N: N itself below [`MAX_LINKS`] (a constant
+    /// to the compiler, see `by_capacity!`), else n.
+    #[inline(always)]
+    fn links<const N: usize>(&self) -> usize {
+        if N < MAX_LINKS { N } else { self.n }
+    }
+
     /// μₖ = Σ_{i ≥ k} mᵢ: the mass below joint k, kg.
     #[inline(always)]
-    fn hanging(&self) -> [T; MAX_LINKS] {
-        let mut mu = [T::splat(0.0); MAX_LINKS];
+    fn hanging<const N: usize>(&self) -> [T; N] {
+        let mut mu = [T::splat(0.0); N];
         let mut sum = T::splat(0.0);
-        for k in (0..self.n).rev() {
+        for k in (0..self.links::<N>()).rev() {
             sum = sum + self.m[k];
             mu[k] = sum;
         }
         mu
     }
 
+    // The temporaries below are written entry by entry over their whole (const) size, unused
+    // entries (past n) as zeros, so that the compiler drops their initial zero fill (no
+    // `from_fn`: its closures, left out of line, would not get the kernels' instruction set).
+    #[inline(always)]
+    fn pairs<const N: usize>(&self, theta: &[T]) -> Pairs<T, N> {
+        let n = self.links::<N>();
+        let zero = T::splat(0.0);
+        let mut pairs = Pairs { sin: [[zero; N]; N], cos: [[zero; N]; N] };
+        for i in 0..N {
+            for j in 0..N {
+                (pairs.sin[i][j], pairs.cos[i][j]) =
+                    if i < j && j < n { (theta[i] - theta[j]).sin_cos() } else { (zero, zero) };
+            }
+        }
+        pairs
+    }
+
     /// Mass matrix M(θ) (upper-left n × n block), kg m².
     #[inline(always)]
-    fn mass_matrix(&self, theta: &[T]) -> [[T; MAX_LINKS]; MAX_LINKS] {
-        let mu = self.hanging();
-        let mut mass = [[T::splat(0.0); MAX_LINKS]; MAX_LINKS];
-        for i in 0..self.n {
-            // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
-            mass[i][i] = mu[i] * self.l[i] * self.l[i];
-            // Each pair's cosine once, the entry (j, i) by symmetry (cos is even, exactly so in
-            // the platform's trigonometry and the lanes' alike): n (n − 1) / 2 cosines where
-            // each entry took one (3 for three links instead of 9).
-            for j in i + 1..self.n {
-                let c = (theta[i] - theta[j]).cos();
-                mass[i][j] = c * (mu[j] * self.l[i] * self.l[j]);
-                mass[j][i] = c * (mu[j] * self.l[j] * self.l[i]);
+    fn mass_matrix<const N: usize>(&self, mu: &[T; N], pairs: &Pairs<T, N>) -> [[T; N]; N] {
+        let n = self.links::<N>();
+        let mut mass = [[T::splat(0.0); N]; N];
+        for i in 0..N {
+            for j in 0..N {
+                mass[i][j] = if i >= n || j >= n {
+                    T::splat(0.0)
+                } else if i == j {
+                    // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
+                    mu[i] * self.l[i] * self.l[i]
+                } else if i < j {
+                    pairs.cos[i][j] * (mu[j] * self.l[i] * self.l[j])
+                } else {
+                    pairs.cos[j][i] * (mu[i] * self.l[i] * self.l[j])
+                };
             }
         }
         mass
@@ -240,50 +308,67 @@ impl<T: Num> Chain<T> {
     /// θ'' = M⁻¹ f at y = (θ, ω).
     #[inline(always)]
     pub fn accelerations(&self, y: &[T], out: &mut [T]) {
-        let n = self.n;
+        by_capacity!(self.n, N => self.accelerations_in::<N>(y, out))
+    }
+
+    #[inline(always)]
+    fn accelerations_in<const N: usize>(&self, y: &[T], out: &mut [T]) {
+        let n = self.links::<N>();
         let (theta, omega) = y.split_at(n);
-        let mu = self.hanging();
-        let mass = self.mass_matrix(theta);
-        let mut f = [T::splat(0.0); MAX_LINKS];
+        let mu = self.hanging::<N>();
+        let pairs = self.pairs::<N>(theta);
+        let mut f = [T::splat(0.0); N];
         for i in 0..n {
             let mut fi = theta[i].sin() * (-mu[i] * self.g * self.l[i]);
             for j in 0..n {
                 if j != i {
-                    fi = fi
-                        - (theta[i] - theta[j]).sin()
-                            * omega[j]
-                            * omega[j]
-                            * (mu[i.max(j)] * self.l[i] * self.l[j]);
+                    let s = if i < j { pairs.sin[i][j] } else { -pairs.sin[j][i] };
+                    fi = fi - s * omega[j] * omega[j] * (mu[i.max(j)] * self.l[i] * self.l[j]);
                 }
             }
             f[i] = fi;
         }
-        solve_spd(n, mass, &mut f);
+        solve_spd(n, self.mass_matrix(&mu, &pairs), &mut f);
         out[..n].copy_from_slice(&f[..n]);
     }
 
     /// ω = M⁻¹ p.
     #[inline(always)]
     fn velocities(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        let mut w = [T::splat(0.0); MAX_LINKS];
-        w[..self.n].copy_from_slice(&p[..self.n]);
-        solve_spd(self.n, self.mass_matrix(theta), &mut w);
-        out[..self.n].copy_from_slice(&w[..self.n]);
+        by_capacity!(self.n, N => {
+            let pairs = self.pairs::<N>(theta);
+            self.velocities_in(&pairs, p, out)
+        })
+    }
+
+    #[inline(always)]
+    fn velocities_in<const N: usize>(&self, pairs: &Pairs<T, N>, p: &[T], out: &mut [T]) {
+        let mut w = [T::splat(0.0); N];
+        let n = self.links::<N>();
+        w[..n].copy_from_slice(&p[..n]);
+        solve_spd(n, self.mass_matrix(&self.hanging(), pairs), &mut w);
+        out[..n].copy_from_slice(&w[..n]);
     }
 
     /// ∂H/∂θ (see the module's formula).
     #[inline(always)]
     fn dh_dtheta(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        let n = self.n;
-        let mu = self.hanging();
-        let mut w = [T::splat(0.0); MAX_LINKS];
-        self.velocities(theta, p, &mut w);
+        by_capacity!(self.n, N => self.dh_dtheta_in::<N>(theta, p, out))
+    }
+
+    #[inline(always)]
+    fn dh_dtheta_in<const N: usize>(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        let n = self.links::<N>();
+        let mu = self.hanging::<N>();
+        let pairs = self.pairs::<N>(theta);
+        let mut w = [T::splat(0.0); N];
+        self.velocities_in(&pairs, p, &mut w);
         for k in 0..n {
             let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
             for j in 0..n {
                 if j != k {
-                    d = d
-                        + (theta[k] - theta[j]).sin() * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
+                    let s = if k < j { pairs.sin[k][j] } else { -pairs.sin[j][k] };
+                    d = d + s * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
                 }
             }
             out[k] = d;
@@ -294,14 +379,14 @@ impl<T: Num> Chain<T> {
 impl Chain {
     /// Potential energy V = −Σ μₖ g lₖ cos θₖ, J (zero with every rod horizontal).
     pub fn potential(&self, theta: &[f64]) -> f64 {
-        let mu = self.hanging();
+        let mu = self.hanging::<MAX_LINKS>();
         (0..self.n).map(|k| -mu[k] * self.g * self.l[k] * theta[k].cos()).sum()
     }
 
     /// Kinetic energy T = ½ ωᵀ M(θ) ω, J.
     pub fn kinetic(&self, y: &[f64]) -> f64 {
         let (theta, omega) = y.split_at(self.n);
-        let mass = self.mass_matrix(theta);
+        let mass = self.mass_at(theta);
         let mut t = 0.0;
         for i in 0..self.n {
             for j in 0..self.n {
@@ -311,44 +396,58 @@ impl Chain {
         t
     }
 
+    /// M(θ), kg m².
+    fn mass_at(&self, theta: &[f64]) -> [[f64; MAX_LINKS]; MAX_LINKS] {
+        self.mass_matrix(&self.hanging(), &self.pairs(theta))
+    }
+
     /// The parameters as dual numbers (constants), for Jacobians.
     fn dual(&self) -> Chain<Dual64> {
         self.map(Dual64::from)
     }
 }
 
-/// Solves M x = b in place for a symmetric positive definite n × n M by Cholesky
-/// factorisation (M is a mass matrix), on the stack.
+/// Solves M x = b in place for a symmetric positive definite n × n M (a mass matrix) by its
+/// factorisation M = L D Lᵀ (L unit lower triangular, D diagonal), on the stack: n divisions
+/// and no square root, where Cholesky's L Lᵀ takes n square roots and n (n + 3) / 2 divisions
+/// (on lanes these dominated the chain's factorisation).
+#[allow(clippy::needless_range_loop)] // index loops: the factorisation's own notation
 #[inline(always)]
-fn solve_spd<T: Num>(n: usize, mut a: [[T; MAX_LINKS]; MAX_LINKS], b: &mut [T; MAX_LINKS]) {
+fn solve_spd<T: Num, const N: usize>(n: usize, mut a: [[T; N]; N], b: &mut [T; N]) {
+    // Below the diagonal a becomes L; u holds row j of L D.
+    let mut diag = [T::splat(0.0); N];
+    let mut inv = [T::splat(0.0); N];
     for j in 0..n {
+        let mut u = [T::splat(0.0); N];
         let mut d = a[j][j];
-        for &v in &a[j][..j] {
-            d = d - v * v;
+        for k in 0..j {
+            u[k] = a[j][k] * diag[k];
+            d = d - u[k] * a[j][k];
         }
-        let d = d.sqrt();
-        a[j][j] = d;
+        diag[j] = d;
+        inv[j] = T::splat(1.0) / d;
         for i in j + 1..n {
             let mut s = a[i][j];
-            for (x, y) in a[i][..j].iter().zip(&a[j][..j]) {
-                s = s - *x * *y;
+            for k in 0..j {
+                s = s - a[i][k] * u[k];
             }
-            a[i][j] = s / d;
+            a[i][j] = s * inv[j];
         }
     }
+    // L z = b, then Lᵀ x = D⁻¹ z.
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {
             s = s - a[i][k] * b[k];
         }
-        b[i] = s / a[i][i];
+        b[i] = s;
     }
     for i in (0..n).rev() {
-        let mut s = b[i];
+        let mut s = b[i] * inv[i];
         for k in i + 1..n {
             s = s - a[k][i] * b[k];
         }
-        b[i] = s / a[i][i];
+        b[i] = s;
     }
 }
 
@@ -390,7 +489,7 @@ impl Model for Chain {
 
     fn to_momenta(&self, y: &[f64], z: &mut [f64]) {
         let n = self.n;
-        let mass = self.mass_matrix(&y[..n]);
+        let mass = self.mass_at(&y[..n]);
         z[..n].copy_from_slice(&y[..n]);
         for i in 0..n {
             z[n + i] = (0..n).map(|j| mass[i][j] * y[n + j]).sum();
@@ -450,7 +549,7 @@ impl System for Chain {
 impl Chain {
     /// V(every rod horizontal) − V_min = Σₖ μₖ g lₖ, J.
     fn well_depth(&self) -> f64 {
-        let mu = self.hanging();
+        let mu = self.hanging::<MAX_LINKS>();
         (0..self.n).map(|k| mu[k] * self.g * self.l[k]).sum()
     }
 }
