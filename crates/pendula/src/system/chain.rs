@@ -211,23 +211,14 @@ impl<T: Copy> Chain<T> {
 /// 4 KiB: filling it took a fifth of the three-link chain's time).
 macro_rules! by_capacity {
     ($n:expr, $N:ident => $body:expr) => {
+        by_capacity!(@exact [1 2 3 4] $n, $N => $body)
+    };
+    (@exact [$($k:literal)*] $n:expr, $N:ident => $body:expr) => {
         match $n {
-            1 => {
-                const $N: usize = 1;
+            $($k => {
+                const $N: usize = $k;
                 $body
-            }
-            2 => {
-                const $N: usize = 2;
-                $body
-            }
-            3 => {
-                const $N: usize = 3;
-                $body
-            }
-            4 => {
-                const $N: usize = 4;
-                $body
-            }
+            })*
             _ => {
                 const $N: usize = MAX_LINKS;
                 $body
@@ -267,8 +258,10 @@ impl<T: Num> Chain<T> {
     }
 
     // The temporaries below are written entry by entry over their whole (const) size, unused
-    // entries (past n) as zeros, so that the compiler drops their initial zero fill (no
-    // `from_fn`: its closures, left out of line, would not get the kernels' instruction set).
+    // entries (past n) as zeros. Their initial zero fill still remains (perf: a `memset`, about
+    // a tenth of the three-link chain's lane time): the pairs loop is too large to unroll.
+    // `from_fn` was tried and was 6 times slower (its closures, left out of line, do not get
+    // the kernels' instruction set).
     #[inline(always)]
     fn pairs<const N: usize>(&self, theta: &[T]) -> Pairs<T, N> {
         let n = self.links::<N>();
