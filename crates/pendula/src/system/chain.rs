@@ -203,74 +203,36 @@ impl<T: Copy> Chain<T> {
     }
 }
 
-/// Runs `$body` with `$N` a const array capacity for `$n` links: the link count itself up to
-/// four links (the chains most used: every loop then has a constant trip count and unrolls,
-/// and every array entry is written once), [`MAX_LINKS`] beyond. The equations' temporaries
-/// (the mass matrix, the pairs' trigonometry) are sized by it, so that a short chain neither
-/// fills nor copies arrays sized for eight links (on lanes of 8 members an 8 × 8 matrix is
-/// 4 KiB: filling it took a fifth of the three-link chain's time).
-macro_rules! by_capacity {
-    ($n:expr, $N:ident => $body:expr) => {
-        by_capacity!(@exact [1 2 3 4] $n, $N => $body)
-    };
-    (@exact [$($k:literal)*] $n:expr, $N:ident => $body:expr) => {
-        match $n {
-            $($k => {
-                const $N: usize = $k;
-                $body
-            })*
-            _ => {
-                const $N: usize = MAX_LINKS;
-                $body
-            }
-        }
-    };
-}
-
 /// sin and cos of θᵢ − θⱼ for each pair i < j (entries with i ≥ j unused): one `sin_cos` per
 /// pair, shared by the mass matrix and the forces. The pairs j < i take −sin and cos of the
 /// pair (j, i): sin is odd and cos even exactly (in the platform's trigonometry, the lanes'
 /// and the dual numbers' alike), so this is what evaluating them would give.
-struct Pairs<T, const N: usize> {
-    sin: [[T; N]; N],
-    cos: [[T; N]; N],
+struct Pairs<T> {
+    sin: [[T; MAX_LINKS]; MAX_LINKS],
+    cos: [[T; MAX_LINKS]; MAX_LINKS],
 }
 
 /// The equations, written once over every number type.
 impl<T: Num> Chain<T> {
-    /// The number of links for arrays of capacity N: N itself below [`MAX_LINKS`] (a constant
-    /// to the compiler, see `by_capacity!`), else n.
-    #[inline(always)]
-    fn links<const N: usize>(&self) -> usize {
-        if N < MAX_LINKS { N } else { self.n }
-    }
-
     /// μₖ = Σ_{i ≥ k} mᵢ: the mass below joint k, kg.
     #[inline(always)]
-    fn hanging<const N: usize>(&self) -> [T; N] {
-        let mut mu = [T::splat(0.0); N];
+    fn hanging(&self) -> [T; MAX_LINKS] {
+        let mut mu = [T::splat(0.0); MAX_LINKS];
         let mut sum = T::splat(0.0);
-        for k in (0..self.links::<N>()).rev() {
+        for k in (0..self.n).rev() {
             sum = sum + self.m[k];
             mu[k] = sum;
         }
         mu
     }
 
-    // The temporaries below are written entry by entry over their whole (const) size, unused
-    // entries (past n) as zeros. Their initial zero fill still remains (perf: a `memset`, about
-    // a tenth of the three-link chain's lane time): the pairs loop is too large to unroll.
-    // `from_fn` was tried and was 6 times slower (its closures, left out of line, do not get
-    // the kernels' instruction set).
     #[inline(always)]
-    fn pairs<const N: usize>(&self, theta: &[T]) -> Pairs<T, N> {
-        let n = self.links::<N>();
+    fn pairs(&self, theta: &[T]) -> Pairs<T> {
         let zero = T::splat(0.0);
-        let mut pairs = Pairs { sin: [[zero; N]; N], cos: [[zero; N]; N] };
-        for i in 0..N {
-            for j in 0..N {
-                (pairs.sin[i][j], pairs.cos[i][j]) =
-                    if i < j && j < n { (theta[i] - theta[j]).sin_cos() } else { (zero, zero) };
+        let mut pairs = Pairs { sin: [[zero; MAX_LINKS]; MAX_LINKS], cos: [[zero; MAX_LINKS]; MAX_LINKS] };
+        for i in 0..self.n {
+            for j in i + 1..self.n {
+                (pairs.sin[i][j], pairs.cos[i][j]) = (theta[i] - theta[j]).sin_cos();
             }
         }
         pairs
@@ -278,21 +240,15 @@ impl<T: Num> Chain<T> {
 
     /// Mass matrix M(θ) (upper-left n × n block), kg m².
     #[inline(always)]
-    fn mass_matrix<const N: usize>(&self, mu: &[T; N], pairs: &Pairs<T, N>) -> [[T; N]; N] {
-        let n = self.links::<N>();
-        let mut mass = [[T::splat(0.0); N]; N];
-        for i in 0..N {
-            for j in 0..N {
-                mass[i][j] = if i >= n || j >= n {
-                    T::splat(0.0)
-                } else if i == j {
-                    // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
-                    mu[i] * self.l[i] * self.l[i]
-                } else if i < j {
-                    pairs.cos[i][j] * (mu[j] * self.l[i] * self.l[j])
-                } else {
-                    pairs.cos[j][i] * (mu[i] * self.l[i] * self.l[j])
-                };
+    fn mass_matrix(&self, mu: &[T; MAX_LINKS], pairs: &Pairs<T>) -> [[T; MAX_LINKS]; MAX_LINKS] {
+        let mut mass = [[T::splat(0.0); MAX_LINKS]; MAX_LINKS];
+        for i in 0..self.n {
+            // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
+            mass[i][i] = mu[i] * self.l[i] * self.l[i];
+            for j in i + 1..self.n {
+                let c = pairs.cos[i][j];
+                mass[i][j] = c * (mu[j] * self.l[i] * self.l[j]);
+                mass[j][i] = c * (mu[j] * self.l[j] * self.l[i]);
             }
         }
         mass
@@ -301,16 +257,11 @@ impl<T: Num> Chain<T> {
     /// θ'' = M⁻¹ f at y = (θ, ω).
     #[inline(always)]
     pub fn accelerations(&self, y: &[T], out: &mut [T]) {
-        by_capacity!(self.n, N => self.accelerations_in::<N>(y, out))
-    }
-
-    #[inline(always)]
-    fn accelerations_in<const N: usize>(&self, y: &[T], out: &mut [T]) {
-        let n = self.links::<N>();
+        let n = self.n;
         let (theta, omega) = y.split_at(n);
-        let mu = self.hanging::<N>();
-        let pairs = self.pairs::<N>(theta);
-        let mut f = [T::splat(0.0); N];
+        let mu = self.hanging();
+        let pairs = self.pairs(theta);
+        let mut f = [T::splat(0.0); MAX_LINKS];
         for i in 0..n {
             let mut fi = theta[i].sin() * (-mu[i] * self.g * self.l[i]);
             for j in 0..n {
@@ -328,16 +279,13 @@ impl<T: Num> Chain<T> {
     /// ω = M⁻¹ p.
     #[inline(always)]
     fn velocities(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        by_capacity!(self.n, N => {
-            let pairs = self.pairs::<N>(theta);
-            self.velocities_in(&pairs, p, out)
-        })
+        self.velocities_in(&self.pairs(theta), p, out)
     }
 
     #[inline(always)]
-    fn velocities_in<const N: usize>(&self, pairs: &Pairs<T, N>, p: &[T], out: &mut [T]) {
-        let mut w = [T::splat(0.0); N];
-        let n = self.links::<N>();
+    fn velocities_in(&self, pairs: &Pairs<T>, p: &[T], out: &mut [T]) {
+        let mut w = [T::splat(0.0); MAX_LINKS];
+        let n = self.n;
         w[..n].copy_from_slice(&p[..n]);
         solve_spd(n, self.mass_matrix(&self.hanging(), pairs), &mut w);
         out[..n].copy_from_slice(&w[..n]);
@@ -346,15 +294,10 @@ impl<T: Num> Chain<T> {
     /// ∂H/∂θ (see the module's formula).
     #[inline(always)]
     fn dh_dtheta(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        by_capacity!(self.n, N => self.dh_dtheta_in::<N>(theta, p, out))
-    }
-
-    #[inline(always)]
-    fn dh_dtheta_in<const N: usize>(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        let n = self.links::<N>();
-        let mu = self.hanging::<N>();
-        let pairs = self.pairs::<N>(theta);
-        let mut w = [T::splat(0.0); N];
+        let n = self.n;
+        let mu = self.hanging();
+        let pairs = self.pairs(theta);
+        let mut w = [T::splat(0.0); MAX_LINKS];
         self.velocities_in(&pairs, p, &mut w);
         for k in 0..n {
             let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
@@ -372,7 +315,7 @@ impl<T: Num> Chain<T> {
 impl Chain {
     /// Potential energy V = −Σ μₖ g lₖ cos θₖ, J (zero with every rod horizontal).
     pub fn potential(&self, theta: &[f64]) -> f64 {
-        let mu = self.hanging::<MAX_LINKS>();
+        let mu = self.hanging();
         (0..self.n).map(|k| -mu[k] * self.g * self.l[k] * theta[k].cos()).sum()
     }
 
@@ -406,12 +349,12 @@ impl Chain {
 /// (on lanes these dominated the chain's factorisation).
 #[allow(clippy::needless_range_loop)] // index loops: the factorisation's own notation
 #[inline(always)]
-fn solve_spd<T: Num, const N: usize>(n: usize, mut a: [[T; N]; N], b: &mut [T; N]) {
-    // Below the diagonal a becomes L; u holds row j of L D.
-    let mut diag = [T::splat(0.0); N];
-    let mut inv = [T::splat(0.0); N];
+fn solve_spd<T: Num>(n: usize, mut a: [[T; MAX_LINKS]; MAX_LINKS], b: &mut [T; MAX_LINKS]) {
+    // Below the diagonal a becomes L; u holds row j of L D (its first j entries).
+    let mut diag = [T::splat(0.0); MAX_LINKS];
+    let mut inv = [T::splat(0.0); MAX_LINKS];
+    let mut u = [T::splat(0.0); MAX_LINKS];
     for j in 0..n {
-        let mut u = [T::splat(0.0); N];
         let mut d = a[j][j];
         for k in 0..j {
             u[k] = a[j][k] * diag[k];
@@ -542,7 +485,7 @@ impl System for Chain {
 impl Chain {
     /// V(every rod horizontal) − V_min = Σₖ μₖ g lₖ, J.
     fn well_depth(&self) -> f64 {
-        let mu = self.hanging::<MAX_LINKS>();
+        let mu = self.hanging();
         (0..self.n).map(|k| mu[k] * self.g * self.l[k]).sum()
     }
 }
