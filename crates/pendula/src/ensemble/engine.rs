@@ -447,7 +447,7 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
             self.reach[H] = eq.trig_reach(t, &yh).max(self.reach[H]);
         }
         let mut dh = [Lanes([0.0; HALF]); D];
-        eq.rhs(t, &yh, &mut dh);
+        eq.rhs_sized(t, &yh, &mut dh);
         for (v, w) in dydt.iter_mut().zip(&dh) {
             v.0[H * HALF..][..HALF].copy_from_slice(&w.0);
         }

@@ -203,21 +203,16 @@ impl<T: Copy> Chain<T> {
     }
 }
 
-/// sin and cos of θᵢ − θⱼ for each pair i < j (entries with i ≥ j unused): one `sin_cos` per
-/// pair, shared by the mass matrix and the forces. The pairs j < i take −sin and cos of the
-/// pair (j, i): sin is odd and cos even exactly (in the platform's trigonometry, the lanes'
-/// and the dual numbers' alike), so this is what evaluating them would give.
-struct Pairs<T> {
-    sin: [[T; MAX_LINKS]; MAX_LINKS],
-    cos: [[T; MAX_LINKS]; MAX_LINKS],
-}
-
-/// The equations, written once over every number type.
+/// The equations, written once over every number type and every capacity `C` ≥ n of the
+/// temporaries: [`MAX_LINKS`] for a chain of unknown size, less where the dimension is known
+/// when compiling (the ensemble engine's kernels, [`Equations::rhs_sized`]), which spares the
+/// zero fill of larger arrays. The arithmetic does not depend on `C` (the same operations in
+/// the same order).
 impl<T: Num> Chain<T> {
     /// μₖ = Σ_{i ≥ k} mᵢ: the mass below joint k, kg.
     #[inline(always)]
-    fn hanging(&self) -> [T; MAX_LINKS] {
-        let mut mu = [T::splat(0.0); MAX_LINKS];
+    fn hanging<const C: usize>(&self) -> [T; C] {
+        let mut mu = [T::splat(0.0); C];
         let mut sum = T::splat(0.0);
         for k in (0..self.n).rev() {
             sum = sum + self.m[k];
@@ -226,84 +221,99 @@ impl<T: Num> Chain<T> {
         mu
     }
 
+    /// One matrix for what the pairs give: sin(θᵢ − θⱼ) above the diagonal (i < j), the mass
+    /// matrix M(θ) (kg m², symmetric) on and below it, which [`solve_spd`] overwrites with
+    /// its factors. One `sin_cos` per pair serves the mass matrix and the forces; the pairs
+    /// j < i take −sin and cos of the pair (j, i): sin is odd and cos even exactly (in the
+    /// platform's trigonometry, the lanes' and the dual numbers' alike), so this is what
+    /// evaluating them would give. One n × n temporary, not three: on lanes their zero fill
+    /// was most of the overhead.
     #[inline(always)]
-    fn pairs(&self, theta: &[T]) -> Pairs<T> {
-        let zero = T::splat(0.0);
-        let mut pairs = Pairs { sin: [[zero; MAX_LINKS]; MAX_LINKS], cos: [[zero; MAX_LINKS]; MAX_LINKS] };
-        for i in 0..self.n {
-            for j in i + 1..self.n {
-                (pairs.sin[i][j], pairs.cos[i][j]) = (theta[i] - theta[j]).sin_cos();
-            }
-        }
-        pairs
-    }
-
-    /// Mass matrix M(θ) (upper-left n × n block), kg m².
-    #[inline(always)]
-    fn mass_matrix(&self, mu: &[T; MAX_LINKS], pairs: &Pairs<T>) -> [[T; MAX_LINKS]; MAX_LINKS] {
-        let mut mass = [[T::splat(0.0); MAX_LINKS]; MAX_LINKS];
+    fn pairs<const C: usize>(&self, theta: &[T], mu: &[T; C]) -> [[T; C]; C] {
+        let mut a = [[T::splat(0.0); C]; C];
         for i in 0..self.n {
             // cos(θᵢ − θᵢ) = 1 exactly: the diagonal needs no cosine.
-            mass[i][i] = mu[i] * self.l[i] * self.l[i];
+            a[i][i] = mu[i] * self.l[i] * self.l[i];
             for j in i + 1..self.n {
-                let c = pairs.cos[i][j];
-                mass[i][j] = c * (mu[j] * self.l[i] * self.l[j]);
-                mass[j][i] = c * (mu[j] * self.l[j] * self.l[i]);
+                let (s, c) = (theta[i] - theta[j]).sin_cos();
+                a[i][j] = s;
+                a[j][i] = c * (mu[j] * self.l[j] * self.l[i]);
             }
         }
-        mass
+        a
+    }
+
+    /// sin(θᵢ − θⱼ) from [`Chain::pairs`]' matrix.
+    #[inline(always)]
+    fn sin_of<const C: usize>(a: &[[T; C]; C], i: usize, j: usize) -> T {
+        if i < j { a[i][j] } else { -a[j][i] }
     }
 
     /// θ'' = M⁻¹ f at y = (θ, ω).
     #[inline(always)]
     pub fn accelerations(&self, y: &[T], out: &mut [T]) {
+        self.accelerations_in::<MAX_LINKS>(y, out)
+    }
+
+    /// [`Chain::accelerations`] with temporaries of capacity `C` ≥ n.
+    #[inline(always)]
+    fn accelerations_in<const C: usize>(&self, y: &[T], out: &mut [T]) {
         let n = self.n;
         let (theta, omega) = y.split_at(n);
-        let mu = self.hanging();
-        let pairs = self.pairs(theta);
-        let mut f = [T::splat(0.0); MAX_LINKS];
+        let mu = self.hanging::<C>();
+        let mut a = self.pairs(theta, &mu);
+        let mut f = [T::splat(0.0); C];
         for i in 0..n {
             let mut fi = theta[i].sin() * (-mu[i] * self.g * self.l[i]);
             for j in 0..n {
                 if j != i {
-                    let s = if i < j { pairs.sin[i][j] } else { -pairs.sin[j][i] };
+                    let s = Self::sin_of(&a, i, j);
                     fi = fi - s * omega[j] * omega[j] * (mu[i.max(j)] * self.l[i] * self.l[j]);
                 }
             }
             f[i] = fi;
         }
-        solve_spd(n, self.mass_matrix(&mu, &pairs), &mut f);
+        solve_spd(n, &mut a, &mut f);
         out[..n].copy_from_slice(&f[..n]);
+    }
+
+    /// θ' = ω, θ'' = M⁻¹ f with temporaries of capacity `C` ≥ n.
+    #[inline(always)]
+    fn rhs_in<const C: usize>(&self, y: &[T], dydt: &mut [T]) {
+        let n = self.n;
+        dydt[..n].copy_from_slice(&y[n..2 * n]);
+        self.accelerations_in::<C>(y, &mut dydt[n..]);
     }
 
     /// ω = M⁻¹ p.
     #[inline(always)]
     fn velocities(&self, theta: &[T], p: &[T], out: &mut [T]) {
-        self.velocities_in(&self.pairs(theta), p, out)
+        let mut w = [T::splat(0.0); MAX_LINKS];
+        self.velocities_in(&mut self.pairs(theta, &self.hanging()), p, &mut w);
+        out[..self.n].copy_from_slice(&w[..self.n]);
     }
 
+    /// ω = M⁻¹ p from [`Chain::pairs`]' matrix `a` (left factorised), into `w`.
     #[inline(always)]
-    fn velocities_in(&self, pairs: &Pairs<T>, p: &[T], out: &mut [T]) {
-        let mut w = [T::splat(0.0); MAX_LINKS];
+    fn velocities_in<const C: usize>(&self, a: &mut [[T; C]; C], p: &[T], w: &mut [T; C]) {
         let n = self.n;
         w[..n].copy_from_slice(&p[..n]);
-        solve_spd(n, self.mass_matrix(&self.hanging(), pairs), &mut w);
-        out[..n].copy_from_slice(&w[..n]);
+        solve_spd(n, a, w);
     }
 
     /// ∂H/∂θ (see the module's formula).
     #[inline(always)]
     fn dh_dtheta(&self, theta: &[T], p: &[T], out: &mut [T]) {
         let n = self.n;
-        let mu = self.hanging();
-        let pairs = self.pairs(theta);
+        let mu = self.hanging::<MAX_LINKS>();
+        let mut a = self.pairs(theta, &mu);
         let mut w = [T::splat(0.0); MAX_LINKS];
-        self.velocities_in(&pairs, p, &mut w);
+        self.velocities_in(&mut a, p, &mut w);
         for k in 0..n {
             let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
             for j in 0..n {
                 if j != k {
-                    let s = if k < j { pairs.sin[k][j] } else { -pairs.sin[j][k] };
+                    let s = Self::sin_of(&a, k, j);
                     d = d + s * w[k] * w[j] * (mu[k.max(j)] * self.l[k] * self.l[j]);
                 }
             }
@@ -315,7 +325,7 @@ impl<T: Num> Chain<T> {
 impl Chain {
     /// Potential energy V = −Σ μₖ g lₖ cos θₖ, J (zero with every rod horizontal).
     pub fn potential(&self, theta: &[f64]) -> f64 {
-        let mu = self.hanging();
+        let mu = self.hanging::<MAX_LINKS>();
         (0..self.n).map(|k| -mu[k] * self.g * self.l[k] * theta[k].cos()).sum()
     }
 
@@ -333,8 +343,16 @@ impl Chain {
     }
 
     /// M(θ), kg m².
+    #[allow(clippy::needless_range_loop)] // (i, j) and (j, i): the matrix's own notation
     fn mass_at(&self, theta: &[f64]) -> [[f64; MAX_LINKS]; MAX_LINKS] {
-        self.mass_matrix(&self.hanging(), &self.pairs(theta))
+        // Above the diagonal, the mirror of what is below (sines there).
+        let mut mass = self.pairs(theta, &self.hanging::<MAX_LINKS>());
+        for i in 0..self.n {
+            for j in i + 1..self.n {
+                mass[i][j] = mass[j][i];
+            }
+        }
+        mass
     }
 
     /// The parameters as dual numbers (constants), for Jacobians.
@@ -343,17 +361,18 @@ impl Chain {
     }
 }
 
-/// Solves M x = b in place for a symmetric positive definite n × n M (a mass matrix) by its
+/// Solves M x = b in place for a symmetric positive definite n × n M (a mass matrix, read on
+/// and below the diagonal of `a`, where its factors are left) by its
 /// factorisation M = L D Lᵀ (L unit lower triangular, D diagonal), on the stack: n divisions
 /// and no square root, where Cholesky's L Lᵀ takes n square roots and n (n + 3) / 2 divisions
 /// (on lanes these dominated the chain's factorisation).
 #[allow(clippy::needless_range_loop)] // index loops: the factorisation's own notation
 #[inline(always)]
-fn solve_spd<T: Num>(n: usize, mut a: [[T; MAX_LINKS]; MAX_LINKS], b: &mut [T; MAX_LINKS]) {
+fn solve_spd<T: Num, const C: usize>(n: usize, a: &mut [[T; C]; C], b: &mut [T; C]) {
     // Below the diagonal a becomes L; u holds row j of L D (its first j entries).
-    let mut diag = [T::splat(0.0); MAX_LINKS];
-    let mut inv = [T::splat(0.0); MAX_LINKS];
-    let mut u = [T::splat(0.0); MAX_LINKS];
+    let mut diag = [T::splat(0.0); C];
+    let mut inv = [T::splat(0.0); C];
+    let mut u = [T::splat(0.0); C];
     for j in 0..n {
         let mut d = a[j][j];
         for k in 0..j {
@@ -454,9 +473,22 @@ impl Model for Chain {
 impl<T: Num> Equations<T> for Chain<T> {
     #[inline(always)]
     fn rhs(&self, _t: T, y: &[T], dydt: &mut [T]) {
-        let n = self.n;
-        dydt[..n].copy_from_slice(&y[n..2 * n]);
-        self.accelerations(y, &mut dydt[n..]);
+        self.rhs_in::<MAX_LINKS>(y, dydt);
+    }
+
+    /// Temporaries of capacity D/2 (the padded state holds D/2 links at most): 2, 4 or
+    /// [`MAX_LINKS`]. The engine compiles a kernel per padded dimension (4, 8 or 16), so
+    /// each kernel holds one capacity; 8 × 8 temporaries for 3 links were zero filled
+    /// (4 KiB each on lanes) at every evaluation, most of the lanes' overhead.
+    #[inline(always)]
+    fn rhs_sized<const D: usize>(&self, _t: T, y: &[T; D], dydt: &mut [T; D]) {
+        if const { D <= 4 } {
+            self.rhs_in::<2>(y, dydt);
+        } else if const { D <= 8 } {
+            self.rhs_in::<4>(y, dydt);
+        } else {
+            self.rhs_in::<MAX_LINKS>(y, dydt);
+        }
     }
 
     /// 2 max |θₖ|: the angles and their differences.
@@ -485,7 +517,7 @@ impl System for Chain {
 impl Chain {
     /// V(every rod horizontal) − V_min = Σₖ μₖ g lₖ, J.
     fn well_depth(&self) -> f64 {
-        let mu = self.hanging();
+        let mu = self.hanging::<MAX_LINKS>();
         (0..self.n).map(|k| mu[k] * self.g * self.l[k]).sum()
     }
 }

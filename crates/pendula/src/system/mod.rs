@@ -41,6 +41,17 @@ pub trait Equations<T: Num>: Send + Sync {
     /// Writes f(t, y) into `dydt`; both slices have the system's dimension.
     fn rhs(&self, t: T, y: &[T], dydt: &mut [T]);
 
+    /// [`Equations::rhs`] where the state's length `D` is known when compiling (the ensemble
+    /// engine compiles a kernel per dimension); for a system whose temporaries grow with its
+    /// size (the chain) to size them by `D`. The same arithmetic as `rhs`.
+    #[inline(always)]
+    fn rhs_sized<const D: usize>(&self, t: T, y: &[T; D], dydt: &mut [T; D])
+    where
+        Self: Sized,
+    {
+        self.rhs(t, y, dydt);
+    }
+
     /// A bound on |x| over the arguments x of every sine and cosine [`Equations::rhs`] takes
     /// at (t, y): the lanes' branch-free trigonometry serves |x| ≤ 2²⁰ rad
     /// ([`crate::num::trig::FAST_RANGE`]), and a lane group whose bound goes beyond runs
