@@ -260,11 +260,11 @@ pub(crate) trait LaneStep<const W: usize, const FMA: bool, const WIDE: bool>: Co
     /// the parameters alone stays out of the loop: held in the step, it measured 18% slower).
     type Equations;
 
-    /// Writes into `next`, which holds `y` on entry, the state after one step of size `h`
-    /// from time `t` and state `y` (W values per lane: the member's variables, then any the
-    /// method keeps of its own); the reach of the sine
-    /// and cosine arguments it took folded into `reach` (one value per half group, not
-    /// `WIDE`; see [`Equations::trig_reach`]).
+    /// Writes into `next`, every value of it (it holds the previous step's on entry), the
+    /// state after one step of size `h` from time `t` and state `y` (W values per lane: the
+    /// member's variables, then any the method keeps of its own); the reach of the sine and
+    /// cosine arguments it took folded into `reach` (one value per half group, not `WIDE`;
+    /// see [`Equations::trig_reach`]).
     fn step(
         &mut self,
         eqs: &Self::Equations,
@@ -350,7 +350,7 @@ where
         let mut f = LaneRhs::<_, D, FMA, WIDE> { eqs, reach: *reach };
         fixed_stages::<_, _, D, _>(&self.a, &self.plan, &self.c, 0, &mut self.k, &mut f, t, h, y);
         *reach = f.reach;
-        fixed_update::<_, D>(&self.b, &self.k, self.scale, next);
+        fixed_update::<_, D>(&self.b, &self.k, self.scale, y, next);
     }
 }
 
@@ -532,10 +532,11 @@ where
     let [mut before, mut after] = [[[0.0; LANES]; MAX_DIM]; 2];
     let mut failed_step = [-1.0; LANES];
     let mut reach = [Lanes([0.0; HALF]); 2];
+    // Every step writes all of it (no copy of y first).
+    let mut next = y;
     for step in 0..run.steps {
         // Times from the step index, as the scalar loop computes them.
         let t = step as f64 * h;
-        let mut next = y;
         method.step(eqs, t, h, &y, &mut next, &mut reach);
         // One probe per lane for the common step, in which nothing happens: the sum of the
         // state's components is finite (so is every component; a sum that overflows only

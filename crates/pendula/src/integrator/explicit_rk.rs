@@ -256,8 +256,14 @@ const MAX_PLANNED: usize = 16;
 #[inline(always)]
 pub(crate) fn explicit_update<T: Num>(b: &[f64], k: &[T], scale: f64, y: &mut [T]) {
     match y.len() {
-        2 => fixed_update::<T, 2>(b, k.as_chunks().0, scale, y.try_into().expect("2")),
-        4 => fixed_update::<T, 4>(b, k.as_chunks().0, scale, y.try_into().expect("4")),
+        2 => {
+            let y: &mut [T; 2] = y.try_into().expect("2");
+            fixed_update::<T, 2>(b, k.as_chunks().0, scale, &y.clone(), y)
+        }
+        4 => {
+            let y: &mut [T; 4] = y.try_into().expect("4");
+            fixed_update::<T, 4>(b, k.as_chunks().0, scale, &y.clone(), y)
+        }
         n => {
             for (j, yj) in y.iter_mut().enumerate() {
                 let mut acc = if b[0] == 1.0 { k[j] } else { T::splat(b[0]) * k[j] };
@@ -280,9 +286,16 @@ impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
     }
 }
 
-/// [`explicit_update`] for states of N components, stage i in `k[i]`.
+/// [`explicit_update`] for states of N components, stage i in `k[i]`, from `y` into `out`
+/// (every component written: a caller whose `out` is not `y` copies nothing first).
 #[inline(always)]
-pub(crate) fn fixed_update<T: Num, const N: usize>(b: &[f64], k: &[[T; N]], scale: f64, y: &mut [T; N]) {
+pub(crate) fn fixed_update<T: Num, const N: usize>(
+    b: &[f64],
+    k: &[[T; N]],
+    scale: f64,
+    y: &[T; N],
+    out: &mut [T; N],
+) {
     let mut acc = k[0];
     // b₀ = 1 (RK4, Euler): b₀ k₀ is k₀ itself, without the product.
     if b[0] != 1.0 {
@@ -296,7 +309,7 @@ pub(crate) fn fixed_update<T: Num, const N: usize>(b: &[f64], k: &[[T; N]], scal
         }
     }
     for j in 0..N {
-        y[j] = T::splat(scale).madd(acc[j], y[j]);
+        out[j] = T::splat(scale).madd(acc[j], y[j]);
     }
 }
 
