@@ -1,12 +1,17 @@
 //! The argument groups several commands share, declared once (ripgrep's low-level arguments,
-//! converted in one step into validated values): the system to run (a positional name), the
-//! method and its step (`--method`, `--dt`), and the end time (`--t-end`).
+//! converted in one step into validated values): the system to run (a positional name), its
+//! settings (`--set`) and preset (`--preset`), the method and its step (`--method`, `--dt`),
+//! the end time (`--t-end`), the worker threads (`--threads`), the JSON summary (`--summary`)
+//! and the limits' override (`--allow-large`). A command whose flag means something more
+//! says so in its help (`cli.rs`'s `mut_arg`, or a note in its [`Defaults`]).
 //!
 //! Each command states its defaults once, in a [`Defaults`]. Its help text and its conversion
 //! both read them: [`Defaults::document`] writes `[default: …]` into the help of the shared
 //! arguments the command has (`cli.rs` applies it to every argument of the command), and the
 //! groups' `resolve` methods fall back to the same values. What the help says is what runs
 //! (`tests/cli.rs` checks the help of every command against its `Defaults`).
+
+use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
@@ -38,11 +43,18 @@ impl Defaults {
     /// arguments; other arguments unchanged.
     pub fn document(&self, arg: clap::Arg) -> clap::Arg {
         let id = arg.get_id().as_str().to_owned();
+        let own = arg.get_help().map(|h| h.to_string().trim_end_matches('.').to_owned());
         let (what, default) = match id.as_str() {
-            "system" => ("System to run (see `pendula list systems`)", Some(self.system.to_owned())),
-            "method" => ("Integration method (see `pendula list methods`)", self.method.map(str::to_owned)),
-            "dt" => ("Step size, s", self.dt.map(|v| Short(v).to_string())),
-            "t_end" => ("End time, s", self.t_end.map(|v| Short(v).to_string())),
+            "system" => {
+                ("System to run (see `pendula list systems`)".to_owned(), Some(self.system.to_owned()))
+            }
+            "method" => {
+                ("Integration method (see `pendula list methods`)".to_owned(), self.method.map(str::to_owned))
+            }
+            "dt" => ("Step size, s".to_owned(), self.dt.map(|v| Short(v).to_string())),
+            "t_end" => ("End time, s".to_owned(), self.t_end.map(|v| Short(v).to_string())),
+            // The other shared groups' help, with the command's note after it.
+            "set" | "preset" | "threads" | "summary" => (own.unwrap_or_default(), None),
             _ => return arg,
         };
         let note = self.notes.iter().find(|(n, _)| *n == id);
@@ -182,4 +194,65 @@ mod tests {
         assert!(dt_help.contains(&format!("[default: {}]", m.dt(&d).unwrap())), "{dt_help}");
         assert_eq!(SystemArg::default().name(&d), "double");
     }
+}
+
+/// The settings over the system's defaults.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct SetArgs {
+    /// Set a parameter or initial-state variable, NAME=VALUE (`pendula list systems` names
+    /// them); angles take a `deg` or `pi` suffix (bare numbers are radians).
+    #[arg(id = "set", long = "set", value_name = "NAME=VALUE")]
+    #[serde(rename = "set")]
+    pub items: Vec<String>,
+}
+
+/// A named parameter set (`pendula list presets`), which picks the system.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct PresetArg {
+    /// Start from a named preset (see `pendula list presets`); it picks the system, and
+    /// --set applies over it.
+    #[arg(id = "preset", long = "preset", value_name = "NAME")]
+    #[serde(rename = "preset")]
+    pub name: Option<String>,
+}
+
+/// The worker threads of a parallel command.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct ThreadsArg {
+    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores]; the
+    /// result does not depend on it.
+    #[arg(id = "threads", long = "threads", value_name = "N")]
+    #[serde(rename = "threads")]
+    pub count: Option<String>,
+}
+
+impl ThreadsArg {
+    /// The threads given (1 to the cores; to 1024 with `allow_large`), or every core.
+    pub fn resolve(&self, allow_large: bool) -> Result<usize> {
+        crate::limits::threads(self.count.as_deref(), allow_large)
+    }
+}
+
+/// Where the JSON summary goes.
+#[derive(Debug, Clone, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct SummaryArg {
+    /// Write a JSON summary here (`-`: on stdout, and what is printed for people on stderr).
+    #[arg(id = "summary", long = "summary", value_name = "FILE.json")]
+    #[serde(rename = "summary")]
+    pub path: Option<PathBuf>,
+}
+
+impl SummaryArg {
+    /// Opens it ([`crate::study::Summary::open`]): a path that cannot be written fails
+    /// before the work.
+    pub fn open(&self) -> Result<crate::study::Summary> {
+        crate::study::Summary::open(self.path.as_deref())
+    }
+}
+
+/// Whether to run beyond the limits (`crate::limits`).
+#[derive(Debug, Clone, Copy, Default, Args, serde::Serialize, serde::Deserialize)]
+pub struct LargeArg {
+    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
+    pub allow_large: bool,
 }

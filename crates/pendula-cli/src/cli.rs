@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use crate::args::{LargeArg, PresetArg, SetArgs, SummaryArg};
+
 /// Simple, double and harmonic pendulums with verified, structure-preserving integrators.
 #[derive(Debug, Parser)]
 #[command(name = "pendula", version, after_help = EXIT_CODES)]
@@ -74,8 +76,8 @@ pub enum Command {
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
     #[command(mut_args(|a| crate::commands::fractal::DEFAULTS.document(a)))]
     Fractal(Box<crate::commands::fractal::FractalArgs>),
-    /// Integrate a grid of initial states or parameters in parallel (SIMD for the double
-    /// pendulum with rk4) into one .npy array, or one shard of it.
+    /// Integrate a grid of initial states or parameters in parallel (SIMD lanes for every
+    /// system with an explicit Runge-Kutta method) into one .npy array, or one shard of it.
     #[command(mut_args(|a| crate::commands::sweep::DEFAULTS.document(a)))]
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.
@@ -172,14 +174,12 @@ pub struct SimulateArgs {
     /// Largest step an adaptive method may take, s [default: unbounded].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub h_max: Option<String>,
-    /// Set a parameter or initial-state variable, e.g. `--set theta1=120deg --set m2=2`.
-    /// Angles take a `deg` suffix (bare numbers are radians) or a `pi` suffix.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
-    /// Start from a named preset (see `pendula list presets`); it picks the system, and
-    /// --set applies over it.
-    #[arg(long, value_name = "NAME")]
-    pub preset: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub set: SetArgs,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub preset: PresetArg,
     /// TOML scenario with the same names (keys system, method, dt, t_end or steps, every,
     /// out, summary, and a `[set]` table); flags override it. At most 1 MiB, arrays and
     /// tables nested at most 16 deep.
@@ -205,9 +205,9 @@ pub struct SimulateArgs {
     /// [default: trajectory.csv].
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary of the run here (`-`: on stdout).
-    #[arg(long, value_name = "FILE.json")]
-    pub summary: Option<PathBuf>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub summary: SummaryArg,
     /// Locate events and list them in the summary: `flip` (an angle passes ±π the first
     /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE` (for an angle,
     /// VALUE + 2 pi k: the angle is on a circle); a trailing `+`
@@ -226,6 +226,7 @@ pub struct SimulateArgs {
     /// Simulated seconds between checkpoints [default: only when interrupted].
     #[arg(long, value_name = "T", allow_hyphen_values = true, requires = "checkpoint")]
     pub checkpoint_every: Option<String>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub large: LargeArg,
 }

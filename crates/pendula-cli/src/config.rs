@@ -27,6 +27,7 @@ pub const SIMULATE: crate::args::Defaults = crate::args::Defaults {
             "For adaptive methods the first step to try. The run may take at most 10^11 steps (10^13 with --allow-large).",
         ),
         ("t_end", "The last step is shortened to land on it."),
+        ("set", "For example `--set theta1=120deg --set m2=2`."),
     ],
 };
 /// Default trajectory file.
@@ -623,7 +624,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
 
 /// [`simulate`] with the scenario file already read: the flags override `scenario`.
 pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<SimulateConfig> {
-    let preset = args.preset.as_deref().map(system::driven::find_preset).transpose()?;
+    let preset = args.preset.name.as_deref().map(system::driven::find_preset).transpose()?;
     let system_name = args
         .system
         .system
@@ -652,7 +653,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         let q = info.quantity(name)?;
         settings.push((name.clone(), toml_value(name, value, q)?));
     }
-    settings.extend(parse_settings(info, &args.set)?);
+    settings.extend(parse_settings(info, &args.set.items)?);
     let values = info.values(&settings)?;
 
     let given_dt = match &args.stepping.dt {
@@ -778,7 +779,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
         None => None,
         Some(_) => Some(output(args.out.clone().or(scenario.out).unwrap_or_else(|| DEFAULT_OUT.into()))?),
     };
-    let summary = args.summary.clone().or(scenario.summary);
+    let summary = args.summary.path.clone().or(scenario.summary);
     if matches!(out, Some(Output::Stdout)) && summary.as_deref() == Some(Path::new("-")) {
         bail!("--out - and --summary - would both write to stdout: give one of them a file");
     }
@@ -793,7 +794,7 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
     }
     limits::check(
         "simulate",
-        args.allow_large,
+        args.large.allow_large,
         &simulate_estimates(&values, &spec, &tolerances, every, &grid, &out, plot.is_some())?,
     )?;
     let checkpoint = checkpoints(args, out.as_ref(), summary.as_deref(), plot.as_deref())?;

@@ -25,23 +25,21 @@ macro_rules! say {
 macro_rules! sayln {
     ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
 }
+use crate::args::{LargeArg, SetArgs, SummaryArg};
 use crate::output::{AtomicFile, CreatedDirs};
 
 /// Arguments every study command takes.
 #[derive(Debug, Clone, Args)]
 pub struct Common {
-    /// Set a parameter or initial-state variable of the system, NAME=VALUE (`pendula list
-    /// systems` names them; each command's help gives an example for its system).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    #[command(flatten)]
+    pub set: SetArgs,
     /// Directory for CSV, PNG and SVG outputs [default: pendula-out/<command>].
     #[arg(long, value_name = "DIR")]
     pub out_dir: Option<PathBuf>,
-    /// Write the headline numbers as JSON here (`-`: on stdout, and the tables on stderr).
-    #[arg(long, value_name = "FILE.json")]
-    pub summary: Option<PathBuf>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    pub summary: SummaryArg,
+    #[command(flatten)]
+    pub large: LargeArg,
 }
 
 /// A geometric range of step sizes and an end time, as convergence and work-precision take

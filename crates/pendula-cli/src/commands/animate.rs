@@ -13,7 +13,7 @@ use pendula::observe::{Every, Recorder};
 use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
-use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
+use crate::args::{Defaults, EndArg, LargeArg, MethodArgs, SetArgs, SystemArg};
 use crate::config::parse_value;
 use crate::output::{AtomicFile, CreatedDirs, WatchedChild};
 use crate::study;
@@ -26,10 +26,8 @@ pub struct AnimateArgs {
     pub stepping: MethodArgs,
     #[command(flatten)]
     pub end: EndArg,
-    /// Set a parameter or initial-state variable: `--set theta1=120deg` for the double pendulum,
-    /// `--set theta=120deg` for the pendulum (bare angles are radians).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    #[command(flatten)]
+    pub set: SetArgs,
     /// Output: FILE.gif, or FILE.mp4 (needs ffmpeg on the PATH) [default: pendula-out/animate/animation.gif].
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -43,8 +41,8 @@ pub struct AnimateArgs {
     /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    pub large: LargeArg,
 }
 
 /// What animate runs without arguments.
@@ -56,6 +54,7 @@ pub const DEFAULTS: Defaults = Defaults {
     notes: &[
         ("system", "A pendulum or the double pendulum."),
         ("t_end", "The length of the animation in simulated seconds."),
+        ("set", "`--set theta1=120deg` for the double pendulum, `--set theta=120deg` for the pendulum."),
     ],
 };
 
@@ -93,7 +92,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "MP4 output needs an `ffmpeg` binary on the PATH, and none was found; install ffmpeg or write a .gif"
         );
     }
-    let values = study::values(system, &args.set)?;
+    let values = study::values(system, &args.set.items)?;
     let first = values.info().state[0];
     let delta = args.compare.as_deref().map(|d| parse_value("--compare", d, Some(&first))).transpose()?;
     if let Some(d) = delta
@@ -112,7 +111,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let how = format!("{} frames of {}x{} pixels", crate::limits::round(frames), size.0, size.1);
     crate::limits::check(
         "animate",
-        args.allow_large,
+        args.large.allow_large,
         &[
             crate::limits::Estimate::new(
                 crate::limits::Cost::Steps,

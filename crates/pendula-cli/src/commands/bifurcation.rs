@@ -17,11 +17,11 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_u
 use rayon::prelude::*;
 use serde_json::json;
 
-use crate::args::{Defaults, SystemArg};
+use crate::args::{Defaults, PresetArg, SystemArg, ThreadsArg};
 use crate::commands::sweep::{parse_axis, refuse_set_and_swept};
 use crate::config::{f64_arg, parse_count};
 use crate::limits::{self, Cost, Estimate};
-use crate::study::{self, OutDir, Summary, num};
+use crate::study::{self, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct BifurcationArgs {
@@ -31,9 +31,8 @@ pub struct BifurcationArgs {
     /// [default: drive_amplitude=1.0:1.5:800 for driven-pendulum].
     #[arg(long, value_name = "NAME=LO:HI:N")]
     pub param: Option<String>,
-    /// Start from a named preset (`pendula list presets`); --set applies over it.
-    #[arg(long, value_name = "NAME")]
-    pub preset: Option<String>,
+    #[command(flatten)]
+    pub preset: PresetArg,
     /// Time discarded before sampling, s, rounded up to whole drive periods [default: 1000].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub transient: Option<String>,
@@ -46,9 +45,8 @@ pub struct BifurcationArgs {
     /// The state variable plotted against the parameter [default: the first velocity].
     #[arg(long, value_name = "NAME")]
     pub variable: Option<String>,
-    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<String>,
+    #[command(flatten)]
+    pub threads: ThreadsArg,
     #[command(flatten)]
     pub common: study::Common,
 }
@@ -66,8 +64,8 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     // Validate everything first.
     let (info, base) = study::preset_settings(
         args.system.system.as_deref(),
-        args.preset.as_deref(),
-        &args.common.set,
+        args.preset.name.as_deref(),
+        &args.common.set.items,
         DEFAULTS.system,
     )?;
     let system = info.name;
@@ -87,7 +85,12 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
             axis.name
         );
     }
-    refuse_set_and_swept(&args.common.set, &[param_text.to_owned()], std::slice::from_ref(&axis), "--param")?;
+    refuse_set_and_swept(
+        &args.common.set.items,
+        &[param_text.to_owned()],
+        std::slice::from_ref(&axis),
+        "--param",
+    )?;
     let transient = f64_arg("--transient", args.transient.as_deref(), 1000.0, "a time in seconds")?;
     if transient < 0.0 {
         bail!("invalid --transient {}: must be finite and >= 0", pendula::error::Short(transient));
@@ -100,7 +103,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         Some(t) => parse_count("--steps-per-period", t, 4, limits::MAX_STEPS_PER_PERIOD, "steps")? as u32,
         None => 100,
     };
-    let threads = limits::threads(args.threads.as_deref(), args.common.allow_large)?;
+    let threads = args.threads.resolve(args.common.large.allow_large)?;
     // What it costs, before the values are made: every value's transient and samples, at the
     // fastest drive along the axis (its most periods), and its rows in memory and in the CSV.
     let simd = pendula::ensemble::driven::runs(info);
@@ -116,7 +119,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let dim = info.state.len() as f64;
     limits::check(
         "bifurcation",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[
             Estimate::new(
                 if simd { Cost::LaneSteps } else { Cost::Steps },
@@ -174,7 +177,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         );
     }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
 
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;

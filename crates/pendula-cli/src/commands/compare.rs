@@ -26,7 +26,7 @@ use pendula::error::Short;
 use crate::args::{Defaults, SystemArg};
 use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate, round};
-use crate::study::{self, Common, OutDir, Summary, num, short};
+use crate::study::{self, Common, OutDir, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct CompareArgs {
@@ -127,7 +127,7 @@ pub const DEFAULTS: Defaults = Defaults { system: "double", method: None, dt: No
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let steps = match &args.dt {
         Some(text) => Steps::Equal(positive_arg("--dt", Some(text), 0.0, "a step size in seconds")?),
         None => Steps::EqualCost(positive_arg(
@@ -157,7 +157,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     };
     limits::check(
         "compare",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[Estimate::new(Cost::Steps, methods.len() as f64 * per_method, how)],
     )?;
     match steps {
@@ -172,7 +172,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         Steps::EqualCost(_) => {}
     }
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
 
     let bar = study::progress(methods.len() as u64, "compare");
     // The methods' runs are independent: one per core, in the order given.

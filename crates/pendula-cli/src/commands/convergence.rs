@@ -18,7 +18,7 @@ use serde_json::json;
 
 use crate::args::{Defaults, SystemArg};
 use crate::commands::compare::refusal;
-use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
+use crate::study::{self, Common, OutDir, StepRange, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -86,7 +86,7 @@ pub const DEFAULTS: Defaults =
 
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, None)?;
@@ -102,14 +102,14 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     }
     study::check_study(
         "convergence",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &values,
         t_end,
         runs,
         format!("{} runs of {} methods to t = {} s", levels, methods.len(), short(t_end)),
     )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
 
     let (results, reference) = study_orders(&values, &methods, &ladder, t_end)?;
 

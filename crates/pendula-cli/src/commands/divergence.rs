@@ -12,7 +12,7 @@ use crate::config::f64_arg;
 use pendula::error::Short;
 
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
-use crate::study::{self, Common, OutDir, Summary, num};
+use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct DivergenceArgs {
@@ -41,7 +41,7 @@ pub const DEFAULTS: Defaults =
 
 pub fn run(args: &DivergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let info = values.info();
     let delta = f64_arg("--delta", args.delta.as_deref(), 1e-9, "a separation")?;
     if delta == 0.0 {
@@ -82,7 +82,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
     crate::limits::check(
         "divergence",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[crate::limits::Estimate::new(
             crate::limits::Cost::Steps,
             2.0 * schedule.steps as f64,
@@ -90,7 +90,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         )],
     )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
     let model = values.build();
     // About 2000 samples, whatever the step.
     let every = (schedule.steps / 2000).max(1);

@@ -18,7 +18,7 @@ use pendula::system::{Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
-use crate::args::{Defaults, MethodArgs};
+use crate::args::{Defaults, LargeArg, MethodArgs, SetArgs, SummaryArg, ThreadsArg};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
 use crate::commands::sweep::{parse_axis, write_npy};
@@ -27,7 +27,7 @@ use pendula::error::Short;
 use crate::config::{f64_arg, parse_settings, positive_arg};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
-use crate::study::{OutDir, Summary};
+use crate::study::OutDir;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct FractalArgs {
@@ -45,13 +45,12 @@ pub struct FractalArgs {
     /// (and both or neither flip) [default: 0.01].
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub tolerance: Option<String>,
-    /// Set a parameter (m1, m2, l1, l2, g); the pendulum starts at rest.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
-    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores]; the
-    /// result does not depend on it.
-    #[arg(long, value_name = "N")]
-    pub threads: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub set: SetArgs,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub threads: ThreadsArg,
     /// Directory for fractal.npy, fractal.png, fractal-converged.npy and fractal-converged.png
     /// [default: pendula-out/fractal].
     #[arg(long, value_name = "DIR", conflicts_with = "out")]
@@ -59,16 +58,17 @@ pub struct FractalArgs {
     /// Output .npy file instead, anywhere; the PNG and the convergence flags go beside it.
     #[arg(long, value_name = "FILE.npy")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary here (`-`: on stdout, and the report line on stderr).
-    #[arg(long, value_name = "FILE.json")]
-    pub summary: Option<PathBuf>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub summary: SummaryArg,
     /// Compute the pixels in chunks and keep the finished ones in FILE (and FILE.chunks), so
     /// that an interrupted fractal continues with `pendula resume FILE`, computing only the
     /// chunks missing; both files are removed when the fractal is written.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub large: LargeArg,
 }
 
 /// `dir/stem.npy` → `dir/stem{suffix}`.
@@ -86,6 +86,7 @@ pub const DEFAULTS: Defaults = Defaults {
     notes: &[
         ("dt", "The convergence check runs at half of it."),
         ("method", "rk4, tao-2 or tao-4 (the ensemble engine's)."),
+        ("set", "Parameters only (m1, m2, l1, l2, g): the pendulum starts at rest."),
     ],
 };
 
@@ -97,7 +98,7 @@ pub fn run(args: &FractalArgs) -> Result<()> {
 pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result<()> {
     // Parse and validate everything before any work.
     let info = pendula::model::find("double")?;
-    let settings = parse_settings(info, &args.set)?;
+    let settings = parse_settings(info, &args.set.items)?;
     for (name, _) in &settings {
         if info.state.iter().any(|q| q.name == *name) {
             bail!(
@@ -145,7 +146,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         );
     };
     crate::config::binding_step(method, h, "--dt")?;
-    let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
+    let threads = args.threads.resolve(args.large.allow_large)?;
     if args.out.as_deref() == Some(Path::new("-")) {
         bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");
     }
@@ -157,7 +158,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     let grid = format!("{} x {} pixels", theta1.n, theta2.n);
     limits::check(
         "fractal",
-        args.allow_large,
+        args.large.allow_large,
         &[
             Estimate::new(
                 Cost::LaneSteps,
@@ -197,12 +198,12 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         }
         (None, None) => unreachable!("a directory when there is no --out"),
     };
-    let summary = Summary::open(args.summary.as_deref())?;
+    let summary = args.summary.open()?;
     let checkpoint = match &args.checkpoint {
         Some(c) => {
             let flag = if dir.is_some() { "--out-dir" } else { "--out" };
             let mut outputs: Vec<(&str, &Path)> = paths.iter().map(|p| (flag, p.as_path())).collect();
-            outputs.extend(args.summary.as_deref().map(|s| ("--summary", s)));
+            outputs.extend(args.summary.path.as_deref().map(|s| ("--summary", s)));
             let path = crate::checkpoint::check_path(c, &outputs)?;
             Chunks::claim(&path)?;
             Some(path)

@@ -9,19 +9,18 @@ use pendula::system::AsSystem;
 use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
-use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
+use crate::args::{Defaults, EndArg, MethodArgs, PresetArg, SystemArg};
 use crate::config::{f64_arg, positive_arg};
 use pendula::error::Short;
 
-use crate::study::{self, Common, OutDir, Summary, num};
+use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct LyapunovArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// Start from a named preset (`pendula list presets`); --set applies over it.
-    #[arg(long, value_name = "NAME")]
-    pub preset: Option<String>,
+    #[command(flatten)]
+    pub preset: PresetArg,
     #[command(flatten)]
     pub stepping: MethodArgs,
     #[command(flatten)]
@@ -58,8 +57,8 @@ pub const DEFAULTS: Defaults = Defaults {
 pub fn run(args: &LyapunovArgs) -> Result<()> {
     let values = study::preset_values(
         args.system.system.as_deref(),
-        args.preset.as_deref(),
-        &args.common.set,
+        args.preset.name.as_deref(),
+        &args.common.set.items,
         DEFAULTS.system,
     )?;
     let info = values.info();
@@ -101,7 +100,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let rows = t_end / renormalise;
     crate::limits::check(
         "lyapunov",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[
             crate::limits::Estimate::new(
                 crate::limits::Cost::Steps,
@@ -121,7 +120,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     )?;
     // The outputs before the work: a path that cannot be written fails first.
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
     let model = values.build();
     let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)
         .map_err(|e| crate::config::flag_error(e, &names))?;

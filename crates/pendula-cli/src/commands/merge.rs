@@ -13,6 +13,7 @@ use clap::Args;
 use ndarray_npy::ReadNpyExt;
 use serde_json::Value;
 
+use crate::args::LargeArg;
 use crate::commands::sweep::{SHARD_FORMAT, Written, checksum, read_description};
 use crate::output::{AtomicFile, claim_input};
 
@@ -24,8 +25,8 @@ pub struct MergeArgs {
     /// The full array (a new path: not one of the shards).
     #[arg(long, value_name = "FILE.npy")]
     pub out: PathBuf,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    pub large: LargeArg,
 }
 
 /// One shard, as its description states it.
@@ -191,7 +192,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let how = format!("{} values of shape {shape:?}", crate::limits::round(total as f64));
     crate::limits::check(
         "merge",
-        args.allow_large,
+        args.large.allow_large,
         &[
             crate::limits::Estimate::new(crate::limits::Cost::Memory, bytes, how.clone()),
             crate::limits::Estimate::new(crate::limits::Cost::Output, bytes, how),

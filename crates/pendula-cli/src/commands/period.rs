@@ -12,7 +12,7 @@ use serde_json::json;
 
 use crate::args::{Defaults, MethodArgs};
 use crate::config::f64_arg;
-use crate::study::{self, Common, OutDir, Summary, num};
+use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PeriodArgs {
@@ -56,19 +56,19 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
         );
     }
     crate::config::refuse_settings(
-        &args.common.set,
+        &args.common.set.items,
         &["theta", "omega"],
         "period releases the pendulum from rest at each amplitude (--max-amplitude); set its parameters only",
     )?;
     crate::config::schedule(&pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }, "--dt", "--dt")?;
     let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();
     // What it costs: each amplitude runs 2.5 of its exact periods.
-    let pendulum = Pendulum::from_values(&study::values("pendulum", &args.common.set)?);
+    let pendulum = Pendulum::from_values(&study::values("pendulum", &args.common.set.items)?);
     let steps: f64 =
         amplitudes.iter().map(|a| crate::limits::steps(2.5 * pendulum.period(a.to_radians()), h)).sum();
     crate::limits::check(
         "period",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[crate::limits::Estimate::new(
             crate::limits::Cost::Steps,
             steps,
@@ -76,8 +76,8 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
         )],
     )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "period")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
-    let rows = periods(&args.common.set, method, h, &amplitudes)?;
+    let summary = args.common.summary.open()?;
+    let rows = periods(&args.common.set.items, method, h, &amplitudes)?;
 
     let csv: Vec<Vec<String>> = rows
         .iter()

@@ -10,6 +10,7 @@ use clap::Args;
 use pendula::system::{self, SystemInfo};
 use pendula_viz::{Figure, Heatmap, Kind, Legend, palette};
 
+use crate::args::LargeArg;
 use crate::output::AtomicFile;
 
 #[derive(Debug, Clone, Args)]
@@ -38,8 +39,8 @@ pub struct PlotArgs {
     /// Output FILE.png or FILE.svg [default: the input's name with -plot.png].
     #[arg(long, value_name = "FILE.png")]
     pub out: Option<PathBuf>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    pub large: LargeArg,
 }
 
 /// Checks that `path` names a PNG or SVG file; `flag` names the option.
@@ -505,7 +506,7 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
             Ok(Contents::Table(Trajectory::new(title, names, rows, system)))
         }
         Some("npy") => {
-            let (shape, values) = read_npy(path, args.allow_large)?;
+            let (shape, values) = read_npy(path, args.large.allow_large)?;
             if values.is_empty() {
                 bail!("{} has no values to draw", path.display());
             }
@@ -625,7 +626,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     let size = meta.len() as f64;
     crate::limits::check(
         "plot",
-        args.allow_large,
+        args.large.allow_large,
         &[crate::limits::Estimate::new(crate::limits::Cost::Input, size, args.file.display().to_string())],
     )?;
     // The picture may not replace what it is drawn from.

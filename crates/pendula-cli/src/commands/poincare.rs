@@ -15,7 +15,7 @@ use serde_json::json;
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::config::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
 use crate::limits::{self, Cost, Estimate};
-use crate::study::{self, Common, OutDir, Summary, num};
+use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct PoincareArgs {
@@ -62,11 +62,11 @@ pub const DEFAULTS: Defaults = Defaults {
 
 pub fn run(args: &PoincareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let info = values.info();
     let state: Vec<&str> = info.state.iter().map(|q| q.name).collect();
     refuse_settings(
-        &args.common.set,
+        &args.common.set.items,
         &state,
         "poincare starts every orbit on the section at the energy --energy; set parameters only",
     )?;
@@ -135,7 +135,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let crossings = count as f64 * (t_end / period).max(1.0);
     limits::check(
         "poincare",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[
             Estimate::new(
                 Cost::Steps,
@@ -153,7 +153,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let spec = PoincareSpec { energy, count, section, value, t_end };
     // The outputs before the work: a path that cannot be written fails first.
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
     let orbits = poincare(&*model, method, stepping, &spec)?;
 
     let other = 1 - section;

@@ -13,7 +13,7 @@ use serde_json::json;
 
 use pendula::error::Short;
 
-use crate::study::{self, Common, OutDir, Summary, num};
+use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
 pub struct RegimesArgs {
@@ -58,11 +58,11 @@ const MAX_NATURAL_FREQUENCY: f64 = 0.1 / H;
 /// the limits.
 fn check(args: &RegimesArgs) -> Result<()> {
     crate::config::refuse_settings(
-        &args.common.set,
+        &args.common.set.items,
         &["x", "v", "c", "drive_amplitude", "drive_frequency"],
         "oscillator-regimes sets the start, the damping and the drive itself; set k and m only",
     )?;
-    let (_, o) = oscillator(&args.common.set, &[])?;
+    let (_, o) = oscillator(&args.common.set.items, &[])?;
     let w0 = o.natural_frequency();
     if w0 > MAX_NATURAL_FREQUENCY {
         anyhow::bail!(
@@ -82,7 +82,7 @@ fn check(args: &RegimesArgs) -> Result<()> {
     }
     crate::limits::check(
         "oscillator-regimes",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[crate::limits::Estimate::new(
             crate::limits::Cost::Steps,
             steps,
@@ -98,10 +98,10 @@ fn check(args: &RegimesArgs) -> Result<()> {
 pub fn run(args: &RegimesArgs) -> Result<()> {
     check(args)?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "oscillator-regimes")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
-    let (transients, transient_rows) = transients(&args.common.set)?;
+    let summary = args.common.summary.open()?;
+    let (transients, transient_rows) = transients(&args.common.set.items)?;
     out.csv("transients.csv", &["zeta", "t", "exact", "simulated"], &transient_rows)?;
-    let points = resonance(&args.common.set)?;
+    let points = resonance(&args.common.set.items)?;
     let rows: Vec<Vec<String>> = points
         .iter()
         .map(|p| {
@@ -121,7 +121,7 @@ pub fn run(args: &RegimesArgs) -> Result<()> {
     let worst_amp =
         points.iter().map(|p| (p.amplitude_simulated / p.amplitude_exact - 1.0).abs()).fold(0.0, f64::max);
     let worst_phase = points.iter().map(|p| (p.phase_simulated - p.phase_exact).abs()).fold(0.0, f64::max);
-    let peaks = RESONANCE.iter().map(|&z| peak(&args.common.set, z)).collect::<Result<Vec<_>>>()?;
+    let peaks = RESONANCE.iter().map(|&z| peak(&args.common.set.items, z)).collect::<Result<Vec<_>>>()?;
     let shown: Vec<Vec<String>> = RESONANCE
         .iter()
         .zip(&peaks)

@@ -43,23 +43,23 @@ pub fn run(args: &ResumeArgs) -> Result<()> {
         "simulate" => {
             let mut a: crate::cli::SimulateArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
-            a.summary = summary.or(a.summary);
-            a.allow_large |= args.allow_large;
+            a.summary.path = summary.or(a.summary.path);
+            a.large.allow_large |= args.allow_large;
             let resumed = crate::run_state::Resumed::load(checkpoint)?;
             crate::simulate::execute(&a, Some(resumed))
         }
         "sweep" => {
             let mut a: super::sweep::SweepArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
-            a.summary = summary.or(a.summary);
-            a.allow_large |= args.allow_large;
+            a.summary.path = summary.or(a.summary.path);
+            a.large.allow_large |= args.allow_large;
             super::sweep::execute(&a, Some(checkpoint))
         }
         "fractal" => {
             let mut a: super::fractal::FractalArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
-            a.summary = summary.or(a.summary);
-            a.allow_large |= args.allow_large;
+            a.summary.path = summary.or(a.summary.path);
+            a.large.allow_large |= args.allow_large;
             super::fractal::execute(&a, Some(checkpoint))
         }
         other => bail!(

@@ -9,7 +9,7 @@ use serde_json::json;
 use crate::args::{Defaults, EndArg, SystemArg};
 use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate};
-use crate::study::{self, Common, OutDir, Summary, num, short};
+use crate::study::{self, Common, OutDir, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct StabilityArgs {
@@ -38,7 +38,7 @@ pub const DEFAULTS: Defaults = Defaults {
 
 pub fn run(args: &StabilityArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let t_end = args.end.t_end(&DEFAULTS)?;
     let bound =
         positive_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
@@ -52,7 +52,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let per_run = limits::steps(t_end, H_RANGE.0);
     limits::check(
         "stability",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &[Estimate::new(
             Cost::Steps,
             methods.len() as f64 * runs * per_run,
@@ -66,7 +66,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
         )],
     )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "stability")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
     let criterion = StabilityCriterion { t_end, max_rel_energy_error: bound };
     let results = stable_steps(&values, &methods, &criterion)?;
     let notes: Vec<String> = methods.iter().zip(&results).map(|(m, (_, h))| note(m, *h)).collect();

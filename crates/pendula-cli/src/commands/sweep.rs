@@ -22,7 +22,7 @@ use pendula::{End, RunSpec};
 use rayon::prelude::*;
 use serde_json::json;
 
-use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
+use crate::args::{Defaults, EndArg, LargeArg, MethodArgs, SetArgs, SummaryArg, SystemArg, ThreadsArg};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
 use crate::config::{clip, parse_count, parse_settings, parse_value};
@@ -39,9 +39,9 @@ pub struct SweepArgs {
     /// more axes; the first varies fastest in the output.
     #[arg(long = "grid", value_name = "NAME=LO:HI:N", required = true)]
     pub grids: Vec<String>,
-    /// Set a parameter or initial-state variable for every cell (`--set m2=2`).
-    #[arg(long, value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub set: SetArgs,
     #[command(flatten)]
     #[serde(flatten)]
     pub stepping: MethodArgs,
@@ -60,9 +60,9 @@ pub struct SweepArgs {
     /// `energy-error` (E_end − E_0, J) [default: final].
     #[arg(long, value_name = "LIST")]
     pub record: Option<String>,
-    /// Worker threads, at most the cores (1024 with --allow-large) [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<String>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub threads: ThreadsArg,
     /// Compute only shard K of N (K = 1 … N): a contiguous slice of the cells, written with a
     /// FILE.json description for `pendula merge`.
     #[arg(long, value_name = "K/N")]
@@ -70,16 +70,17 @@ pub struct SweepArgs {
     /// Output .npy file [default: sweep.npy].
     #[arg(long, value_name = "FILE.npy")]
     pub out: Option<PathBuf>,
-    /// Write a JSON summary here (`-`: on stdout).
-    #[arg(long, value_name = "FILE.json")]
-    pub summary: Option<PathBuf>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub summary: SummaryArg,
     /// Compute the cells in chunks and keep the finished ones in FILE (and FILE.chunks), so
     /// that an interrupted sweep continues with `pendula resume FILE`, computing only the
     /// chunks missing; both files are removed when the sweep ends.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
-    #[arg(long, help = crate::limits::ALLOW_LARGE_HELP)]
-    pub allow_large: bool,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub large: LargeArg,
 }
 
 /// One axis of the grid.
@@ -203,7 +204,7 @@ pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, t
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
     let family = pendula::model::find(args.system.name(&DEFAULTS))?;
-    let base = parse_settings(family, &args.set)?;
+    let base = parse_settings(family, &args.set.items)?;
     // A family (the chain) resolves to the member the settings choose; an axis may not
     // change the member, since the state's size would change from cell to cell.
     let info = family.values(&base)?.info();
@@ -229,7 +230,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             bail!("invalid --grid: `{}` is given twice", a.name);
         }
     }
-    refuse_set_and_swept(&args.set, &args.grids, &axes, "--grid")?;
+    refuse_set_and_swept(&args.set.items, &args.grids, &axes, "--grid")?;
     // The cell count must be a number the sweep can index (its work and bytes are checked
     // below): 10^15 cells are 8 PB of results.
     let cells: f64 = axes.iter().map(|a| a.n as f64).product();
@@ -321,7 +322,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
     let how = format!("{} cells x {} bytes", limits::round(cells), sweep.columns.len() * 8);
     limits::check(
         "sweep",
-        args.allow_large,
+        args.large.allow_large,
         &[
             Estimate::new(
                 if matches!(path(&sweep)?, EnsemblePath::Scalar) { Cost::Steps } else { Cost::LaneSteps },
@@ -387,8 +388,13 @@ impl Observer for FlipWatch {
 }
 
 /// What sweep runs without arguments.
-pub const DEFAULTS: Defaults =
-    Defaults { system: "double", method: Some("rk4"), dt: Some(0.01), t_end: Some(10.0), notes: &[] };
+pub const DEFAULTS: Defaults = Defaults {
+    system: "double",
+    method: Some("rk4"),
+    dt: Some(0.01),
+    t_end: Some(10.0),
+    notes: &[("set", "The same for every cell, e.g. `--set m2=2`.")],
+};
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     execute(args, None)
@@ -397,7 +403,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
 /// Runs a sweep from the start, or `resumed` from its checkpoint (`pendula resume`).
 pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<()> {
     let sweep = parse(args)?;
-    let threads = limits::threads(args.threads.as_deref(), args.allow_large)?;
+    let threads = args.threads.resolve(args.large.allow_large)?;
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("sweep.npy"));
     if out_path == Path::new("-") {
         bail!("invalid --out -: sweep writes a .npy file, not stdout; give FILE.npy");
@@ -411,7 +417,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         Some(c) => {
             let mut outputs =
                 vec![("--out", out_path.as_path()), ("--out (shard description)", side_path.as_path())];
-            outputs.extend(args.summary.as_deref().map(|s| ("--summary", s)));
+            outputs.extend(args.summary.path.as_deref().map(|s| ("--summary", s)));
             Some(crate::checkpoint::check_path(c, &outputs)?)
         }
         None => None,
@@ -419,7 +425,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let out_file = AtomicFile::create(&out_path, "--out")?;
     let side_file =
         if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
-    let summary = crate::study::Summary::open(args.summary.as_deref())?;
+    let summary = args.summary.open()?;
     if let Some(c) = &checkpoint {
         Chunks::claim(c)?;
     }

@@ -11,7 +11,7 @@ use serde_json::json;
 use crate::args::{Defaults, SystemArg};
 use crate::commands::compare::refusal;
 use crate::config::{f64_arg, parse_count};
-use crate::study::{self, Common, OutDir, StepRange, Summary, num, short};
+use crate::study::{self, Common, OutDir, StepRange, num, short};
 use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
@@ -72,7 +72,7 @@ pub const DEFAULTS: Defaults =
 
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set)?;
+    let values = study::values(system, &args.common.set.items)?;
     let (ladder, t_end) =
         args.steps.resolve_or_default(crate::commands::convergence::default_t_end(&values))?;
     let tols = tolerances(args)?;
@@ -104,14 +104,14 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     }
     study::check_study(
         "work-precision",
-        args.common.allow_large,
+        args.common.large.allow_large,
         &values,
         t_end,
         runs,
         format!("the runs of {} methods to t = {} s", methods.len(), short(t_end)),
     )?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
-    let summary = Summary::open(args.common.summary.as_deref())?;
+    let summary = args.common.summary.open()?;
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
         .map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "work-precision");

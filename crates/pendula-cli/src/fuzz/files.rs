@@ -813,7 +813,7 @@ pub(super) fn shards(cases: u32) -> Result<(), String> {
         let args = crate::commands::merge::MergeArgs {
             shards: names.iter().map(|n| dir.join(format!("{n}.npy"))).collect(),
             out: dir.join("m.npy"),
-            allow_large: *allow_large,
+            large: crate::args::LargeArg { allow_large: *allow_large },
         };
         crate::output::validate_only(false);
         let _claims = claims();
@@ -1003,7 +1003,7 @@ pub(super) fn plot(cases: u32) -> Result<(), String> {
             energy: case.energy,
             system: case.system.clone(),
             out: Some(dir.join(if case.svg { "p.svg" } else { "p.png" })),
-            allow_large: false,
+            large: crate::args::LargeArg { allow_large: false },
         };
         plot_checks(&args, case.draw)
     })
