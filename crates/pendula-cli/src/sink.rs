@@ -27,8 +27,14 @@ pub struct Tally<W> {
 }
 
 impl<W> Tally<W> {
-    fn new(inner: W) -> Self {
+    /// Counting from nothing.
+    pub fn new(inner: W) -> Self {
         Tally { inner, bytes: 0, crc: crc32fast::Hasher::new() }
+    }
+
+    /// The bytes written through it so far and their CRC-32.
+    pub fn written(&self) -> (u64, u32) {
+        (self.bytes, self.crc.clone().finalize())
     }
 }
 

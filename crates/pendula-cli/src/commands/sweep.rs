@@ -28,6 +28,7 @@ use crate::chunks::{Chunks, chunk_size};
 use crate::config::{clip, parse_count, parse_settings, parse_value};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
+use crate::sink::Tally;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SweepArgs {
@@ -740,31 +741,12 @@ pub(crate) struct Written {
     pub crc32: u32,
 }
 
-/// A writer that counts and checksums what passes through it.
-struct Checksummed<W> {
-    inner: W,
-    crc: crc32fast::Hasher,
-    bytes: u64,
-}
-
-impl<W: std::io::Write> std::io::Write for Checksummed<W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.crc.update(&buf[..n]);
-        self.bytes += n as u64;
-        Ok(n)
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
-
 /// The length and CRC-32 of what `reader` holds, read to its end.
 pub(crate) fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
-    let mut sink = Checksummed { inner: std::io::sink(), crc: crc32fast::Hasher::new(), bytes: 0 };
+    let mut sink = Tally::new(std::io::sink());
     std::io::copy(&mut reader, &mut sink)?;
-    Ok(Written { bytes: sink.bytes, crc32: sink.crc.finalize() })
+    let (bytes, crc32) = sink.written();
+    Ok(Written { bytes, crc32 })
 }
 
 /// Writes `data` as a .npy array of `shape` into `file`; its length and checksum.
@@ -777,18 +759,16 @@ pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
     use std::io::Write;
     let array =
         ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
-    let mut w = Checksummed {
-        inner: std::io::BufWriter::new(file.handle()?),
-        crc: crc32fast::Hasher::new(),
-        bytes: 0,
-    };
+    // Counted under the buffer: the bytes that reach the file.
+    let mut w = std::io::BufWriter::new(Tally::new(file.handle()?));
     array.write_npy(&mut w).map_err(|e| match e {
         // The file's own error, which names it.
         ndarray_npy::WriteNpyError::Io(io) => anyhow::Error::new(io),
         other => anyhow::Error::new(other),
     })?;
     w.flush()?;
-    Ok(Written { bytes: w.bytes, crc32: w.crc.finalize() })
+    let (bytes, crc32) = w.get_ref().written();
+    Ok(Written { bytes, crc32 })
 }
 
 pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {
