@@ -69,6 +69,15 @@ pub fn check<M: Model>(model: &M, t: f64, y: &[f64]) -> Vec<String> {
         }
     }
 
+    // The states a step ε before and after y along the flow (y ∓ ε f), to first order: the
+    // central differences below of p(y(t)) and of E(t, y(t)).
+    let eps = 1e-6;
+    let (mut ya, mut yb) = (y.to_vec(), y.to_vec());
+    for i in 0..n {
+        ya[i] += eps * f[i];
+        yb[i] -= eps * f[i];
+    }
+
     // The Hamiltonian form against the model's equations and energy.
     if let Ok(form) = model.hamiltonian_form() {
         let half = n / 2;
@@ -80,12 +89,6 @@ pub fn check<M: Model>(model: &M, t: f64, y: &[f64]) -> Vec<String> {
             }
         }
         // p' along the model's flow, by central differences of p(y(t)).
-        let eps = 1e-6;
-        let (mut ya, mut yb) = (y.to_vec(), y.to_vec());
-        for i in 0..n {
-            ya[i] += eps * f[i];
-            yb[i] -= eps * f[i];
-        }
         let (mut za, mut zb) = (vec![0.0; n], vec![0.0; n]);
         model.to_momenta(&ya, &mut za);
         model.to_momenta(&yb, &mut zb);
@@ -107,12 +110,6 @@ pub fn check<M: Model>(model: &M, t: f64, y: &[f64]) -> Vec<String> {
     }
 
     // dE/dt along the flow is the power of the forces.
-    let eps = 1e-6;
-    let (mut ya, mut yb) = (y.to_vec(), y.to_vec());
-    for i in 0..n {
-        ya[i] += eps * f[i];
-        yb[i] -= eps * f[i];
-    }
     let de = (model.energy(t + eps, &ya) - model.energy(t - eps, &yb)) / (2.0 * eps);
     let power = model.power(t, y);
     let escale = model.energy_scale(y) / model.time_scale();

@@ -18,7 +18,7 @@ use super::{CHUNK, has_fma};
 pub const LANES: usize = 16;
 use crate::integrator::Stepper;
 use crate::integrator::explicit_rk::{
-    Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update,
+    Plan, Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update, plan,
 };
 use crate::num::{Lanes, Num, trig};
 use crate::observe::Observer;
@@ -666,6 +666,7 @@ where
 /// not used: the stepper holds the model's equations in its own number type).
 struct OneLane<E, const FMA: bool> {
     tableau: &'static Tableau,
+    plan: Plan,
     eq: E,
     k: Vec<Lanes<1, FMA, true>>,
     stage: Vec<Lanes<1, FMA, true>>,
@@ -682,7 +683,7 @@ impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> f
         let mut f = |t: f64, y: &[Lanes<1, FMA, true>], dydt: &mut [Lanes<1, FMA, true>]| {
             eq.rhs(Lanes([t]), y, dydt);
         };
-        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, &self.y);
+        explicit_stages(tab.a, &self.plan, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, &self.y);
         explicit_update(tab.b, &self.k, h / tab.denominator, &mut self.y);
         for (v, lane) in y.iter_mut().zip(&self.y) {
             *v = lane.0[0];
@@ -716,6 +717,7 @@ pub fn solve_one<M: Model>(
         let zero = Lanes([0.0]);
         let mut stepper = OneLane::<_, FMA> {
             tableau,
+            plan: plan(tableau.a),
             eq: model.convert(&|x| Lanes::<1, FMA, true>([x])),
             k: vec![zero; tableau.b.len() * n],
             stage: vec![zero; n],

@@ -441,6 +441,8 @@ const DOP853_B: &[f64] = &[
 #[derive(Debug, Clone)]
 pub struct EmbeddedRk {
     tableau: &'static EmbeddedTableau,
+    /// Its stages' forms, the dense output's included.
+    plan: super::explicit_rk::Plan,
     k: Vec<f64>,
     stage: Vec<f64>,
     /// The candidate solution of the last attempt.
@@ -462,6 +464,7 @@ impl EmbeddedRk {
         assert!(tableau.b.len() <= tableau.stages && tableau.new_point <= tableau.stages);
         EmbeddedRk {
             tableau,
+            plan: super::explicit_rk::plan(tableau.a),
             k: vec![0.0; tableau.a.len() * dim],
             stage: vec![0.0; dim],
             candidate: vec![0.0; dim],
@@ -480,7 +483,18 @@ impl EmbeddedRk {
         let first = usize::from(self.first_stage == Some(t));
         let (a, c) = (&tab.a[..tab.stages], &tab.c[..tab.stages]);
         let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
-        super::explicit_rk::explicit_stages(a, c, first, &mut self.k, &mut self.stage, &mut f, t, h, y);
+        super::explicit_rk::explicit_stages(
+            a,
+            &self.plan,
+            c,
+            first,
+            &mut self.k,
+            &mut self.stage,
+            &mut f,
+            t,
+            h,
+            y,
+        );
         let combine =
             |w: &[f64], j: usize| w.iter().enumerate().map(|(i, w)| w * self.k[i * n + j]).sum::<f64>();
         for (j, yj) in y.iter().enumerate() {
@@ -558,6 +572,7 @@ impl EmbeddedRk {
             let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
             super::explicit_rk::explicit_stages(
                 tab.a,
+                &self.plan,
                 tab.c,
                 tab.new_point + 1,
                 &mut self.k,

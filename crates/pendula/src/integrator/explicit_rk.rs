@@ -64,6 +64,7 @@ pub static RK4: Method = Method {
 #[derive(Debug, Clone)]
 pub struct ExplicitRk {
     tableau: &'static Tableau,
+    plan: Plan,
     k: Vec<f64>,
     stage: Vec<f64>,
 }
@@ -71,7 +72,12 @@ pub struct ExplicitRk {
 impl ExplicitRk {
     /// A stepper for systems of dimension `dim`.
     pub fn new(tableau: &'static Tableau, dim: usize) -> Self {
-        ExplicitRk { tableau, k: vec![0.0; tableau.b.len() * dim], stage: vec![0.0; dim] }
+        ExplicitRk {
+            tableau,
+            plan: plan(tableau.a),
+            k: vec![0.0; tableau.b.len() * dim],
+            stage: vec![0.0; dim],
+        }
     }
 }
 
@@ -104,6 +110,7 @@ impl<T, F: FnMut(f64, &[T], &mut [T])> StageRhs<T> for F {
 #[inline(always)]
 pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
     a: &[&[f64]],
+    plan: &[Row],
     c: &[f64],
     first: usize,
     k: &mut [T],
@@ -115,10 +122,6 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
 ) {
     match y.len() {
         2 | 4 => {
-            let mut plan = [Row::Sum; MAX_PLANNED];
-            for (i, (p, row)) in plan.iter_mut().zip(a).enumerate().skip(first) {
-                *p = Row::of(&row[..i]);
-            }
             let plan = &plan[..a.len()];
             if y.len() == 2 {
                 fixed_stages::<T, F, 2, _>(
@@ -149,7 +152,7 @@ pub(crate) fn explicit_stages<T: Num, F: StageRhs<T>>(
         n => {
             for (i, (row, c)) in a.iter().zip(c).enumerate().skip(first) {
                 let (done, rest) = k.split_at_mut(i * n);
-                let plan = Row::of(&row[..i]);
+                let plan = plan.get(i).copied().unwrap_or(Row::Sum);
                 for (j, s) in stage.iter_mut().enumerate() {
                     *s = match plan {
                         Row::Single(l, a) => T::splat(a * h).madd(done[l * n + j], y[j]),
@@ -248,8 +251,21 @@ impl Row {
     }
 }
 
-/// The most stages whose forms [`explicit_stages`] plans on the stack (DOP853 has 12).
+/// The most stages whose forms a [`Plan`] holds (DOP853 has 16 with its dense output's).
 const MAX_PLANNED: usize = 16;
+
+/// The forms of a tableau's stages, [`Row::of`] each row: planned once, when a stepper is
+/// made, not at every step. Rows past [`MAX_PLANNED`] are sums.
+pub(crate) type Plan = [Row; MAX_PLANNED];
+
+/// The [`Plan`] of the rows `a`.
+pub(crate) fn plan(a: &[&[f64]]) -> Plan {
+    let mut plan = [Row::Sum; MAX_PLANNED];
+    for (i, (p, row)) in plan.iter_mut().zip(a).enumerate() {
+        *p = Row::of(&row[..i]);
+    }
+    plan
+}
 
 /// y += scale Σᵢ bᵢ kᵢ (the sum from b₀ k₀, left to right), over every number type; states of
 /// 2 and 4 components with fixed-size arrays (the same arithmetic).
@@ -280,7 +296,7 @@ impl<S: System + ?Sized> Stepper<S> for ExplicitRk {
     fn step(&mut self, system: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
         let tab = self.tableau;
         let mut f = |t: f64, y: &[f64], dydt: &mut [f64]| system.rhs(t, y, dydt);
-        explicit_stages(tab.a, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, y);
+        explicit_stages(tab.a, &self.plan, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, y);
         explicit_update(tab.b, &self.k, h / tab.denominator, y);
         Ok(())
     }
