@@ -43,7 +43,6 @@ impl Defaults {
     /// arguments; other arguments unchanged.
     pub fn document(&self, arg: clap::Arg) -> clap::Arg {
         let id = arg.get_id().as_str().to_owned();
-        let own = arg.get_help().map(|h| h.to_string().trim_end_matches('.').to_owned());
         let (what, default) = match id.as_str() {
             "system" => {
                 ("System to run (see `pendula list systems`)".to_owned(), Some(self.system.to_owned()))
@@ -54,7 +53,10 @@ impl Defaults {
             "dt" => ("Step size, s".to_owned(), self.dt.map(|v| Short(v).to_string())),
             "t_end" => ("End time, s".to_owned(), self.t_end.map(|v| Short(v).to_string())),
             // The other shared groups' help, with the command's note after it.
-            "set" | "preset" | "threads" | "summary" => (own.unwrap_or_default(), None),
+            "set" | "preset" | "threads" | "summary" => {
+                let own = arg.get_help().map(|h| h.to_string().trim_end_matches('.').to_owned());
+                (own.unwrap_or_default(), None)
+            }
             _ => return arg,
         };
         let note = self.notes.iter().find(|(n, _)| *n == id);

@@ -163,14 +163,12 @@ impl Sink {
             Sink::Discard => return Ok(Position { bytes: 0, rows, crc32: 0 }),
             Sink::Csv(w) => {
                 w.flush()?;
-                let t = w.get_ref();
-                (t.bytes, t.crc.clone().finalize())
+                w.get_ref().written()
             }
             Sink::Npy(npy) => {
                 assert!(npy.spool.is_none(), "a checkpointed trajectory is a regular file");
                 npy.out.flush()?;
-                let t = npy.out.get_ref();
-                (t.bytes, t.crc.clone().finalize())
+                npy.out.get_ref().written()
             }
         };
         Ok(Position { bytes: tally.0, rows, crc32: tally.1 })
