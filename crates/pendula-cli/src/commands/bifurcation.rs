@@ -246,7 +246,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let v_unit = unit(state[variable].unit);
     let fig = Figure::new(
         format!(
-            "{system}: stroboscopic samples after {} ({samples} per value, RK4, {m} steps/period)",
+            "{system}: {samples} samples per value after t = {} (RK4, {m} steps/period)",
             with_unit(transient, tu)
         ),
         axis_label(&axis.name, info.quantity(&axis.name)?.unit),
@@ -261,7 +261,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     out.figure("bifurcation", &fig)?;
     sayln!(
         summary,
-        "{system}: {} values of {} in [{}, {}], {samples} samples each after {}; {} [{wall:.2} s, {threads} threads]",
+        "{system}: {} values of {} in [{}, {}], {samples} samples each after t = {}; {} [{wall:.2} s, {threads} threads]",
         axis.n,
         axis.name,
         pendula::error::Short(axis.lo),
