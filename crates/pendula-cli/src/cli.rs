@@ -77,7 +77,8 @@ pub enum Command {
     #[command(mut_args(|a| crate::commands::fractal::DEFAULTS.document(a)))]
     Fractal(Box<crate::commands::fractal::FractalArgs>),
     /// Integrate a grid of initial states or parameters in parallel (SIMD lanes for every
-    /// system with an explicit Runge-Kutta method) into one .npy array, or one shard of it.
+    /// system with an explicit Runge-Kutta method, and for separable systems with the explicit
+    /// symplectic methods) into one .npy array, or one shard of it.
     #[command(mut_args(|a| crate::commands::sweep::DEFAULTS.document(a)))]
     Sweep(Box<crate::commands::sweep::SweepArgs>),
     /// Assemble the shards of a sweep into the full array.

@@ -11,8 +11,7 @@ use std::ops::Deref;
 use crate::Error;
 use crate::checkpoint::{Leg, Pause, RunState};
 use crate::control::Tolerances;
-use crate::ensemble::engine::{self, LaneOutcome, LaneSpec};
-use crate::integrator::explicit_rk::Tableau;
+use crate::ensemble::engine::{self, LaneMethod, LaneOutcome, LaneSpec};
 use crate::integrator::{Method, Scheme};
 use crate::observe::Observer;
 use crate::simulate::{Report, RunSpec, Stepping};
@@ -93,15 +92,19 @@ impl Values {
     }
 }
 
-/// The tableau the ensemble engine runs `method` with on `info`'s system, or `None` when it
-/// does not ([`crate::ensemble::engine::supports`]: explicit Runge–Kutta methods of at most
-/// four stages, on every catalogued system, damped and driven variants included). Answered
-/// before any step is taken: the callers choose the engine by this, never by names.
-pub fn lane_tableau(method: &Method, info: &SystemInfo) -> Option<&'static Tableau> {
-    match method.scheme {
-        Scheme::ExplicitRk(tableau) if engine::supports(info, tableau) => Some(tableau),
-        _ => None,
-    }
+/// How the ensemble engine runs `method` on `model`'s system, or `None` when it does not
+/// ([`crate::ensemble::engine::supports`]): explicit Runge–Kutta methods of at most four
+/// stages on every catalogued system, damped and driven variants included; the explicit
+/// partitioned methods (symplectic Euler, Störmer–Verlet, the Yoshida compositions) on
+/// separable systems, kick–drift. Answered before any step is taken: the callers choose the
+/// engine by this, never by names.
+pub fn lane_method(method: &'static Method, model: &dyn DynModel) -> Option<LaneMethod> {
+    let lanes = match method.scheme {
+        Scheme::ExplicitRk(tableau) => LaneMethod::Rk(tableau),
+        Scheme::Partitioned(scheme) if model.separable() => LaneMethod::KickDrift { method, scheme },
+        _ => return None,
+    };
+    engine::supports(model.info(), &lanes).then_some(lanes)
 }
 
 /// Which engine an ensemble runs on, decided by the library before any step (callers never
@@ -110,16 +113,17 @@ pub fn lane_tableau(method: &Method, info: &SystemInfo) -> Option<&'static Table
 pub enum EnsemblePath {
     /// Tao's map on lanes for the free double pendulum ([`crate::ensemble::run_values`]).
     DoubleKernel(crate::ensemble::BatchMethod),
-    /// The general engine ([`DynModel::ensemble`]) with this explicit tableau: every system,
-    /// forces included.
-    Engine(&'static Tableau),
+    /// The general engine ([`DynModel::ensemble`]) with this method: every system with an
+    /// explicit tableau, forces included; separable systems with kick–drift.
+    Engine(LaneMethod),
     /// No lanes for this method: one scalar run per member.
     Scalar,
 }
 
 /// The engine for an ensemble of `method` runs of the system of `base`, whose members differ
-/// from `base` in the quantities named `swept`.
-pub fn ensemble_path(method: &Method, base: &Values, swept: &[&str]) -> EnsemblePath {
+/// from `base` in the quantities named `swept`. (With kick–drift, a swept member that is not
+/// separable — damped — is refused by the engine, as a scalar run refuses it.)
+pub fn ensemble_path(method: &'static Method, base: &Values, swept: &[&str]) -> EnsemblePath {
     let info = base.info();
     if std::ptr::eq(info, double::DoublePendulum::INFO)
         && let Some(tao @ crate::ensemble::BatchMethod::Tao(_)) = crate::ensemble::BatchMethod::of(method)
@@ -131,8 +135,8 @@ pub fn ensemble_path(method: &Method, base: &Values, swept: &[&str]) -> Ensemble
             return EnsemblePath::DoubleKernel(tao);
         }
     }
-    match lane_tableau(method, info) {
-        Some(tableau) => EnsemblePath::Engine(tableau),
+    match lane_method(method, &*base.build()) {
+        Some(lanes) => EnsemblePath::Engine(lanes),
         None => EnsemblePath::Scalar,
     }
 }
@@ -169,11 +173,14 @@ pub trait DynModel: DynSystem {
     /// As [`crate::ensemble::engine::solve_one`].
     fn solve_lane(
         &self,
-        tableau: &'static Tableau,
+        method: LaneMethod,
         y0: &[f64],
         spec: &RunSpec,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error>;
+    /// Whether this system has a separable Hamiltonian form (the explicit partitioned
+    /// methods' requirement; none when damped).
+    fn separable(&self) -> bool;
     /// Runs `method` from `y0` as `spec` says, showing every step to `observer`
     /// (see [`crate::simulate::solve`]).
     ///
@@ -252,12 +259,16 @@ impl<M: Model> DynModel for M {
     }
     fn solve_lane(
         &self,
-        tableau: &'static Tableau,
+        method: LaneMethod,
         y0: &[f64],
         spec: &RunSpec,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
-        engine::solve_one(self, tableau, y0, spec, observer)
+        engine::solve_one(self, method, y0, spec, observer)
+    }
+    fn separable(&self) -> bool {
+        use crate::system::Hamiltonian;
+        self.hamiltonian_form().is_ok_and(|form| form.separable())
     }
     fn solve(
         &self,

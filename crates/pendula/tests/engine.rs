@@ -1,11 +1,13 @@
 //! The ensemble engine runs every catalogued system, damped and driven variants included,
-//! with every explicit method it takes: a lane group's members get exactly the bits each
-//! gets alone in one lane (`solve_lane`, through the scalar run loop), and agree with the
-//! reference arithmetic (`solve`: glibc's sine and cosine, no fused operations) to rounding.
+//! with every explicit method it takes (the explicit Runge–Kutta methods everywhere; the
+//! explicit partitioned methods, kick–drift, on separable systems): a lane group's members get
+//! exactly the bits each gets alone in one lane (`solve_lane`, through the scalar run loop),
+//! and agree with the reference arithmetic (`solve`: glibc's sine and cosine, no fused
+//! operations; for the partitioned methods the (q, p) steppers) to rounding.
 
-use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
+use pendula::ensemble::engine::{LaneMethod, LaneOutcome, LaneSpec};
 use pendula::integrator::{self, Scheme};
-use pendula::model::{CATALOGUE, lane_tableau};
+use pendula::model::{CATALOGUE, lane_method};
 use pendula::observe::Ignore;
 use pendula::system::Values;
 use pendula::{End, RunSpec};
@@ -26,8 +28,9 @@ fn variants() -> Vec<Values> {
 }
 
 /// `count` members around `base`: every state variable and every real parameter moved a
-/// little, differently per member (so that lanes differ in every input).
-fn members(base: &Values, count: usize) -> Vec<Vec<f64>> {
+/// little, differently per member (so that lanes differ in every input); with `keep_zeros`,
+/// quantities that are zero in `base` (a damping, a drive left off) stay zero.
+fn members(base: &Values, count: usize, keep_zeros: bool) -> Vec<Vec<f64>> {
     let info = base.info();
     let raw: Vec<f64> =
         base.parameters().map(|(_, v)| v).chain(base.initial_state().iter().copied()).collect();
@@ -39,7 +42,7 @@ fn members(base: &Values, count: usize) -> Vec<Vec<f64>> {
                 .map(|(&v, q)| {
                     let f = jitter.next().unwrap();
                     // Structural settings (links, the small-angle flag) are the group's.
-                    if q.name == "links" || q.name == "linear" {
+                    if q.name == "links" || q.name == "linear" || (keep_zeros && v == 0.0) {
                         v
                     } else if v == 0.0 {
                         f - 0.9
@@ -60,13 +63,13 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
         let dim = info.state.len();
         let np = info.parameters.len();
         // 37 members: two full lane groups and a padded one.
-        let all = members(&base, 37);
+        let all = members(&base, 37, false);
         for method in integrator::METHODS.iter().filter(|m| matches!(m.scheme, Scheme::ExplicitRk(_))) {
-            let tableau = lane_tableau(method, info).expect("the engine runs every explicit method");
-            let (h, steps) = if info.dimensionless { (0.05, 400) } else { (2e-3, 400) };
-            let spec = LaneSpec { tableau, h, steps, stop_at_flip: false, track_flips: false };
-            let mut out = vec![0.0; all.len() * dim];
             let model = base.build();
+            let lanes = lane_method(method, &*model).expect("the engine runs every explicit method");
+            let (h, steps) = if info.dimensionless { (0.05, 400) } else { (2e-3, 400) };
+            let spec = LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false };
+            let mut out = vec![0.0; all.len() * dim];
             model
                 .ensemble(
                     info,
@@ -84,7 +87,7 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
                 let member = info.values(&settings).unwrap();
                 let one = member.build();
                 let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
-                let alone = one.solve_lane(tableau, &m[np..], &run, &mut Ignore).unwrap().state;
+                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap().state;
                 let lane = &out[i * dim..(i + 1) * dim];
                 assert!(
                     lane.iter().zip(&alone).all(|(a, b)| a.to_bits() == b.to_bits()),
@@ -118,12 +121,12 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
 fn a_member_that_blows_up_is_named() {
     let base = values("oscillator", &[]);
     let info = base.info();
-    let mut all = members(&base, 20);
+    let mut all = members(&base, 20, false);
     // Member 13: a stiff spring that explicit Euler at this step amplifies without bound.
     let k = info.quantities().position(|q| q.name == "k").unwrap();
     all[13][k] = 1e6;
     let spec = LaneSpec {
-        tableau: lane_tableau(&integrator::explicit_rk::EULER, info).unwrap(),
+        method: lane_method(&integrator::explicit_rk::EULER, &*base.build()).unwrap(),
         h: 0.01,
         steps: 2000,
         stop_at_flip: false,
@@ -146,6 +149,133 @@ fn a_member_that_blows_up_is_named() {
         pendula::Error::NonFiniteMember { member, t } => {
             assert_eq!(member, 13);
             assert!(t > 0.0 && t <= 20.0, "{t}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The explicit partitioned methods (symplectic Euler, Störmer–Verlet, the Yoshida
+/// compositions) run on lanes, kick–drift in the velocities, for every separable variant —
+/// free and driven, the small-angle pendulum — with the bits of each member alone, and agree
+/// with the (q, p) steppers to rounding; on systems that are not separable (the double
+/// pendulum, the chain, any damped system) the engine does not take them (the scalar
+/// steppers run them, implicitly where they must).
+#[test]
+fn kick_drift_lanes_run_every_separable_system_bit_for_bit() {
+    let separable = [
+        values("pendulum", &[]),
+        values("pendulum", &[("drive_amplitude", 1.0), ("drive_frequency", 2.0)]),
+        values("pendulum", &[("linear", 1.0)]),
+        values("oscillator", &[]),
+        values("oscillator", &[("drive_amplitude", 1.0), ("drive_frequency", 1.3)]),
+    ];
+    let partitioned: Vec<&'static integrator::Method> =
+        integrator::METHODS.iter().copied().filter(|m| matches!(m.scheme, Scheme::Partitioned(_))).collect();
+    let mut checked = Vec::new();
+    for base in &separable {
+        let info = base.info();
+        let dim = info.state.len();
+        let np = info.parameters.len();
+        let all = members(base, 37, true);
+        let model = base.build();
+        for &method in &partitioned {
+            let lanes = lane_method(method, &*model).expect("kick-drift on a separable system");
+            assert!(matches!(lanes, LaneMethod::KickDrift { .. }), "{lanes:?}");
+            let (h, steps) = (2e-3, 400);
+            let spec = LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false };
+            let mut out = vec![0.0; all.len() * dim];
+            model
+                .ensemble(
+                    info,
+                    all.len(),
+                    &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
+                    &spec,
+                    &mut out,
+                    dim,
+                    &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..row.len()]),
+                )
+                .unwrap();
+            for (i, m) in all.iter().enumerate() {
+                let settings: Vec<(String, f64)> =
+                    info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
+                let one = info.values(&settings).unwrap().build();
+                let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
+                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap();
+                let lane = &out[i * dim..(i + 1) * dim];
+                assert!(
+                    lane.iter().zip(&alone.state).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "{} {} member {i}: lane {lane:?}, alone {:?}",
+                    info.name,
+                    method.name,
+                    alone.state
+                );
+                // The (q, p) stepper: the same map in momenta, glibc's sine, no fused
+                // operations, and as many evaluations of the forces.
+                let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap();
+                let scale = reference.state.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+                let diff = max_diff(lane, &reference.state);
+                assert!(
+                    diff <= 1e-10 * scale,
+                    "{} {} member {i}: {diff} from the (q, p) stepper",
+                    info.name,
+                    method.name
+                );
+                assert_eq!(alone.rhs_evals, reference.rhs_evals, "{} {}", info.name, method.name);
+            }
+            checked.push(method.name);
+        }
+    }
+    for method in &partitioned {
+        assert_eq!(checked.iter().filter(|&&c| c == method.name).count(), separable.len(), "{}", method.name);
+    }
+    // Not separable: no kick-drift lanes.
+    for base in [
+        values("double", &[]),
+        values("chain", &[("links", 3.0)]),
+        values("pendulum", &[("damping", 0.2)]),
+        values("oscillator", &[("c", 0.4)]),
+    ] {
+        let model = base.build();
+        for &method in &partitioned {
+            assert!(lane_method(method, &*model).is_none(), "{} {}", base.info().name, method.name);
+        }
+    }
+}
+
+/// A kick-drift ensemble whose members include a damped one is refused before any step,
+/// naming the member and why (a scalar run of it is refused the same way).
+#[test]
+fn a_damped_member_of_a_kick_drift_ensemble_is_named() {
+    let base = values("pendulum", &[]);
+    let info = base.info();
+    let mut all = members(&base, 20, true);
+    let damping = info.quantities().position(|q| q.name == "damping").unwrap();
+    all[17][damping] = 0.3;
+    all[19][damping] = 0.1;
+    let spec = LaneSpec {
+        method: lane_method(&integrator::partitioned::VERLET, &*base.build()).unwrap(),
+        h: 0.01,
+        steps: 100,
+        stop_at_flip: false,
+        track_flips: false,
+    };
+    let mut out = vec![f64::NAN; all.len() * 2];
+    let err = base
+        .build()
+        .ensemble(
+            info,
+            all.len(),
+            &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
+            &spec,
+            &mut out,
+            2,
+            &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..2]),
+        )
+        .unwrap_err();
+    match &err {
+        pendula::Error::UnmetRequirement { method, reason, .. } => {
+            assert_eq!(*method, "verlet");
+            assert!(reason.starts_with("member 17: ") && reason.contains("damping = 0.3"), "{reason}");
         }
         other => panic!("{other:?}"),
     }

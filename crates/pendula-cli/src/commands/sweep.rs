@@ -2,7 +2,9 @@
 //! initial-state variables, in parallel, into one .npy array — whole, or one deterministic
 //! shard of it (`--shard K/N`, assembled by `pendula merge`).
 //!
-//! The double pendulum with rk4 runs on the SIMD ensemble engine (`pendula::ensemble`);
+//! Where the library's `ensemble_path` says so — every system with an explicit Runge–Kutta
+//! method, separable systems with the explicit partitioned methods, the free double pendulum
+//! with Tao's map — the cells run on the SIMD ensemble engine (`pendula::ensemble`);
 //! everything else runs the scalar integrators cell by cell, also in parallel. Either way a
 //! cell's result does not depend on the thread count or the sharding.
 
@@ -684,9 +686,9 @@ fn run_lanes(
                 other => anyhow::Error::new(other),
             })
         }
-        EnsemblePath::Engine(tableau) => {
+        EnsemblePath::Engine(method) => {
             let spec = LaneSpec {
-                tableau,
+                method,
                 h: sweep.h,
                 steps: sweep.steps,
                 stop_at_flip: sweep.until_flip,

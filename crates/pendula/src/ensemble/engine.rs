@@ -1,7 +1,8 @@
-//! The ensemble engine for every catalogued system and every explicit Runge–Kutta method:
-//! a system's own equations ([`Equations`], written once) over [`Lanes`] of [`LANES`] members,
-//! the integrators' own stages ([`crate::integrator::explicit_rk`], written once), and one run
-//! loop: flips located on the cubic Hermite interpolant, members retired when they flip (if
+//! The ensemble engine for every catalogued system and every explicit Runge–Kutta method,
+//! and for separable systems with the explicit partitioned methods ([`LaneMethod`]): a
+//! system's own equations ([`Equations`], written once) over [`Lanes`] of [`LANES`] members,
+//! the integrators' own steps ([`crate::integrator::explicit_rk`]'s stages,
+//! [`crate::integrator::partitioned::kick_drift`], written once), and one run loop: flips located on the cubic Hermite interpolant, members retired when they flip (if
 //! asked), the first non-finite state an error naming the member and the time.
 //!
 //! A member's bits do not depend on its lane, its lane group, its chunk or the thread count:
@@ -16,10 +17,11 @@ use super::{CHUNK, has_fma};
 /// independent chains of operations hide each other's latency (8 alone measured slower on the
 /// hand-written kernels this engine replaced: 1.14 s against 0.87 s on one core).
 pub const LANES: usize = 16;
-use crate::integrator::Stepper;
 use crate::integrator::explicit_rk::{
     Plan, Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update, plan,
 };
+use crate::integrator::partitioned::{Accelerations, Partition, kick_drift};
+use crate::integrator::{Method, Stepper};
 use crate::num::{Lanes, Num, trig};
 use crate::observe::Observer;
 use crate::system::{Equations, Model, SystemInfo};
@@ -33,11 +35,44 @@ pub const MAX_STAGES: usize = 4;
 
 type V = [f64; LANES];
 
+/// A method as the engine runs it on lanes: data, chosen by [`crate::model::lane_method`]
+/// before any step.
+#[derive(Debug, Clone, Copy)]
+pub enum LaneMethod {
+    /// An explicit Runge–Kutta tableau (at most [`MAX_STAGES`] stages), on every system.
+    Rk(&'static Tableau),
+    /// A partitioned scheme (symplectic Euler, Störmer–Verlet, a Yoshida composition) on a
+    /// separable system, kick–drift in the velocities
+    /// ([`crate::integrator::partitioned::kick_drift`]): `method` is its descriptor (what it
+    /// requires of each member), `scheme` its steps.
+    KickDrift {
+        /// The method's descriptor.
+        method: &'static Method,
+        /// Its scheme.
+        scheme: Partition,
+    },
+}
+
+impl LaneMethod {
+    /// Right-hand side evaluations of a run of `steps` steps (for Störmer–Verlet and the
+    /// compositions, one per Verlet step and one at the start: the last of a step is the
+    /// first of the next).
+    pub fn evaluations(&self, steps: u64) -> u64 {
+        let start = u64::from(steps > 0);
+        match self {
+            LaneMethod::Rk(t) => t.b.len() as u64 * steps,
+            LaneMethod::KickDrift { scheme: Partition::SymplecticEuler, .. } => steps,
+            LaneMethod::KickDrift { scheme: Partition::StormerVerlet, .. } => steps + start,
+            LaneMethod::KickDrift { scheme: Partition::Composition(w), .. } => w.len() as u64 * steps + start,
+        }
+    }
+}
+
 /// What an ensemble run of explicit steps does.
 #[derive(Debug, Clone, Copy)]
 pub struct LaneSpec {
-    /// The method's tableau (at most [`MAX_STAGES`] stages).
-    pub tableau: &'static Tableau,
+    /// The method.
+    pub method: LaneMethod,
     /// Step size, s (in the system's units when dimensionless).
     pub h: f64,
     /// Number of steps, from t = 0.
@@ -58,10 +93,32 @@ pub struct LaneOutcome {
     pub flip_time: f64,
 }
 
-/// Whether the engine runs `tableau` on `info`'s states: at most [`MAX_STAGES`] stages and
-/// [`MAX_DIM`] variables.
-pub fn supports(info: &SystemInfo, tableau: &Tableau) -> bool {
-    tableau.b.len() <= MAX_STAGES && info.state.len() <= MAX_DIM
+/// Whether the engine runs `method` on `info`'s states: a tableau of at most [`MAX_STAGES`]
+/// stages on at most [`MAX_DIM`] variables; kick–drift on states of [`KICK_DRIFT_DIM`]
+/// variables (the kernels compiled for it: every separable system catalogued has one degree of
+/// freedom).
+pub fn supports(info: &SystemInfo, method: &LaneMethod) -> bool {
+    match method {
+        LaneMethod::Rk(tableau) => tableau.b.len() <= MAX_STAGES && info.state.len() <= MAX_DIM,
+        LaneMethod::KickDrift { .. } => info.state.len() == KICK_DRIFT_DIM,
+    }
+}
+
+/// The state dimension the kick–drift kernels are compiled for.
+pub const KICK_DRIFT_DIM: usize = 2;
+
+/// Whether member `values` (parameters then state, as [`run`] takes them) meets what
+/// `method` requires of it ([`crate::simulate::check`]: for kick–drift, a separable
+/// Hamiltonian, so no damping), before any step.
+fn check_member<M: Model>(
+    info: &'static SystemInfo,
+    method: &LaneMethod,
+    values: &[f64],
+) -> Result<(), Error> {
+    let LaneMethod::KickDrift { method, .. } = method else { return Ok(()) };
+    let settings: Vec<(String, f64)> =
+        info.quantities().map(|q| q.name.to_owned()).zip(values.iter().copied()).collect();
+    crate::simulate::check(method, &M::from_values(&info.values(&settings)?))
 }
 
 /// Runs `count` members of the system `M` (the member entry `info`: for the chain, the
@@ -71,8 +128,9 @@ pub fn supports(info: &SystemInfo, tableau: &Tableau) -> bool {
 /// of `out` (rows of `row_len` values).
 ///
 /// # Errors
-/// [`Error::NonFiniteMember`] for the first member (in index order) whose state became
-/// non-finite.
+/// For kick–drift, [`Error::UnmetRequirement`] for the first member (in index order) that
+/// is not separable (damped), naming it, before it takes a step; else
+/// [`Error::NonFiniteMember`] for the first member whose state became non-finite.
 ///
 /// # Panics
 /// If the engine does not run the method on the system ([`supports`]): a caller's error.
@@ -86,10 +144,10 @@ pub fn run<M: Model, T: Send>(
     row_len: usize,
     store: &(dyn Fn(usize, &LaneOutcome, &mut [T]) + Sync),
 ) -> Result<(), Error> {
-    assert!(supports(info, spec.tableau), "the engine runs at most 4 stages on at most 16 variables");
+    assert!(supports(info, &spec.method), "the engine does not run this method on {}", info.name);
     assert_eq!(out.len(), count * row_len, "one row per member");
     let width = info.parameters.len() + info.state.len();
-    let failures: Vec<(usize, f64)> = out
+    let failures: Vec<(usize, Error)> = out
         .par_chunks_mut(CHUNK * row_len)
         .enumerate()
         .filter_map(|(c, rows)| {
@@ -99,7 +157,12 @@ pub fn run<M: Model, T: Send>(
             for (i, v) in values.chunks_mut(width).enumerate() {
                 member(start + i, v);
             }
-            let mut first: Option<(usize, f64)> = None;
+            for (i, v) in values.chunks(width).enumerate() {
+                if let Err(e) = check_member::<M>(info, &spec.method, v) {
+                    return Some((start + i, name_member(e, start + i)));
+                }
+            }
+            let mut first: Option<(usize, Error)> = None;
             for (g, (group, rows)) in
                 values.chunks(LANES * width).zip(rows.chunks_mut(LANES * row_len)).enumerate()
             {
@@ -109,15 +172,29 @@ pub fn run<M: Model, T: Send>(
                     store(start + g * LANES + i, o, row);
                 }
                 if let Some((i, t)) = failed {
-                    first.get_or_insert((start + g * LANES + i, t));
+                    let member = start + g * LANES + i;
+                    first.get_or_insert((member, Error::NonFiniteMember { member, t }));
                 }
             }
             first
         })
         .collect();
-    match failures.into_iter().min_by_key(|&(m, _)| m) {
-        Some((member, t)) => Err(Error::NonFiniteMember { member, t }),
+    match failures.into_iter().min_by_key(|(m, _)| *m) {
+        Some((_, e)) => Err(e),
         None => Ok(()),
+    }
+}
+
+/// `e`, a member's unmet requirement, saying which member.
+fn name_member(e: Error, member: usize) -> Error {
+    match e {
+        Error::UnmetRequirement { method, needs, reason, suggestion } => Error::UnmetRequirement {
+            method,
+            needs,
+            reason: format!("member {member}: {reason}"),
+            suggestion,
+        },
+        other => other,
     }
 }
 
@@ -156,29 +233,50 @@ pub(crate) fn run_group<M: Model>(
             kernel_plain::<_, $d, $wide>(&$eq, &$step, &$run, &mut $record)
         };
     }
-    macro_rules! with {
-        ($fma:tt, $wide:tt, $d:tt, $s:tt) => {{
-            let eq = [0, 1].map(|half| {
+    let run =
+        Run { dim, angles: &angles, h: spec.h, steps: spec.steps, stop_at_flip: spec.stop_at_flip, track };
+    macro_rules! equations {
+        ($fma:tt, $wide:tt) => {
+            [0, 1].map(|half| {
                 M::over::<Lanes<HALF, $fma, $wide>>(&setting, &|name| {
                     let k = index(name);
                     Lanes(std::array::from_fn(|i| pick(half * HALF + i)[k]))
                 })
-            });
-            let run = Run {
-                dim,
-                angles: &angles,
-                h: spec.h,
-                steps: spec.steps,
-                stop_at_flip: spec.stop_at_flip,
-                track,
-            };
-            let step = RkStep::<_, $d, $s, $fma, $wide>::new(spec.tableau, spec.h);
+            })
+        };
+    }
+    macro_rules! with {
+        ($fma:tt, $wide:tt, $d:tt, $s:tt) => {{
+            let LaneMethod::Rk(tableau) = spec.method else { unreachable!("a tableau") };
+            let eq = equations!($fma, $wide);
+            let step = RkStep::<_, $d, $s, $fma, $wide>::new(tableau, spec.h);
             call!($fma, $d, $wide, eq, step, run, record)
         }};
     }
     macro_rules! go {
         ($fma:tt, $wide:tt) => {{
-            let one = spec.tableau.b.len() == 1;
+            match spec.method {
+                LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len() == 1),
+                LaneMethod::KickDrift { scheme, .. } => {
+                    // Compiled only for the dimension it runs on (`supports`).
+                    if const { M::DIM == KICK_DRIFT_DIM } {
+                        let eq = equations!($fma, $wide);
+                        let step = KickDrift::<_, KICK_DRIFT_DIM, $fma, $wide> {
+                            eqs: std::marker::PhantomData,
+                            scheme,
+                            primed: false,
+                        };
+                        call!($fma, 4, $wide, eq, step, run, record)
+                    } else {
+                        unreachable!("kick-drift lanes on {} variables", M::DIM)
+                    }
+                }
+            }
+        }};
+    }
+    macro_rules! rk {
+        ($fma:tt, $wide:tt, $one:expr) => {{
+            let one = $one;
             if M::DIM == 2 {
                 if one { with!($fma, $wide, 2, 1) } else { with!($fma, $wide, 2, 4) }
             } else if M::DIM == 4 {
@@ -351,6 +449,81 @@ where
         fixed_stages::<_, _, D, _>(&self.a, &self.plan, &self.c, 0, &mut self.k, &mut f, t, h, y);
         *reach = f.reach;
         fixed_update::<_, D>(&self.b, &self.k, self.scale, y, next);
+    }
+}
+
+/// A kick–drift step ([`kick_drift`]) on states of D variables (positions, then velocities),
+/// the accelerations kept after them in the lane state (W ≥ D + D/2 values per lane), from one
+/// step to the next.
+struct KickDrift<E, const D: usize, const FMA: bool, const WIDE: bool> {
+    eqs: std::marker::PhantomData<fn(&E)>,
+    scheme: Partition,
+    /// Whether the kept accelerations are those at the step's start (false until the first
+    /// step of a kernel's run has computed them).
+    primed: bool,
+}
+
+// By hand, as `RkStep`'s.
+impl<E, const D: usize, const FMA: bool, const WIDE: bool> Clone for KickDrift<E, D, FMA, WIDE> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<E, const D: usize, const FMA: bool, const WIDE: bool> Copy for KickDrift<E, D, FMA, WIDE> {}
+
+impl<E, const D: usize, const W: usize, const FMA: bool, const WIDE: bool> LaneStep<W, FMA, WIDE>
+    for KickDrift<E, D, FMA, WIDE>
+where
+    E: Equations<Lanes<HALF, FMA, WIDE>>,
+{
+    type Equations = [E; 2];
+
+    #[inline(always)]
+    fn step(
+        &mut self,
+        eqs: &[E; 2],
+        t: f64,
+        h: f64,
+        y: &[Lanes<LANES, FMA, WIDE>; W],
+        next: &mut [Lanes<LANES, FMA, WIDE>; W],
+        reach: &mut [Lanes<HALF, FMA, WIDE>; 2],
+    ) {
+        const { assert!(W >= D + D / 2, "room for the accelerations") };
+        let n = D / 2;
+        *next = *y;
+        let mut accel = LaneAccelerations::<_, D, FMA, WIDE> {
+            f: LaneRhs { eqs, reach: *reach },
+            full: [Lanes::splat(0.0); D],
+            rates: [Lanes::splat(0.0); D],
+        };
+        let (state, kept) = next.split_at_mut(D);
+        let (q, v) = state.split_at_mut(n);
+        kick_drift(self.scheme, t, h, q, v, &mut kept[..n], self.primed, &mut accel);
+        self.primed = true;
+        *reach = accel.f.reach;
+    }
+}
+
+/// A lane group's accelerations for [`kick_drift`], from the equations' right-hand side (not
+/// a closure: its method is kept in line, with the kernel's instruction set).
+struct LaneAccelerations<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
+    f: LaneRhs<'a, E, D, FMA, WIDE>,
+    /// The equations' state: the positions, and velocities left at zero (the accelerations
+    /// of a separable system do not depend on them).
+    full: [Lanes<LANES, FMA, WIDE>; D],
+    rates: [Lanes<LANES, FMA, WIDE>; D],
+}
+
+impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, const WIDE: bool>
+    Accelerations<Lanes<LANES, FMA, WIDE>> for LaneAccelerations<'_, E, D, FMA, WIDE>
+{
+    #[inline(always)]
+    fn accelerations(&mut self, t: f64, q: &[Lanes<LANES, FMA, WIDE>], a: &mut [Lanes<LANES, FMA, WIDE>]) {
+        let n = D / 2;
+        self.full[..n].copy_from_slice(q);
+        self.f.eval(t, &self.full, &mut self.rates);
+        a.copy_from_slice(&self.rates[n..]);
     }
 }
 
@@ -692,50 +865,112 @@ impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> f
     }
 }
 
-/// Runs `model` from `y0` with the explicit tableau `tableau` in the engine arithmetic (see
-/// the one-lane stepper: polynomial sine and cosine, fused multiply-adds where the CPU has them), fixed steps as `spec` says, showing every state to `observer` (without an
-/// energy: observers that need one compute it): the single-member form of [`run`], bit for bit
-/// what a lane of a sweep gives the same member.
+/// Kick–drift on one lane: what a lane of [`run`] gives a member with
+/// [`LaneMethod::KickDrift`] (the accelerations kept from step to step, as the lanes keep
+/// them in their state).
+struct OneLaneKickDrift<E, const FMA: bool> {
+    scheme: Partition,
+    eq: E,
+    /// Positions then velocities, the equations' state (velocities zero while the
+    /// accelerations are evaluated).
+    y: Vec<Lanes<1, FMA, true>>,
+    full: Vec<Lanes<1, FMA, true>>,
+    rates: Vec<Lanes<1, FMA, true>>,
+    a: Vec<Lanes<1, FMA, true>>,
+    primed: bool,
+}
+
+impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> for OneLaneKickDrift<E, FMA> {
+    fn step(&mut self, _: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
+        let n = y.len() / 2;
+        for (lane, v) in self.y.iter_mut().zip(y.iter()) {
+            *lane = Lanes([*v]);
+        }
+        let Self { eq, full, rates, .. } = self;
+        let mut accel = |s: f64, q: &[Lanes<1, FMA, true>], a: &mut [Lanes<1, FMA, true>]| {
+            full[..n].copy_from_slice(q);
+            eq.rhs(Lanes([s]), full, rates);
+            a.copy_from_slice(&rates[n..]);
+        };
+        let (q, v) = self.y.split_at_mut(n);
+        kick_drift(self.scheme, t, h, q, v, &mut self.a, self.primed, &mut accel);
+        self.primed = true;
+        for (v, lane) in y.iter_mut().zip(&self.y) {
+            *v = lane.0[0];
+        }
+        Ok(())
+    }
+}
+
+/// Runs `model` from `y0` with `method` in the engine arithmetic (see the one-lane steppers:
+/// polynomial sine and cosine, fused multiply-adds where the CPU has them), fixed steps as
+/// `spec` says, showing every state to `observer` (without an energy: observers that need one
+/// compute it): the single-member form of [`run`], bit for bit what a lane of a sweep gives
+/// the same member.
 ///
 /// # Errors
-/// An invalid `spec`; [`Error::NonFinite`] at the first non-finite state.
+/// What `method` requires and the model lacks ([`crate::simulate::check`]); an invalid
+/// `spec`; [`Error::NonFinite`] at the first non-finite state.
 pub fn solve_one<M: Model>(
     model: &M,
-    tableau: &'static Tableau,
+    method: LaneMethod,
     y0: &[f64],
     spec: &RunSpec,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
     fn go<M: Model, const FMA: bool>(
         model: &M,
-        tableau: &'static Tableau,
+        method: LaneMethod,
         y0: &[f64],
         spec: &RunSpec,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
         let n = y0.len();
         let zero = Lanes([0.0]);
-        let mut stepper = OneLane::<_, FMA> {
-            tableau,
-            plan: plan(tableau.a),
-            eq: model.convert(&|x| Lanes::<1, FMA, true>([x])),
-            k: vec![zero; tableau.b.len() * n],
-            stage: vec![zero; n],
-            y: vec![zero; n],
-        };
+        let eq = model.convert(&|x| Lanes::<1, FMA, true>([x]));
         let mut y = y0.to_vec();
-        let outcome = Simulation { system: &(), spec: *spec }.run(&mut stepper, &mut y, observer)?;
+        let simulation = Simulation { system: &(), spec: *spec };
+        let outcome = match method {
+            LaneMethod::Rk(tableau) => simulation.run(
+                &mut OneLane::<_, FMA> {
+                    tableau,
+                    plan: plan(tableau.a),
+                    eq,
+                    k: vec![zero; tableau.b.len() * n],
+                    stage: vec![zero; n],
+                    y: vec![zero; n],
+                },
+                &mut y,
+                observer,
+            )?,
+            LaneMethod::KickDrift { method, scheme } => {
+                crate::simulate::check(method, model)?;
+                simulation.run(
+                    &mut OneLaneKickDrift::<_, FMA> {
+                        scheme,
+                        eq,
+                        y: vec![zero; n],
+                        full: vec![zero; n],
+                        rates: vec![zero; n],
+                        a: vec![zero; n / 2],
+                        primed: false,
+                    },
+                    &mut y,
+                    observer,
+                )?
+            }
+        };
         Ok(Report {
             outcome,
-            rhs_evals: tableau.b.len() as u64 * outcome.steps(),
+            rhs_evals: method.evaluations(outcome.steps()),
             state: y,
             steps_rejected: 0,
             jacobian_evals: 0,
         })
     }
     if has_fma() {
-        go::<M, true>(model, tableau, y0, spec, observer)
+        go::<M, true>(model, method, y0, spec, observer)
     } else {
-        go::<M, false>(model, tableau, y0, spec, observer)
+        go::<M, false>(model, method, y0, spec, observer)
     }
 }

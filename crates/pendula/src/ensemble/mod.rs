@@ -1,5 +1,5 @@
 //! Ensembles. [`engine`] runs every catalogued system with every explicit Runge–Kutta
-//! method on lanes, from the systems' own equations ([`crate::num::Lanes`]). This module is
+//! method on lanes (and separable systems with the explicit partitioned methods), from the systems' own equations ([`crate::num::Lanes`]). This module is
 //! the double pendulum's typed front to it ([`Member`], [`BatchSpec`]: the fractal's and the
 //! benchmarks' form), and Tao's map on lanes for the free double pendulum: a step of the
 //! engine's ([`engine`]'s `LaneStep`, on the engine's one run loop with its flips,
@@ -252,7 +252,7 @@ fn run_rk4_on_engine<T: Send>(
         unreachable!("RK4 is an explicit Runge-Kutta method")
     };
     let lanes = engine::LaneSpec {
-        tableau,
+        method: engine::LaneMethod::Rk(tableau),
         h: spec.h,
         steps: spec.steps,
         stop_at_flip: spec.stop_at_flip,

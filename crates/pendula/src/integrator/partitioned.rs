@@ -16,6 +16,7 @@
 use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
+use crate::num::Num;
 use crate::system::Hamiltonian;
 
 /// Which partitioned scheme.
@@ -191,6 +192,80 @@ impl PartitionedStepper {
             }
         }
         Ok(())
+    }
+}
+
+/// Where [`kick_drift`] takes its accelerations from.
+pub trait Accelerations<T> {
+    /// Writes the accelerations at time `t` and positions `q` into `a`.
+    fn accelerations(&mut self, t: f64, q: &[T], a: &mut [T]);
+}
+
+impl<T, F: FnMut(f64, &[T], &mut [T])> Accelerations<T> for F {
+    fn accelerations(&mut self, t: f64, q: &[T], a: &mut [T]) {
+        self(t, q, a);
+    }
+}
+
+/// One step of `scheme` on a separable H = ½ q′ᵀ M q′ + V(t, q) whose mass matrix M is
+/// constant, in the velocities q′ = M⁻¹ p: the same map as the (q, p) steps above (p = M q′
+/// is linear), over any number type — the ensemble engine's lanes run it (kick–drift; there
+/// the equations' right-hand side gives the accelerations, which for such a system do not
+/// depend on q′).
+///
+/// `accel.accelerations(s, q, a)` writes the accelerations at time s and positions q (a
+/// closure, or a type whose method is kept in line with its caller's instruction set: a
+/// closure is compiled without the SIMD kernels' target features). For Störmer–Verlet
+/// and compositions, `a` holds them at (t, q) on entry when `primed`, and at the step's end
+/// on return, for the next step (first same as last: one evaluation per Verlet step, as the
+/// (q, p) stepper's cache).
+#[allow(clippy::too_many_arguments)] // the step, its state and where the forces come from
+#[inline(always)]
+pub fn kick_drift<T: Num>(
+    scheme: Partition,
+    t: f64,
+    h: f64,
+    q: &mut [T],
+    v: &mut [T],
+    a: &mut [T],
+    primed: bool,
+    accel: &mut impl Accelerations<T>,
+) {
+    let weights: &[f64] = match scheme {
+        Partition::SymplecticEuler => {
+            accel.accelerations(t, q, a);
+            let h = T::splat(h);
+            for (vi, ai) in v.iter_mut().zip(a.iter()) {
+                *vi = h.madd(*ai, *vi);
+            }
+            for (qi, vi) in q.iter_mut().zip(v.iter()) {
+                *qi = h.madd(*vi, *qi);
+            }
+            return;
+        }
+        Partition::StormerVerlet => &[1.0],
+        Partition::Composition(weights) => weights,
+    };
+    if !primed {
+        accel.accelerations(t, q, a);
+    }
+    let mut s = t;
+    for w in weights {
+        // The sizes and times the (q, p) stepper takes: w h, half of it, s + w h.
+        let full = w * h;
+        let kick = T::splat(0.5 * full);
+        for (vi, ai) in v.iter_mut().zip(a.iter()) {
+            *vi = kick.madd(*ai, *vi);
+        }
+        let drift = T::splat(full);
+        for (qi, vi) in q.iter_mut().zip(v.iter()) {
+            *qi = drift.madd(*vi, *qi);
+        }
+        s += full;
+        accel.accelerations(s, q, a);
+        for (vi, ai) in v.iter_mut().zip(a.iter()) {
+            *vi = kick.madd(*ai, *vi);
+        }
     }
 }
 
