@@ -166,6 +166,7 @@ fn benches(c: &mut Criterion) {
             steps: 200,
             stop_at_flip: false,
             track_flips: false,
+            cancel: None,
         };
         let mut out = vec![0.0; count * dim];
         let mut group =

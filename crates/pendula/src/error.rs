@@ -113,6 +113,9 @@ pub enum Error {
         /// Iterations performed.
         iterations: usize,
     },
+    /// The run was interrupted (its cancel flag set by another thread, for a Ctrl-C).
+    #[error("the run was interrupted")]
+    Interrupted,
     /// A saved run state ([`crate::checkpoint`]) does not fit what restores it: a different
     /// method, system or dimension, or words missing or left over.
     #[error("the saved state of {part} does not fit: {reason}")]

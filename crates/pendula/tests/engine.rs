@@ -68,7 +68,8 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
             let model = base.build();
             let lanes = lane_method(method, &*model).expect("the engine runs every explicit method");
             let (h, steps) = if info.dimensionless { (0.05, 400) } else { (2e-3, 400) };
-            let spec = LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false };
+            let spec =
+                LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
             let mut out = vec![0.0; all.len() * dim];
             model
                 .ensemble(
@@ -131,6 +132,7 @@ fn a_member_that_blows_up_is_named() {
         steps: 2000,
         stop_at_flip: false,
         track_flips: false,
+        cancel: None,
     };
     let mut out = vec![0.0; all.len() * 2];
     let err = base
@@ -182,7 +184,8 @@ fn kick_drift_lanes_run_every_separable_system_bit_for_bit() {
             let lanes = lane_method(method, &*model).expect("kick-drift on a separable system");
             assert!(matches!(lanes, LaneMethod::KickDrift { .. }), "{lanes:?}");
             let (h, steps) = (2e-3, 400);
-            let spec = LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false };
+            let spec =
+                LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
             let mut out = vec![0.0; all.len() * dim];
             model
                 .ensemble(
@@ -258,6 +261,7 @@ fn a_damped_member_of_a_kick_drift_ensemble_is_named() {
         steps: 100,
         stop_at_flip: false,
         track_flips: false,
+        cancel: None,
     };
     let mut out = vec![f64::NAN; all.len() * 2];
     let err = base

@@ -693,6 +693,7 @@ fn run_lanes(
                 steps: sweep.steps,
                 stop_at_flip: sweep.until_flip,
                 track_flips,
+                cancel: None,
             };
             let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
                 store_row(i, &o.state[..info.state.len()], o.flip_time, row)

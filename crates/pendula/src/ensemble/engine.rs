@@ -70,7 +70,7 @@ impl LaneMethod {
 
 /// What an ensemble run of explicit steps does.
 #[derive(Debug, Clone, Copy)]
-pub struct LaneSpec {
+pub struct LaneSpec<'a> {
     /// The method.
     pub method: LaneMethod,
     /// Step size, s (in the system's units when dimensionless).
@@ -81,6 +81,9 @@ pub struct LaneSpec {
     pub stop_at_flip: bool,
     /// Record flip times (implied by `stop_at_flip`).
     pub track_flips: bool,
+    /// When set (by another thread: a Ctrl-C), the run stops before its next lane group
+    /// with [`Error::Interrupted`]; what it wrote is then incomplete.
+    pub cancel: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
 /// A member's results.
@@ -130,7 +133,8 @@ fn check_member<M: Model>(
 /// # Errors
 /// For kick–drift, [`Error::UnmetRequirement`] for the first member (in index order) that
 /// is not separable (damped), naming it, before it takes a step; else
-/// [`Error::NonFiniteMember`] for the first member whose state became non-finite.
+/// [`Error::NonFiniteMember`] for the first member whose state became non-finite;
+/// [`Error::Interrupted`] when `spec.cancel` was set.
 ///
 /// # Panics
 /// If the engine does not run the method on the system ([`supports`]): a caller's error.
@@ -166,6 +170,9 @@ pub fn run<M: Model, T: Send>(
             for (g, (group, rows)) in
                 values.chunks(LANES * width).zip(rows.chunks_mut(LANES * row_len)).enumerate()
             {
+                if spec.cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                    return Some((start + g * LANES, Error::Interrupted));
+                }
                 let members: Vec<&[f64]> = group.chunks(width).collect();
                 let (outcomes, failed) = run_group::<M>(info, &members, spec);
                 for (i, (o, row)) in outcomes.iter().zip(rows.chunks_mut(row_len)).enumerate() {

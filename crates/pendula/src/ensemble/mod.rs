@@ -257,6 +257,7 @@ fn run_rk4_on_engine<T: Send>(
         steps: spec.steps,
         stop_at_flip: spec.stop_at_flip,
         track_flips: spec.track_flips,
+        cancel: None,
     };
     let values = |i: usize, v: &mut [f64]| {
         let Member { pendulum: d, state } = member(i);
