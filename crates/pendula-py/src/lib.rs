@@ -1,0 +1,682 @@
+//! `pendula._core`: the pendula library (not the CLI) for Python. The pure-Python package
+//! `pendula` (`python/pendula/`) is the face users see; this module holds what needs the
+//! library: the catalogue, a built system's equations, single runs and ensembles.
+//!
+//! Every computation runs with the GIL released (`Python::detach`), so Python threads run
+//! pendula concurrently. Library errors reach Python as the package's own exception classes
+//! (`pendula.errors`), chosen here by the error's kind: bad input is a `ValueError` subclass
+//! that names the value and what is allowed, a failed run an `IntegrationError` with the time.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
+use pendula::checkpoint::{Leg, Pause};
+use pendula::control::Tolerances;
+use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
+use pendula::integrator::{self, Method, Scheme};
+use pendula::model::{CATALOGUE, DynModel, EnsemblePath, ensemble_path};
+use pendula::observe::{Flow, Observer, Sample};
+use pendula::system::{Domain, Quantity, Values};
+use pendula::{End, Error, RunSpec, Stepping};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+/// The package's exception `class` (in `pendula.errors`) raised with `message`.
+fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
+    match py.import("pendula.errors").and_then(|m| m.getattr(class)) {
+        Ok(cls) => PyErr::from_value(
+            cls.call1((message,)).unwrap_or_else(|e| e.into_value(py).into_bound(py).into_any()),
+        ),
+        Err(e) => e,
+    }
+}
+
+/// The Python exception for a library error: its class by kind, its message the library's.
+fn to_py(py: Python<'_>, e: &Error) -> PyErr {
+    let class = match e {
+        Error::UnknownSystem { .. }
+        | Error::UnknownMethod { .. }
+        | Error::UnknownPreset { .. }
+        | Error::UnknownName { .. } => "UnknownNameError",
+        Error::UnmetRequirement { .. } => "UnsuitableMethodError",
+        Error::NonFinite { .. } | Error::NonFiniteMember { .. } => "NonFiniteStateError",
+        Error::StepSizeTooSmall { .. } => "StepSizeTooSmallError",
+        Error::NewtonDidNotConverge { .. } => "NewtonError",
+        Error::InvalidValue { .. } => "InvalidValueError",
+        _ => "PendulaError",
+    };
+    raise(py, class, e.to_string())
+}
+
+/// The time a failed run failed at, if the error says.
+fn failure_time(e: &Error) -> Option<f64> {
+    match e {
+        Error::NonFinite { t }
+        | Error::NonFiniteMember { t, .. }
+        | Error::StepSizeTooSmall { t, .. }
+        | Error::NewtonDidNotConverge { t, .. } => Some(*t),
+        _ => None,
+    }
+}
+
+fn domain(d: Domain) -> &'static str {
+    d.describe()
+}
+
+fn quantity<'py>(py: Python<'py>, q: &Quantity) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", q.name)?;
+    d.set_item("unit", q.unit)?;
+    d.set_item("default", q.default)?;
+    d.set_item("domain", domain(q.domain))?;
+    d.set_item("description", q.description)?;
+    d.set_item("angle", q.is_angle())?;
+    Ok(d)
+}
+
+/// The catalogue as plain data: `{"systems": [...], "methods": [...]}`. A system's
+/// `separable` and `conservative` are those of its defaults.
+#[pyfunction]
+fn catalogue(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let systems = PyList::empty(py);
+    for entry in CATALOGUE {
+        let info = entry.info();
+        let d = PyDict::new(py);
+        d.set_item("name", info.name)?;
+        d.set_item("description", info.description)?;
+        d.set_item("dimensionless", info.dimensionless)?;
+        d.set_item("energy_scale", info.energy_scale)?;
+        let params = PyList::empty(py);
+        for q in info.parameters {
+            params.append(quantity(py, q)?)?;
+        }
+        d.set_item("parameters", params)?;
+        let state = PyList::empty(py);
+        for q in info.state {
+            state.append(quantity(py, q)?)?;
+        }
+        d.set_item("state", state)?;
+        let model = info.values(&[]).map_err(|e| to_py(py, &e))?.build();
+        d.set_item("separable", model.separable())?;
+        d.set_item("conservative", model.conserves_energy().is_ok())?;
+        systems.append(d)?;
+    }
+    let methods = PyList::empty(py);
+    for m in integrator::METHODS {
+        let d = PyDict::new(py);
+        d.set_item("name", m.name)?;
+        d.set_item("title", m.title)?;
+        d.set_item("order", m.order)?;
+        d.set_item("symplectic", m.symplectic)?;
+        d.set_item("symmetric", m.symmetric)?;
+        d.set_item("adaptive", matches!(m.scheme, Scheme::Embedded(_)))?;
+        d.set_item("requirement", m.requirement.describe())?;
+        d.set_item("description", m.description)?;
+        d.set_item("reference", m.reference)?;
+        methods.append(d)?;
+    }
+    let out = PyDict::new(py);
+    out.set_item("systems", systems)?;
+    out.set_item("methods", methods)?;
+    Ok(out)
+}
+
+/// A catalogued system built from validated values: its equations and runs.
+#[pyclass(module = "pendula._core", frozen)]
+struct CoreSystem {
+    values: Values,
+    model: Box<dyn DynModel>,
+}
+
+#[pymethods]
+impl CoreSystem {
+    /// The system `name` with `params` (parameter and initial-state values by name; the rest
+    /// at their defaults).
+    #[new]
+    fn new(py: Python<'_>, name: &str, params: Vec<(String, f64)>) -> PyResult<Self> {
+        let info = pendula::model::find(name).map_err(|e| to_py(py, &e))?;
+        let values = info.values(&params).map_err(|e| to_py(py, &e))?;
+        let model = values.build();
+        Ok(CoreSystem { values, model })
+    }
+
+    /// The catalogue name.
+    #[getter]
+    fn name(&self) -> &'static str {
+        self.values.info().name
+    }
+
+    /// Every parameter and initial-state value, by name, in the catalogue's order.
+    fn values(&self) -> Vec<(&'static str, f64)> {
+        let info = self.values.info();
+        info.quantities().map(|q| (q.name, self.values.get(q.name))).collect()
+    }
+
+    /// The state's names.
+    #[getter]
+    fn names(&self) -> Vec<&'static str> {
+        self.values.info().state.iter().map(|q| q.name).collect()
+    }
+
+    /// The initial state from the values.
+    fn initial_state(&self) -> Vec<f64> {
+        self.values.initial_state().to_vec()
+    }
+
+    /// Whether the system has a separable Hamiltonian form.
+    #[getter]
+    fn separable(&self) -> bool {
+        self.model.separable()
+    }
+
+    /// Whether the system has a Hamiltonian form (no damping).
+    #[getter]
+    fn hamiltonian(&self) -> bool {
+        integrator::find("verlet").is_ok_and(|m| self.model.check(m).is_ok())
+    }
+
+    /// Whether the energy is conserved (a Hamiltonian form, no drive); else why not.
+    fn conservative(&self) -> (bool, Option<String>) {
+        match self.model.conserves_energy() {
+            Ok(()) => (true, None),
+            Err(why) => (false, Some(why)),
+        }
+    }
+
+    /// Whether the system is dimensionless (no units).
+    #[getter]
+    fn dimensionless(&self) -> bool {
+        self.values.info().dimensionless
+    }
+
+    /// The energy scale relative energy errors from `y0` are taken against, and its
+    /// description.
+    fn energy_scale(&self, y0: Vec<f64>) -> PyResult<(f64, &'static str)> {
+        self.check_dim(&y0)?;
+        Ok((self.model.energy_scale(&y0), self.values.info().energy_scale))
+    }
+
+    /// dy/dt at (t, y) for each column of `y` (shape (n_state, k)).
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        y: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let y = y.as_array();
+        self.check_rows(y.nrows())?;
+        let mut out = numpy::ndarray::Array2::<f64>::zeros(y.raw_dim());
+        let (mut col, mut d) = (vec![0.0; y.nrows()], vec![0.0; y.nrows()]);
+        for (j, column) in y.columns().into_iter().enumerate() {
+            col.iter_mut().zip(column).for_each(|(c, v)| *c = *v);
+            self.model.rhs(t, &col, &mut d);
+            out.column_mut(j).iter_mut().zip(&d).for_each(|(o, v)| *o = *v);
+        }
+        Ok(out.into_pyarray(py))
+    }
+
+    /// The energy at time t of each column of `y` (shape (n_state, k)).
+    fn energy<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        y: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let y = y.as_array();
+        self.check_rows(y.nrows())?;
+        let mut col = vec![0.0; y.nrows()];
+        let e: Vec<f64> = y
+            .columns()
+            .into_iter()
+            .map(|column| {
+                col.iter_mut().zip(column).for_each(|(c, v)| *c = *v);
+                self.model.energy(t, &col)
+            })
+            .collect();
+        Ok(e.into_pyarray(py))
+    }
+
+    /// (q, q') → (q, p) for each column of `y`.
+    fn to_momenta<'py>(
+        &self,
+        py: Python<'py>,
+        y: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.conservative_form(py)?;
+        self.map_columns(py, y, |m, a, b| m.to_momenta(a, b))
+    }
+
+    /// (q, p) → (q, q') for each column of `z`.
+    #[pyo3(name = "from_momenta")]
+    fn velocities_of<'py>(
+        &self,
+        py: Python<'py>,
+        z: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.conservative_form(py)?;
+        self.map_columns(py, z, |m, a, b| m.to_velocities(a, b))
+    }
+
+    /// The pickled form: the name and every value (version 1).
+    fn __getnewargs__(&self) -> (&'static str, Vec<(String, f64)>) {
+        let values = self.values().into_iter().map(|(n, v)| (n.to_owned(), v)).collect();
+        (self.name(), values)
+    }
+}
+
+impl CoreSystem {
+    fn check_rows(&self, rows: usize) -> PyResult<()> {
+        let n = self.values.info().state.len();
+        if rows != n {
+            return Err(raise_shape(n, rows));
+        }
+        Ok(())
+    }
+
+    fn check_dim(&self, y: &[f64]) -> PyResult<()> {
+        self.check_rows(y.len())
+    }
+
+    fn conservative_form(&self, py: Python<'_>) -> PyResult<()> {
+        // The momenta are those of the Hamiltonian form; a damped system has none.
+        let method = integrator::find("verlet").map_err(|e| to_py(py, &e))?;
+        self.model.check(method).map_err(|e| {
+            raise(
+                py,
+                "UnsuitableMethodError",
+                format!("no momenta: {}", e.to_string().split("; ").nth(1).unwrap_or("no Hamiltonian form")),
+            )
+        })
+    }
+
+    fn map_columns<'py>(
+        &self,
+        py: Python<'py>,
+        y: PyReadonlyArray2<'py, f64>,
+        f: impl Fn(&dyn DynModel, &[f64], &mut [f64]),
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let y = y.as_array();
+        self.check_rows(y.nrows())?;
+        let mut out = numpy::ndarray::Array2::<f64>::zeros(y.raw_dim());
+        let (mut col, mut d) = (vec![0.0; y.nrows()], vec![0.0; y.nrows()]);
+        for (j, column) in y.columns().into_iter().enumerate() {
+            col.iter_mut().zip(column).for_each(|(c, v)| *c = *v);
+            f(&*self.model, &col, &mut d);
+            out.column_mut(j).iter_mut().zip(&d).for_each(|(o, v)| *o = *v);
+        }
+        Ok(out.into_pyarray(py))
+    }
+}
+
+fn raise_shape(expected: usize, got: usize) -> PyErr {
+    Python::attach(|py| {
+        raise(
+            py,
+            "InvalidValueError",
+            format!("a state has {expected} variables; got an array with {got} rows"),
+        )
+    })
+}
+
+/// Set by the signal check when Python has a pending KeyboardInterrupt: runs stop at their
+/// next sample.
+struct Interrupt<'a> {
+    flag: &'a AtomicBool,
+}
+
+/// Records every accepted step (t, then the state), stopping when interrupted.
+struct Rows<'a> {
+    rows: Vec<f64>,
+    interrupt: Interrupt<'a>,
+}
+
+impl Observer for Rows<'_> {
+    fn observe(&mut self, sample: &Sample<'_>) -> Flow {
+        self.rows.push(sample.t);
+        self.rows.extend_from_slice(sample.y);
+        if self.interrupt.flag.load(Ordering::Relaxed) {
+            return Flow::Break(pendula::observe::Stop::Enough);
+        }
+        Flow::Continue(())
+    }
+}
+
+/// Runs `f` with the GIL released while a watcher thread checks Python's signal handlers
+/// every 50 ms (they run only in the main thread, with the GIL): a Ctrl-C sets `flag`, which
+/// the run polls, and the interrupt is raised once the run has returned.
+fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce(&AtomicBool) -> T + Send) -> PyResult<T> {
+    let flag = AtomicBool::new(false);
+    let done = AtomicBool::new(false);
+    let out = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| {
+            let out = f(&flag);
+            done.store(true, Ordering::Release);
+            out
+        });
+        // This (the calling) thread keeps watching signals until the worker is done.
+        let mut pending: Option<PyErr> = None;
+        while !done.load(Ordering::Acquire) {
+            py.detach(|| std::thread::sleep(std::time::Duration::from_millis(20)));
+            if pending.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                flag.store(true, Ordering::Relaxed);
+                pending = Some(e);
+            }
+        }
+        let out = py.detach(|| worker.join()).expect("the run does not panic");
+        (out, pending)
+    });
+    match out {
+        (_, Some(e)) => Err(e),
+        (out, None) => Ok(out),
+    }
+}
+
+/// One run: `method` (a catalogue name) on `system` from `y0` over [t0, t_end], fixed steps
+/// `dt` or, for an embedded pair, adaptive steps with `rtol`, `atol` (default 1e-6 each, as
+/// the CLI) from a first step `dt`. Returns a
+/// dict: `t` (k,), `states` (k, n_state), `nfev`, `steps`, `rejected`, `method`, and
+/// `error` (None, or (class, message, t)) — a failed run keeps the steps it took.
+#[pyfunction]
+#[pyo3(signature = (system, method, t0, t_end, y0, dt=None, rtol=None, atol=None))]
+#[allow(clippy::too_many_arguments)] // the run's description, as Python passes it
+fn solve<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    method: &str,
+    t0: f64,
+    t_end: f64,
+    y0: Vec<f64>,
+    dt: Option<f64>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    system.check_dim(&y0)?;
+    for (name, v) in [("t0", t0), ("t_end", t_end)] {
+        if !v.is_finite() {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("invalid value {v} for `{name}`: a finite time"),
+            ));
+        }
+    }
+    if t_end <= t0 {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!("invalid t_span ({t0}, {t_end}): the end must be after the start"),
+        ));
+    }
+    for (name, v) in [("dt", dt), ("rtol", rtol), ("atol", atol)] {
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("invalid value {v} for `{name}`: a finite number > 0"),
+            ));
+        }
+    }
+    if let Some(v) = y0.iter().find(|v| !v.is_finite()) {
+        return Err(raise(py, "InvalidValueError", format!("invalid value {v} in `y0`: finite numbers")));
+    }
+    system.model.check(method).map_err(|e| to_py(py, &e))?;
+    // As the CLI: an embedded pair runs adaptive steps (dt, if given, the first to try).
+    let adaptive = matches!(method.scheme, Scheme::Embedded(_));
+    if !adaptive && (rtol.is_some() || atol.is_some()) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "rtol and atol apply to adaptive methods (dopri5, dop853); `{}` takes fixed steps dt",
+                method.name
+            ),
+        ));
+    }
+    if adaptive && t0 != 0.0 {
+        // The adaptive loop starts at t = 0 (its first step is chosen from there).
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!("invalid value {t0} for `t0`: adaptive runs start at 0"),
+        ));
+    }
+    let tol = Tolerances {
+        rtol: rtol.unwrap_or(1e-6),
+        atol: atol.unwrap_or(1e-6),
+        h_min: 0.0,
+        h_max: f64::INFINITY,
+    };
+    if adaptive {
+        tol.validate().map_err(|e| to_py(py, &e))?;
+    }
+    let spec = RunSpec { t0, h: dt.unwrap_or(1e-3), end: End::Time(t_end) };
+    let model = &*system.model;
+    let (rows, result) = interruptible(py, |flag| {
+        let mut rows = Rows { rows: Vec::new(), interrupt: Interrupt { flag } };
+        let stepping =
+            if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
+        let result = model.solve_fastest(method, &y0, &stepping, &mut rows, None, &Pause::NEVER);
+        (rows.rows, result)
+    })?;
+    let n = y0.len();
+    let k = rows.len() / (n + 1);
+    let t: Vec<f64> = rows.chunks(n + 1).map(|r| r[0]).collect();
+    let states: Vec<f64> = rows.chunks(n + 1).flat_map(|r| r[1..].iter().copied()).collect();
+    let out = PyDict::new(py);
+    out.set_item("t", t.into_pyarray(py))?;
+    out.set_item(
+        "states",
+        numpy::ndarray::Array2::from_shape_vec((k, n), states).expect("k rows").into_pyarray(py),
+    )?;
+    out.set_item("method", method.name)?;
+    out.set_item("adaptive", adaptive)?;
+    match result {
+        Ok(Leg::Done(report)) => {
+            out.set_item("nfev", report.rhs_evals)?;
+            out.set_item("steps", report.outcome.steps())?;
+            out.set_item("rejected", report.steps_rejected)?;
+            out.set_item("error", py.None())?;
+        }
+        Ok(Leg::Paused(_)) => unreachable!("never paused"),
+        Err(e) => {
+            let class = to_py(py, &e);
+            out.set_item("nfev", py.None())?;
+            out.set_item("steps", k.saturating_sub(1))?;
+            out.set_item("rejected", py.None())?;
+            out.set_item("error", (class.into_value(py), failure_time(&e)))?;
+        }
+    }
+    Ok(out)
+}
+
+/// An ensemble: `m` members of `system`, member i's parameters `params[i]` (columns named by
+/// `param_names`, the rest the system's values) and initial state `y0s[i]`, `steps` steps of
+/// `dt` with `method`. On the SIMD lanes when the library says so (`ensemble_path`), else one
+/// scalar run per member; all cores (`threads`). Returns (rows (m, n_state + 1): the final
+/// state then the first flip time or NaN, the engine's name).
+#[pyfunction]
+#[pyo3(signature = (system, y0s, param_names, params, method, dt, steps, until_flip, threads=None))]
+#[allow(clippy::too_many_arguments)] // the ensemble's description, as Python passes it
+fn ensemble<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    y0s: PyReadonlyArray2<'py, f64>,
+    param_names: Vec<String>,
+    params: PyReadonlyArray2<'py, f64>,
+    method: &str,
+    dt: f64,
+    steps: u64,
+    until_flip: bool,
+    threads: Option<usize>,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, &'static str)> {
+    let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    let info = system.values.info();
+    let (np, dim) = (info.parameters.len(), info.state.len());
+    let y0s = y0s.as_array().to_owned();
+    let params = params.as_array().to_owned();
+    let m = y0s.nrows();
+    if y0s.ncols() != dim {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!("y0s has {} columns; the `{}` state has {dim}", y0s.ncols(), info.name),
+        ));
+    }
+    if params.nrows() != m || params.ncols() != param_names.len() {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "params has shape ({}, {}); expected ({m}, {})",
+                params.nrows(),
+                params.ncols(),
+                param_names.len()
+            ),
+        ));
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!("invalid value {dt} for `dt`: a finite number > 0"),
+        ));
+    }
+    let mut slots = Vec::new();
+    for name in &param_names {
+        let q = info.quantity(name).map_err(|e| to_py(py, &e))?;
+        if info.state.iter().any(|s| s.name == q.name) {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("`{name}` is a state variable: give it in y0s"),
+            ));
+        }
+        slots.push(info.parameters.iter().position(|p| p.name == q.name).expect("a parameter"));
+    }
+    // Every member validated before any step: its values within their domains.
+    let base: Vec<f64> = info.quantities().map(|q| system.values.get(q.name)).collect();
+    let member = |i: usize, v: &mut [f64]| {
+        v.copy_from_slice(&base);
+        for (k, &s) in slots.iter().enumerate() {
+            v[s] = params[[i, k]];
+        }
+        v[np..].iter_mut().zip(y0s.row(i)).for_each(|(a, b)| *a = *b);
+    };
+    let settings_of = |v: &[f64]| -> Vec<(String, f64)> {
+        info.quantities().map(|q| q.name.to_owned()).zip(v.iter().copied()).collect()
+    };
+    let mut v = vec![0.0; base.len()];
+    for i in 0..m {
+        member(i, &mut v);
+        info.values(&settings_of(&v))
+            .map_err(|e| raise(py, "InvalidValueError", format!("member {i}: {e}")))?;
+    }
+    let swept: Vec<&str> = param_names.iter().map(String::as_str).collect();
+    let path = ensemble_path(method, &system.values, &swept);
+    let cols = dim + 1;
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err(raise(py, "InvalidValueError", "invalid value 0 for `threads`: at least 1".to_owned()));
+    }
+    let mut data = vec![0.0; m * cols];
+    let model = &*system.model;
+    // In slices of members, the interrupt flag looked at between them: a member's result
+    // does not depend on the slicing (nor on the thread count).
+    let slice = (threads * 16 * 16).max(1);
+    let result = interruptible(py, |flag| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("threads");
+        pool.install(|| -> Result<(), Error> {
+            for (c, rows) in data.chunks_mut(slice * cols).enumerate() {
+                if flag.load(Ordering::Relaxed) {
+                    return Ok(());
+                }
+                let start = c * slice;
+                let count = rows.len() / cols;
+                let member = |i: usize, v: &mut [f64]| member(start + i, v);
+                match path {
+                    EnsemblePath::Engine(lanes) => {
+                        let spec = LaneSpec {
+                            method: lanes,
+                            h: dt,
+                            steps,
+                            stop_at_flip: until_flip,
+                            track_flips: true,
+                            cancel: Some(flag),
+                        };
+                        let store = |_: usize, o: &LaneOutcome, row: &mut [f64]| {
+                            row[..dim].copy_from_slice(&o.state[..dim]);
+                            row[dim] = o.flip_time;
+                        };
+                        model
+                            .ensemble(info, count, &member, &spec, rows, cols, &store)
+                            .map_err(|e| shift(e, start))?;
+                    }
+                    EnsemblePath::DoubleKernel(batch) => {
+                        let spec = pendula::ensemble::BatchSpec {
+                            method: batch,
+                            h: dt,
+                            steps,
+                            stop_at_flip: until_flip,
+                            track_flips: true,
+                        };
+                        pendula::ensemble::run_values(
+                            count,
+                            &member,
+                            &spec,
+                            rows,
+                            cols,
+                            &|_, state, flip, row: &mut [f64]| {
+                                row[..dim].copy_from_slice(state);
+                                row[dim] = flip;
+                            },
+                        )
+                        .map_err(|e| shift(e, start))?;
+                    }
+                    EnsemblePath::Scalar => {
+                        return Err(Error::UnmetRequirement {
+                            method: method.name,
+                            needs: "an explicit method with SIMD lanes on this system",
+                            reason: format!("`{}` has no lanes on `{}`", method.name, info.name),
+                            suggestion: "rk4, or pendula.solve per member",
+                        });
+                    }
+                }
+            }
+            Ok(())
+        })
+    })?;
+    // An interrupted run raised KeyboardInterrupt above; what is left is the run's own.
+    result.map_err(|e| to_py(py, &e))?;
+    Ok((
+        numpy::ndarray::Array2::from_shape_vec((m, cols), data).expect("m rows").into_pyarray(py),
+        match path {
+            EnsemblePath::Engine(_) => "simd lanes (ensemble engine)",
+            EnsemblePath::DoubleKernel(_) => "simd lanes (the double pendulum's kernel)",
+            EnsemblePath::Scalar => "scalar",
+        },
+    ))
+}
+
+/// `e` with its member index counted from the ensemble's start, not the slice's.
+fn shift(e: Error, start: usize) -> Error {
+    match e {
+        Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: member + start, t },
+        other => other,
+    }
+}
+
+/// The extension module.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(catalogue, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_class::<CoreSystem>()?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
