@@ -341,35 +341,53 @@ impl Observer for Rows<'_> {
     }
 }
 
-/// Runs `f` with the GIL released while a watcher thread checks Python's signal handlers
-/// every 50 ms (they run only in the main thread, with the GIL): a Ctrl-C sets `flag`, which
-/// the run polls, and the interrupt is raised once the run has returned.
-fn interruptible<T: Send>(py: Python<'_>, f: impl FnOnce(&AtomicBool) -> T + Send) -> PyResult<T> {
+/// Runs `f` with the GIL released. Unless `short`, on a worker thread, while this (the
+/// calling) thread checks Python's signal handlers every 20 ms (they run only in the main
+/// thread, with the GIL): a Ctrl-C sets the flag `f` is given, which the run polls, and the
+/// KeyboardInterrupt is raised once the run has returned. A `short` run (well under the 0.2 s
+/// a Ctrl-C may wait) runs here, without the thread's cost.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    short: bool,
+    f: impl FnOnce(&AtomicBool) -> T + Send,
+) -> PyResult<T> {
     let flag = AtomicBool::new(false);
-    let done = AtomicBool::new(false);
-    let out = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| {
-            let out = f(&flag);
-            done.store(true, Ordering::Release);
-            out
+    if short {
+        return Ok(py.detach(|| f(&flag)));
+    }
+    let (out, pending) = std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let flag = &flag;
+        scope.spawn(move || {
+            // The receiver outlives the worker (the loop below waits for this message).
+            let _ = tx.send(f(flag));
         });
-        // This (the calling) thread keeps watching signals until the worker is done.
         let mut pending: Option<PyErr> = None;
-        while !done.load(Ordering::Acquire) {
-            py.detach(|| std::thread::sleep(std::time::Duration::from_millis(20)));
-            if pending.is_none()
-                && let Err(e) = py.check_signals()
-            {
-                flag.store(true, Ordering::Relaxed);
-                pending = Some(e);
+        let mut rx = rx;
+        loop {
+            // The receiver moves into the wait and back (it may be sent, not shared).
+            let (received, back) =
+                py.detach(move || (rx.recv_timeout(std::time::Duration::from_millis(20)), rx));
+            rx = back;
+            match received {
+                Ok(out) => return (out, pending),
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if pending.is_none()
+                        && let Err(e) = py.check_signals()
+                    {
+                        flag.store(true, Ordering::Relaxed);
+                        pending = Some(e);
+                    }
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    panic!("the run's thread ended without a result")
+                }
             }
         }
-        let out = py.detach(|| worker.join()).expect("the run does not panic");
-        (out, pending)
     });
-    match out {
-        (_, Some(e)) => Err(e),
-        (out, None) => Ok(out),
+    match pending {
+        Some(e) => Err(e),
+        None => Ok(out),
     }
 }
 
@@ -456,7 +474,9 @@ fn solve<'py>(
     }
     let spec = RunSpec { t0, h: dt.unwrap_or(1e-3), end: End::Time(t_end) };
     let model = &*system.model;
-    let (rows, result) = interruptible(py, |flag| {
+    // Fixed steps on small states: a few milliseconds at most, run without the watcher.
+    let short = !adaptive && (t_end - t0) / spec.h * y0.len() as f64 <= 4e5;
+    let (rows, result) = interruptible(py, short, |flag| {
         let mut rows = Rows { rows: Vec::new(), interrupt: Interrupt { flag } };
         let stepping =
             if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
@@ -588,7 +608,7 @@ fn ensemble<'py>(
     // In slices of members, the interrupt flag looked at between them: a member's result
     // does not depend on the slicing (nor on the thread count).
     let slice = (threads * 16 * 16).max(1);
-    let result = interruptible(py, |flag| {
+    let result = interruptible(py, false, |flag| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("threads");
         pool.install(|| -> Result<(), Error> {
             for (c, rows) in data.chunks_mut(slice * cols).enumerate() {
