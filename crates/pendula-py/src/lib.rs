@@ -16,7 +16,7 @@ use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
 use pendula::integrator::{self, Method, Scheme};
 use pendula::model::{CATALOGUE, DynModel, EnsemblePath, ensemble_path};
 use pendula::observe::{Flow, Observer, Sample};
-use pendula::system::{Domain, Quantity, Values};
+use pendula::system::{Quantity, Values};
 use pendula::{End, Error, RunSpec, Stepping};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -59,16 +59,12 @@ fn failure_time(e: &Error) -> Option<f64> {
     }
 }
 
-fn domain(d: Domain) -> &'static str {
-    d.describe()
-}
-
 fn quantity<'py>(py: Python<'py>, q: &Quantity) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", q.name)?;
     d.set_item("unit", q.unit)?;
     d.set_item("default", q.default)?;
-    d.set_item("domain", domain(q.domain))?;
+    d.set_item("domain", q.domain.describe())?;
     d.set_item("description", q.description)?;
     d.set_item("angle", q.is_angle())?;
     Ok(d)
@@ -203,16 +199,7 @@ impl CoreSystem {
         t: f64,
         y: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let y = y.as_array();
-        self.check_rows(y.nrows())?;
-        let mut out = numpy::ndarray::Array2::<f64>::zeros(y.raw_dim());
-        let (mut col, mut d) = (vec![0.0; y.nrows()], vec![0.0; y.nrows()]);
-        for (j, column) in y.columns().into_iter().enumerate() {
-            col.iter_mut().zip(column).for_each(|(c, v)| *c = *v);
-            self.model.rhs(t, &col, &mut d);
-            out.column_mut(j).iter_mut().zip(&d).for_each(|(o, v)| *o = *v);
-        }
-        Ok(out.into_pyarray(py))
+        self.map_columns(py, y, |m, a, b| m.rhs(t, a, b))
     }
 
     /// The energy at time t of each column of `y` (shape (n_state, k)).
@@ -318,23 +305,18 @@ fn raise_shape(expected: usize, got: usize) -> PyErr {
     })
 }
 
-/// Set by the signal check when Python has a pending KeyboardInterrupt: runs stop at their
-/// next sample.
-struct Interrupt<'a> {
-    flag: &'a AtomicBool,
-}
-
-/// Records every accepted step (t, then the state), stopping when interrupted.
+/// Records every accepted step (t, then the state), stopping at the next sample once
+/// `interrupted` is set (a pending KeyboardInterrupt).
 struct Rows<'a> {
     rows: Vec<f64>,
-    interrupt: Interrupt<'a>,
+    interrupted: &'a AtomicBool,
 }
 
 impl Observer for Rows<'_> {
     fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         self.rows.push(sample.t);
         self.rows.extend_from_slice(sample.y);
-        if self.interrupt.flag.load(Ordering::Relaxed) {
+        if self.interrupted.load(Ordering::Relaxed) {
             return Flow::Break(pendula::observe::Stop::Enough);
         }
         Flow::Continue(())
@@ -477,7 +459,7 @@ fn solve<'py>(
     // Fixed steps on small states: a few milliseconds at most, run without the watcher.
     let short = !adaptive && (t_end - t0) / spec.h * y0.len() as f64 <= 4e5;
     let (rows, result) = interruptible(py, short, |flag| {
-        let mut rows = Rows { rows: Vec::new(), interrupt: Interrupt { flag } };
+        let mut rows = Rows { rows: Vec::new(), interrupted: flag };
         let stepping =
             if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
         let result = model.solve_fastest(method, &y0, &stepping, &mut rows, None, &Pause::NEVER);
