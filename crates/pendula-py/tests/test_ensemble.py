@@ -73,8 +73,10 @@ def _work():
 def test_the_gil_is_released():
     # Two Python threads, each a one-thread ensemble, against the same two run one after
     # the other: about 2× on two cores when the GIL is released, 1× when it is held.
+    # Runs of about half a second each, so that thread start-up and the callers' 20 ms
+    # signal checks are small beside them (at 0.15 s a run, one CI run measured 1.32).
     y0s = _work()
-    run = lambda: pendula.ensemble("double", y0s, steps=1500, dt=0.001, threads=1)  # noqa: E731
+    run = lambda: pendula.ensemble("double", y0s, steps=6000, dt=0.001, threads=1)  # noqa: E731
     run()
     ratios = []
     for _ in range(3):
