@@ -9,7 +9,8 @@ It measures, on the benchmark specification's double pendulum (../shared/bench/S
 - W2: `pendula.solve(..., method="dop853", rtol=atol=1e-10)` against scipy's
   `solve_ivp(method="DOP853")` at the same tolerances on the same right-hand side (the
   specification's canonical expression, in plain Python as scipy users write it), and
-  heyoka.py's `taylor_adaptive` (build/JIT and propagation separately) when it is installed;
+  heyoka.py's `taylor_adaptive` (build/JIT and propagation separately) when it is installed,
+  also at matching accuracy: both over a ladder of tolerances, compared at equal errors;
 - the per-call overhead of `pendula.solve` on a 10-step run;
 - W3: `pendula.ensemble` on the 256 × 256 grid against `pendula sweep` (the release CLI)
   computing the same bytes.
@@ -86,15 +87,44 @@ def w2(runs):
     # The first build compiles with LLVM; later identical builds hit heyoka's cache.
     tb, ta = timed(lambda: hy.taylor_adaptive(sys_, Y0, tol=1e-10), 1)
 
-    def propagate():
+    def propagate(ta):
         ta.time = 0.0
         ta.state[:] = Y0
         ta.propagate_until(10.0)
         return ta.state.copy()
 
-    tprop, state = timed(propagate, runs)
+    tprop, state = timed(lambda: propagate(ta), runs)
     err = np.max(np.abs(state - W2_REF))
     print(f"| heyoka.py taylor_adaptive (tol 1e-10) | build/JIT (first, in this process) {tb * 1e3:.0f} ms, propagation {tprop * 1e3:.3f} ms | - | {err:.1e} | {tp / tprop:.2f} (propagation) |")
+
+    # At matching accuracy: each program's time against its error at 10 s over a ladder of
+    # tolerances, and the two curves compared at the same errors (log-log interpolation).
+    def curve(points):
+        points = sorted(points)  # by error
+        return np.log10([e for e, _ in points]), np.log10([t for _, t in points])
+
+    ours, theirs = [], []
+    print("\n| tolerance | pendula dop853: error, time | heyoka: error, propagation, build |")
+    print("|---|---|---|")
+    for tol in (1e-6, 1e-8, 1e-10, 1e-12, 1e-14):
+        t1, sol = timed(lambda: pendula.solve("double", (0, 10), method="dop853", rtol=tol, atol=tol), runs)
+        e1 = np.max(np.abs(sol.y[:, -1] - W2_REF))
+        tb, ta = timed(lambda: hy.taylor_adaptive(sys_, Y0, tol=tol), 1)
+        t2, state = timed(lambda: propagate(ta), runs)
+        e2 = np.max(np.abs(state - W2_REF))
+        ours.append((e1, t1))
+        theirs.append((e2, t2))
+        print(f"| {tol:.0e} | {e1:.1e}, {t1 * 1e3:.3f} ms | {e2:.1e}, {t2 * 1e3:.3f} ms, {tb * 1e3:.0f} ms |")
+    (ex, et), (hx, ht) = curve(ours), curve(theirs)
+    print("\n| error at 10 s | pendula dop853 | heyoka propagation | pendula/heyoka |")
+    print("|---|---|---|---|")
+    for target in (1e-6, 1e-8, 1e-10, 1e-12):
+        lt = math.log10(target)
+        if ex[0] <= lt <= ex[-1] and hx[0] <= lt <= hx[-1]:
+            a, b = 10 ** np.interp(lt, ex, et), 10 ** np.interp(lt, hx, ht)
+            print(f"| {target:.0e} | {a * 1e3:.3f} ms | {b * 1e3:.3f} ms | {a / b:.2f} |")
+        else:
+            print(f"| {target:.0e} | outside one program's range | | |")
 
 
 def overhead(runs):

@@ -7,12 +7,13 @@
 //! (`pendula.errors`), chosen here by the error's kind: bad input is a `ValueError` subclass
 //! that names the value and what is allowed, a failed run an `IntegrationError` with the time.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pendula::checkpoint::{Leg, Pause};
 use pendula::control::Tolerances;
 use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
+use pendula::events::{EndAtEvent, EventLocator, EventSpec};
 use pendula::integrator::{self, Method, Scheme};
 use pendula::model::{CATALOGUE, DynModel, EnsemblePath, ensemble_path};
 use pendula::observe::{Flow, Observer, Sample};
@@ -305,23 +306,67 @@ fn raise_shape(expected: usize, got: usize) -> PyErr {
     })
 }
 
-/// Records every accepted step (t, then the state), stopping at the next sample once
-/// `interrupted` is set (a pending KeyboardInterrupt).
+/// What a run keeps of every accepted step: t, then the state; with `dense`, what the
+/// continuous solution between the steps needs. It publishes the time reached (`now`, the
+/// f64's bits) for a progress bar and stops at the next step once `interrupted` is set (a
+/// pending KeyboardInterrupt).
 struct Rows<'a> {
     rows: Vec<f64>,
     interrupted: &'a AtomicBool,
+    now: &'a AtomicU64,
+    model: &'a dyn DynModel,
+    dense: Option<DenseRecord>,
+}
+
+/// The continuous solution of a run, step by step: dy/dt at every state (the cubic Hermite
+/// interpolant's data, which every method has), and the method's own dense output (its
+/// steps' t₀, h and coefficients) when it gives one at every step.
+struct DenseRecord {
+    /// dy/dt at each state, row after row.
+    f: Vec<f64>,
+    /// (t₀, h) of each step's dense output, s.
+    steps: Vec<f64>,
+    /// Each step's coefficients, `terms` rows of the state's length.
+    coefficients: Vec<f64>,
+    terms: usize,
+    /// Whether every step so far had the method's dense output.
+    complete: bool,
+    buf: Vec<f64>,
 }
 
 impl Observer for Rows<'_> {
     fn observe(&mut self, sample: &Sample<'_>) -> Flow {
         self.rows.push(sample.t);
         self.rows.extend_from_slice(sample.y);
+        if let Some(d) = &mut self.dense {
+            self.model.rhs(sample.t, sample.y, &mut d.buf);
+            d.f.extend_from_slice(&d.buf);
+            if sample.step > 0 {
+                match &sample.dense {
+                    Some(step) if d.complete => {
+                        let c = step.coefficients();
+                        d.terms = c.len() / sample.y.len();
+                        d.steps.extend_from_slice(&[step.t0, step.h]);
+                        d.coefficients.extend_from_slice(c);
+                    }
+                    _ => d.complete = false,
+                }
+            }
+        }
+        self.now.store(sample.t.to_bits(), Ordering::Relaxed);
         if self.interrupted.load(Ordering::Relaxed) {
             return Flow::Break(pendula::observe::Stop::Enough);
         }
         Flow::Continue(())
     }
+
+    fn wants_dense(&self) -> bool {
+        self.dense.is_some()
+    }
 }
+
+/// Called with the GIL every 20 ms while a long run goes on (a progress bar's update).
+type Tick<'a> = &'a dyn Fn(Python<'_>) -> PyResult<()>;
 
 /// Runs `f` with the GIL released. Unless `short`, on a worker thread, while this (the
 /// calling) thread checks Python's signal handlers every 20 ms (they run only in the main
@@ -331,6 +376,17 @@ impl Observer for Rows<'_> {
 fn interruptible<T: Send>(
     py: Python<'_>,
     short: bool,
+    f: impl FnOnce(&AtomicBool) -> T + Send,
+) -> PyResult<T> {
+    interruptible_with(py, short, None, f)
+}
+
+/// [`interruptible`], calling `tick`, if given, at each check (a progress bar's update); an
+/// exception it raises stops the run as a Ctrl-C does.
+fn interruptible_with<T: Send>(
+    py: Python<'_>,
+    short: bool,
+    tick: Option<Tick<'_>>,
     f: impl FnOnce(&AtomicBool) -> T + Send,
 ) -> PyResult<T> {
     let flag = AtomicBool::new(false);
@@ -355,7 +411,7 @@ fn interruptible<T: Send>(
                 Ok(out) => return (out, pending),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                     if pending.is_none()
-                        && let Err(e) = py.check_signals()
+                        && let Err(e) = py.check_signals().and_then(|()| tick.map_or(Ok(()), |t| t(py)))
                     {
                         flag.store(true, Ordering::Relaxed);
                         pending = Some(e);
@@ -375,11 +431,19 @@ fn interruptible<T: Send>(
 
 /// One run: `method` (a catalogue name) on `system` from `y0` over [t0, t_end], fixed steps
 /// `dt` or, for an embedded pair, adaptive steps with `rtol`, `atol` (default 1e-6 each, as
-/// the CLI) from a first step `dt`. Returns a
-/// dict: `t` (k,), `states` (k, n_state), `nfev`, `steps`, `rejected`, `method`, and
-/// `error` (None, or (class, message, t)) — a failed run keeps the steps it took.
+/// the CLI) from a first step `dt`. `events` are the CLI's `--event` specs (`flip`,
+/// `zero:NAME`, `section:NAME=VALUE[+|-]`), located by the library; with `stop_on_event`
+/// the first ends the run, at the event. With `dense`, the continuous solution is kept.
+/// `progress`, if given, is called with the time reached, s, about every 20 ms.
+///
+/// Returns a dict: `t` (k,), `states` (k, n_state), `nfev`, `steps`, `rejected`, `method`,
+/// `events` ([(name, t, state)]), `stopped` (the terminal event's name or None), with
+/// `dense`: `f` (k, n_state: dy/dt at each state) and, when the method gave its own dense
+/// output at every step, `dense_steps` (k − 1, 2: t₀ and h) and `dense_coefficients`
+/// (k − 1, terms, n_state); and `error` (None, or (exception, t)) — a failed run keeps the
+/// steps it took.
 #[pyfunction]
-#[pyo3(signature = (system, method, t0, t_end, y0, dt=None, rtol=None, atol=None))]
+#[pyo3(signature = (system, method, t0, t_end, y0, dt=None, rtol=None, atol=None, dense=false, events=Vec::new(), stop_on_event=false, progress=None))]
 #[allow(clippy::too_many_arguments)] // the run's description, as Python passes it
 fn solve<'py>(
     py: Python<'py>,
@@ -391,9 +455,27 @@ fn solve<'py>(
     dt: Option<f64>,
     rtol: Option<f64>,
     atol: Option<f64>,
+    dense: bool,
+    events: Vec<String>,
+    stop_on_event: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
     system.check_dim(&y0)?;
+    for (i, e) in events.iter().enumerate() {
+        if events[..i].contains(e) {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("invalid event {e:?}: it is given twice; give each event once"),
+            ));
+        }
+    }
+    let specs = events
+        .iter()
+        .map(|e| EventSpec::parse(e, &*system.model, stop_on_event))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| to_py(py, &e))?;
     for (name, v) in [("t0", t0), ("t_end", t_end)] {
         if !v.is_finite() {
             return Err(raise(
@@ -456,16 +538,43 @@ fn solve<'py>(
     }
     let spec = RunSpec { t0, h: dt.unwrap_or(1e-3), end: End::Time(t_end) };
     let model = &*system.model;
-    // Fixed steps on small states: a few milliseconds at most, run without the watcher.
-    let short = !adaptive && (t_end - t0) / spec.h * y0.len() as f64 <= 4e5;
-    let (rows, result) = interruptible(py, short, |flag| {
-        let mut rows = Rows { rows: Vec::new(), interrupted: flag };
-        let stepping =
-            if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
-        let result = model.solve_fastest(method, &y0, &stepping, &mut rows, None, &Pause::NEVER);
-        (rows.rows, result)
-    })?;
     let n = y0.len();
+    // Fixed steps on small states: a few milliseconds at most, run without the watcher
+    // (and so without a progress bar).
+    let short = !adaptive && progress.is_none() && (t_end - t0) / spec.h * n as f64 <= 4e5;
+    let now = AtomicU64::new(t0.to_bits());
+    let tick = |_: Python<'_>| -> PyResult<()> {
+        match &progress {
+            Some(p) => p.call1((f64::from_bits(now.load(Ordering::Relaxed)),)).map(|_| ()),
+            None => Ok(()),
+        }
+    };
+    let watch_events = !specs.is_empty();
+    let (rows, found, stopped, result) =
+        interruptible_with(py, short, progress.as_ref().map(|_| &tick as Tick<'_>), |flag| {
+            let record = dense.then(|| DenseRecord {
+                f: Vec::new(),
+                steps: Vec::new(),
+                coefficients: Vec::new(),
+                terms: 0,
+                complete: true,
+                buf: vec![0.0; n],
+            });
+            let rows = Rows { rows: Vec::new(), interrupted: flag, now: &now, model, dense: record };
+            let mut chain = EndAtEvent { events: EventLocator::new(model, specs), inner: rows };
+            let stepping = if adaptive {
+                Stepping::Adaptive { t_end, h0: dt, tol: &tol }
+            } else {
+                Stepping::Fixed(spec)
+            };
+            // Without events the locator is left out: one call per step less.
+            let observer: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
+            let result = model.solve_fastest(method, &y0, &stepping, observer, None, &Pause::NEVER);
+            let stopped = chain.events.stopped_at().map(|e| e.name.clone());
+            let Rows { rows, dense, .. } = chain.inner;
+            ((rows, dense), chain.events.found, stopped, result)
+        })?;
+    let (rows, record) = rows;
     let k = rows.len() / (n + 1);
     let t: Vec<f64> = rows.chunks(n + 1).map(|r| r[0]).collect();
     let states: Vec<f64> = rows.chunks(n + 1).flat_map(|r| r[1..].iter().copied()).collect();
@@ -477,6 +586,28 @@ fn solve<'py>(
     )?;
     out.set_item("method", method.name)?;
     out.set_item("adaptive", adaptive)?;
+    let found: Vec<(String, f64, Vec<f64>)> = found.into_iter().map(|e| (e.name, e.t, e.state)).collect();
+    out.set_item("events", found)?;
+    out.set_item("stopped", stopped)?;
+    if let Some(d) = record {
+        out.set_item(
+            "f",
+            numpy::ndarray::Array2::from_shape_vec((k, n), d.f).expect("k rows").into_pyarray(py),
+        )?;
+        let s = d.steps.len() / 2;
+        if d.complete && s > 0 && s + 1 == k {
+            out.set_item(
+                "dense_steps",
+                numpy::ndarray::Array2::from_shape_vec((s, 2), d.steps).expect("s rows").into_pyarray(py),
+            )?;
+            out.set_item(
+                "dense_coefficients",
+                numpy::ndarray::Array3::from_shape_vec((s, d.terms, n), d.coefficients)
+                    .expect("s steps")
+                    .into_pyarray(py),
+            )?;
+        }
+    }
     match result {
         Ok(Leg::Done(report)) => {
             out.set_item("nfev", report.rhs_evals)?;

@@ -59,6 +59,12 @@ impl<'a> DenseStep<'a> {
         DenseStep { t0, h, coefficients }
     }
 
+    /// The coefficients r₀, r₁, … one row of the state's length after the other (a
+    /// caller that keeps the continuous solution past the step, such as Python's `sol`).
+    pub fn coefficients(&self) -> &'a [f64] {
+        self.coefficients
+    }
+
     /// The state at time t (within the step for the method's accuracy), into `out`.
     pub fn at(&self, t: f64, out: &mut [f64]) {
         let n = out.len();

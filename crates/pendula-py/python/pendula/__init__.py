@@ -11,13 +11,15 @@ pendulum is dimensionless. Every computation releases the GIL.
 
 from __future__ import annotations
 
+import html
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from . import _core
+from .dense import DenseOutput, Progress, locate
 from .errors import (
     IntegrationError,
     InvalidValueError,
@@ -35,9 +37,12 @@ __all__ = [
     "catalogue",
     "System",
     "Solution",
+    "DenseOutput",
     "solve",
     "ensemble",
     "EnsembleResult",
+    "MethodConvergence",
+    "MethodWork",
     "PendulaError",
     "UnknownNameError",
     "InvalidValueError",
@@ -274,25 +279,53 @@ def auto_method(system: System) -> tuple[str, str]:
 
 
 class Solution:
-    """A run, in scipy's shape: ``t`` (k,), ``y`` (n_state, k), ``nfev``, ``status``,
-    ``message``, ``success``; plus ``states`` (k, n_state; the same memory as ``y``),
-    ``names``, ``energy`` (J), ``energy_error`` (relative to the system's energy scale),
-    ``method``, ``steps``, ``rejected``."""
+    """A run, in scipy's shape: ``t`` (k,), ``y`` (n_state, k), ``sol`` (the continuous
+    solution, with ``dense_output=True``), ``t_events`` / ``y_events`` (with ``events``),
+    ``nfev``, ``status`` (0: reached the end, 1: a terminal event, -1: failed), ``message``,
+    ``success``; plus ``states`` (k, n_state; the same memory as ``y``), ``names``,
+    ``energy`` (J), ``energy_error`` (relative to the system's energy scale), ``method``,
+    ``steps``, ``rejected``."""
 
-    def __init__(self, system: System, raw: Mapping[str, Any], method_note: str | None = None):
+    def __init__(
+        self,
+        system: System,
+        *,
+        t: np.ndarray,
+        states: np.ndarray,
+        method: str,
+        method_note: str | None = None,
+        adaptive: bool = False,
+        nfev: int | None = None,
+        steps: int = 0,
+        rejected: int | None = None,
+        status: int = 0,
+        message: str = "the run reached the end of the interval",
+        sol: DenseOutput | None = None,
+        t_events: list[np.ndarray] | None = None,
+        y_events: list[np.ndarray] | None = None,
+        event_names: list[str] | None = None,
+    ):
         self.system = system
-        self.t: np.ndarray = raw["t"]
-        self.states: np.ndarray = raw["states"]
-        self.method: str = raw["method"]
+        self.t: np.ndarray = t
+        self.states: np.ndarray = states
+        self.method = method
         self.method_note = method_note
-        self.adaptive: bool = raw["adaptive"]
-        self.nfev = raw["nfev"]
-        self.steps = raw["steps"]
-        self.rejected = raw["rejected"]
-        error = raw["error"]
-        self.status = 0 if error is None else -1
-        self.message = "the run reached the end of the interval" if error is None else str(error[0])
-        self.success = error is None
+        self.adaptive = adaptive
+        self.nfev = nfev
+        self.steps = steps
+        self.rejected = rejected
+        self.status = status
+        self.message = message
+        self.sol = sol
+        self.t_events = t_events
+        self.y_events = y_events
+        #: The events' names, in the order of ``t_events`` (the spec, or the callable's name).
+        self.event_names = event_names
+
+    @property
+    def success(self) -> bool:
+        """Whether the run reached its end or a terminal event (status ≥ 0)."""
+        return self.status >= 0
 
     @property
     def y(self) -> np.ndarray:
@@ -305,7 +338,7 @@ class Solution:
 
     @property
     def energy(self) -> np.ndarray:
-        """E(t) = T + V at every step, J."""
+        """E(t) = T + V at every sample, J."""
         return self.system.energy(self.y) if len(self.t) else np.empty(0)
 
     @property
@@ -358,6 +391,9 @@ class Solution:
             ("t", f"{self.t[0]:g} … {self.t[-1]:g}" if len(self.t) else "-"),
             ("status", self.message),
         ]
+        if self.t_events is not None:
+            for name, te in zip(self.event_names, self.t_events):
+                rows.append((f"event {html.escape(name)}", f"{len(te)} (first at {te[0]:g})" if len(te) else "0"))
         body = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
         return f"<table>{body}</table>"
 
@@ -365,23 +401,24 @@ class Solution:
         return f"<Solution {self.system.name} {self.method}: {len(self.t)} samples, {self.message}>"
 
     def __reduce__(self):
-        raw = {
-            "t": self.t,
-            "states": self.states,
-            "method": self.method,
-            "adaptive": self.adaptive,
-            "nfev": self.nfev,
-            "steps": self.steps,
-            "rejected": self.rejected,
-            "error": None if self.success else (self.message, None),
+        fields = {
+            k: getattr(self, k)
+            for k in (
+                "t", "states", "method", "method_note", "adaptive", "nfev", "steps", "rejected",
+                "status", "message", "sol", "t_events", "y_events", "event_names",
+            )
         }
-        return (_solution_from_pickle, (PICKLE_VERSION, self.system, raw, self.method_note))
+        return (_solution_from_pickle, (PICKLE_VERSION, self.system, fields))
 
 
-def _solution_from_pickle(version, system, raw, note):
+def _solution_from_pickle(version, system, fields):
     if version != PICKLE_VERSION:
         raise PendulaError(f"a pickled Solution of version {version}; this pendula reads version {PICKLE_VERSION}")
-    return Solution(system, raw, note)
+    return Solution(system, **fields)
+
+
+def _event_name(g: Any) -> str:
+    return str(getattr(g, "__name__", None) or repr(g))
 
 
 def solve(
@@ -393,13 +430,33 @@ def solve(
     dt: float | None = None,
     rtol: float | None = None,
     atol: float | None = None,
+    t_eval: Any = None,
+    dense_output: bool = False,
+    events: Any = None,
+    stop_on_event: bool = False,
+    progress: bool | Callable[[float], None] = False,
 ) -> Solution:
     """Integrates ``system`` over ``t_span = (t0, t_end)`` (s) from ``y0`` (default: the
     system's initial state) with ``method`` (a name from ``catalogue().methods``, or
     ``"auto"``: see :func:`auto_method`), fixed steps ``dt`` (s; default 1e-3, as the CLI)
     or, for an embedded pair (dopri5, dop853), adaptive steps with ``rtol``, ``atol``
-    (default 1e-6 each, as the CLI; ``dt`` is then the first step to try). Every accepted
-    step is recorded.
+    (default 1e-6 each, as the CLI; ``dt`` is then the first step to try).
+
+    The solution holds every accepted step, or with ``t_eval`` (increasing times in
+    ``t_span``) the states at those times, from the continuous solution. ``dense_output=True``
+    keeps that continuous solution as ``sol``: the method's own dense output where it has
+    one (dop853: order 7, dopri5: order 4), else the cubic Hermite interpolant of each step.
+
+    ``events``: the CLI's event specs — ``"flip"`` (an angle passes ±π, once),
+    ``"zero:NAME"``, ``"section:NAME=VALUE"`` (a trailing ``+``/``-`` keeps rising or
+    falling crossings) — located by the library exactly as ``pendula simulate --event``,
+    and with ``stop_on_event=True`` the first ends the run; or scipy-style callables
+    ``g(t, y)`` with optional ``terminal`` and ``direction`` attributes, located on the
+    continuous solution. ``t_events[i]`` (times, s) and ``y_events[i]`` (states) follow the
+    order of ``events``.
+
+    ``progress=True`` shows a bar (tqdm's, in a terminal or a notebook, when tqdm is
+    installed; else a line on stderr); a callable is called with the time reached instead.
 
     Raises a ``ValueError`` subclass for bad input and :class:`IntegrationError` (with the
     time and the partial solution) when the run fails.
@@ -418,13 +475,98 @@ def solve(
         if method == "dop853":
             rtol = 1e-10 if rtol is None else rtol
             atol = 1e-10 if atol is None else atol
-    raw = _core.solve(system._core, str(method), t0, t_end, list(map(float, y0)), dt, rtol, atol)
-    solution = Solution(system, raw, note)
-    if raw["error"] is not None:
-        error, t = raw["error"]
-        error.t = t
-        error.solution = solution
-        raise error
+    if events is None:
+        event_list: list[Any] = []
+    elif isinstance(events, str) or callable(events):
+        event_list = [events]
+    else:
+        event_list = list(events)
+    for e in event_list:
+        if not (isinstance(e, str) or callable(e)):
+            raise InvalidValueError(f"invalid event {e!r}: a spec such as 'flip' or 'section:theta1=0+', or a callable g(t, y)")
+    specs = [e for e in event_list if isinstance(e, str)]
+    callables = [e for e in event_list if not isinstance(e, str)]
+    if t_eval is not None:
+        t_eval = np.asarray(t_eval, dtype=np.float64).reshape(-1)
+        lo, hi = min(t0, t_end), max(t0, t_end)
+        outside = ~np.isfinite(t_eval) | (t_eval < lo) | (t_eval > hi)
+        if outside.any():
+            raise InvalidValueError(f"invalid t_eval value {t_eval[np.argmax(outside)]}: times within t_span [{t0}, {t_end}] s")
+        if np.any(np.diff(t_eval) <= 0):
+            raise InvalidValueError("invalid t_eval: the times must be increasing")
+    bar = None
+    if progress is True:
+        bar = Progress(t0, t_end, unit="" if system.dimensionless else "s")
+    elif callable(progress):
+        bar = progress
+    elif progress is not False:
+        raise InvalidValueError(f"invalid value {progress!r} for `progress`: True, False or a callable of t")
+    dense = dense_output or t_eval is not None or bool(callables)
+    try:
+        raw = _core.solve(
+            system._core, str(method), t0, t_end, list(map(float, y0)), dt, rtol, atol,
+            dense, specs, bool(stop_on_event), bar,
+        )
+    except BaseException:
+        if isinstance(bar, Progress):
+            bar.close(None)
+        raise
+    t, states = raw["t"], raw["states"]
+    # The bar's last word is where the run ended (a short run may never have been ticked).
+    if isinstance(bar, Progress):
+        bar.close(float(t[-1]) if len(t) else None)
+    elif bar is not None and len(t):
+        bar(float(t[-1]))
+    sol = None
+    if dense and len(t):
+        coefficients = raw.get("dense_coefficients")
+        order = 3 if coefficients is None else {"dop853": 7, "dopri5": 4}.get(raw["method"], 3)
+        sol = DenseOutput(t, states, raw["f"], raw.get("dense_steps"), coefficients, order)
+    status, message = 0, "the run reached the end of the interval"
+    if raw["stopped"] is not None:
+        status, message = 1, f"a terminal event ({raw['stopped']}) ended the run at t = {t[-1]:g}"
+    found: dict[int, list[tuple[float, np.ndarray]]] = {i: [] for i in range(len(event_list))}
+    for name, te, ye in raw["events"]:
+        found[event_list.index(name)].append((te, np.asarray(ye)))
+    # Callables, on the continuous solution; the first terminal one ends the run there.
+    for e in callables:
+        i = event_list.index(e)
+        found[i] = locate(e, sol, t, states)
+        if getattr(e, "terminal", False) and found[i] and found[i][0][0] < t[-1]:
+            te, ye = found[i][0]
+            keep = t < te
+            t = np.append(t[keep], te)
+            states = np.vstack([states[keep], ye[None, :]])
+            status, message = 1, f"a terminal event ({_event_name(e)}) ended the run at t = {te:g}"
+    if status == 1:
+        # Events after the run's end did not happen.
+        for i in found:
+            found[i] = [(te, ye) for te, ye in found[i] if te <= t[-1]]
+    t_events = y_events = names = None
+    if event_list:
+        names = [e if isinstance(e, str) else _event_name(e) for e in event_list]
+        t_events = [np.array([te for te, _ in found[i]]) for i in range(len(event_list))]
+        y_events = [
+            np.array([ye for _, ye in found[i]]).reshape(-1, len(y0)) for i in range(len(event_list))
+        ]
+    if t_eval is not None and sol is not None:
+        t = t_eval[t_eval <= t[-1]]
+        states = np.ascontiguousarray(sol(t).T) if len(t) else np.empty((0, len(y0)))
+    if not dense_output:
+        sol = None
+    error = raw["error"]
+    if error is not None:
+        status, message = -1, str(error[0])
+    solution = Solution(
+        system, t=t, states=states, method=raw["method"], method_note=note, adaptive=raw["adaptive"],
+        nfev=raw["nfev"], steps=raw["steps"], rejected=raw["rejected"], status=status, message=message,
+        sol=sol, t_events=t_events, y_events=y_events, event_names=names,
+    )
+    if error is not None:
+        exc, t_fail = error
+        exc.t = t_fail
+        exc.solution = solution
+        raise exc
     return solution
 
 

@@ -1,6 +1,6 @@
 """Type stubs of the extension module `pendula._core` (see `crates/pendula-py/src/lib.rs`)."""
 
-from typing import Any, Optional
+from typing import Callable, Any, Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -39,6 +39,10 @@ def solve(
     dt: Optional[float] = None,
     rtol: Optional[float] = None,
     atol: Optional[float] = None,
+    dense: bool = False,
+    events: list[str] = ...,
+    stop_on_event: bool = False,
+    progress: Optional[Callable[[float], None]] = None,
 ) -> dict[str, Any]: ...
 def ensemble(
     system: CoreSystem,
@@ -51,3 +55,4 @@ def ensemble(
     until_flip: bool,
     threads: Optional[int] = None,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
+
