@@ -22,8 +22,10 @@ use pendula::{End, Error, RunSpec, Stepping};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+mod animate;
+
 /// The package's exception `class` (in `pendula.errors`) raised with `message`.
-fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
+pub(crate) fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
     match py.import("pendula.errors").and_then(|m| m.getattr(class)) {
         Ok(cls) => PyErr::from_value(
             cls.call1((message,)).unwrap_or_else(|e| e.into_value(py).into_bound(py).into_any()),
@@ -809,6 +811,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -169,6 +169,11 @@ class System:
         return self._core.name
 
     @property
+    def info(self) -> SystemInfo:
+        """The system's catalogue entry: parameters and state with units and domains."""
+        return catalogue().system(self.name)
+
+    @property
     def params(self) -> dict[str, float]:
         """Every parameter and initial-state value by name (SI units)."""
         return dict(self._core.values())
@@ -381,6 +386,15 @@ class Solution:
         ax.legend()
         ax.set_title(f"{self.system.name}, {self.method}")
         return ax
+
+    def animate(self, *, fps: int = 30, speed: float = 1.0, size: tuple[int, int] = (480, 480)):
+        """The run as an animated GIF (an :class:`~pendula.animation.Animation`, shown inline
+        in Jupyter; ``.save("run.gif")``), drawn by pendula's own animation code: one frame
+        every ``speed``/``fps`` s of simulated time, rods, bobs, a fading trail, the time and
+        the relative energy error on a log gauge. Systems with angles only."""
+        from .animation import animate
+
+        return animate(self, fps=fps, speed=speed, size=size)
 
     def _repr_html_(self) -> str:
         rows = [

@@ -56,3 +56,16 @@ def ensemble(
     threads: Optional[int] = None,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
 
+# `Solution.animate()` (`crates/pendula-py/src/animate.rs`).
+
+def animation_gif(
+    title: str,
+    lengths: list[float],
+    t: npt.NDArray[np.float64],
+    angles: npt.NDArray[np.float64],
+    energy_error: npt.NDArray[np.float64],
+    labels: list[str],
+    fps: int,
+    width: int,
+    height: int,
+) -> bytes: ...
