@@ -7,7 +7,7 @@
 //! (`pendula.errors`), chosen here by the error's kind: bad input is a `ValueError` subclass
 //! that names the value and what is allowed, a failed run an `IntegrationError` with the time.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pendula::checkpoint::{Leg, Pause};
@@ -309,15 +309,50 @@ fn raise_shape(expected: usize, got: usize) -> PyErr {
 }
 
 /// What a run keeps of every accepted step: t, then the state; with `dense`, what the
-/// continuous solution between the steps needs. It publishes the time reached (`now`, the
-/// f64's bits) for a progress bar and stops at the next step once `interrupted` is set (a
-/// pending KeyboardInterrupt).
+/// continuous solution between the steps needs. The run goes on in the calling thread with
+/// the GIL released; about every 20 ms of wall time this observer takes the GIL back for a
+/// moment to run Python's signal handlers (a Ctrl-C) and the progress callback, and ends the
+/// run at once if either raised (`pending`). No watcher thread: a short run costs nothing
+/// extra, and a Ctrl-C is seen within 20 ms and a step.
 struct Rows<'a> {
     rows: Vec<f64>,
-    interrupted: &'a AtomicBool,
-    now: &'a AtomicU64,
     model: &'a dyn DynModel,
     dense: Option<DenseRecord>,
+    progress: Option<Py<PyAny>>,
+    /// Samples since the clock was last read, and when Python last had its turn.
+    samples: u32,
+    checked: std::time::Instant,
+    pending: Option<PyErr>,
+}
+
+impl Rows<'_> {
+    /// Python's turn, if 20 ms have passed (the clock is read every 32 samples).
+    fn python(&mut self, t: f64) -> Flow {
+        self.samples += 1;
+        if self.samples < 32 {
+            return Flow::Continue(());
+        }
+        self.samples = 0;
+        if self.checked.elapsed() < std::time::Duration::from_millis(20) {
+            return Flow::Continue(());
+        }
+        self.checked = std::time::Instant::now();
+        let progress = &self.progress;
+        let turn = Python::attach(|py| {
+            py.check_signals()?;
+            match progress {
+                Some(p) => p.call1(py, (t,)).map(|_| ()),
+                None => Ok(()),
+            }
+        });
+        match turn {
+            Ok(()) => Flow::Continue(()),
+            Err(e) => {
+                self.pending = Some(e);
+                Flow::Break(pendula::observe::Stop::Enough)
+            }
+        }
+    }
 }
 
 /// The continuous solution of a run, step by step: dy/dt at every state (the cubic Hermite
@@ -355,11 +390,7 @@ impl Observer for Rows<'_> {
                 }
             }
         }
-        self.now.store(sample.t.to_bits(), Ordering::Relaxed);
-        if self.interrupted.load(Ordering::Relaxed) {
-            return Flow::Break(pendula::observe::Stop::Enough);
-        }
-        Flow::Continue(())
+        self.python(sample.t)
     }
 
     fn wants_dense(&self) -> bool {
@@ -367,28 +398,14 @@ impl Observer for Rows<'_> {
     }
 }
 
-/// Called with the GIL every 20 ms while a long run goes on (a progress bar's update).
-type Tick<'a> = &'a dyn Fn(Python<'_>) -> PyResult<()>;
-
 /// Runs `f` with the GIL released. Unless `short`, on a worker thread, while this (the
 /// calling) thread checks Python's signal handlers every 20 ms (they run only in the main
 /// thread, with the GIL): a Ctrl-C sets the flag `f` is given, which the run polls, and the
 /// KeyboardInterrupt is raised once the run has returned. A `short` run (well under the 0.2 s
 /// a Ctrl-C may wait) runs here, without the thread's cost.
-fn interruptible<T: Send>(
+pub(crate) fn interruptible<T: Send>(
     py: Python<'_>,
     short: bool,
-    f: impl FnOnce(&AtomicBool) -> T + Send,
-) -> PyResult<T> {
-    interruptible_with(py, short, None, f)
-}
-
-/// [`interruptible`], calling `tick`, if given, at each check (a progress bar's update); an
-/// exception it raises stops the run as a Ctrl-C does.
-fn interruptible_with<T: Send>(
-    py: Python<'_>,
-    short: bool,
-    tick: Option<Tick<'_>>,
     f: impl FnOnce(&AtomicBool) -> T + Send,
 ) -> PyResult<T> {
     let flag = AtomicBool::new(false);
@@ -413,7 +430,7 @@ fn interruptible_with<T: Send>(
                 Ok(out) => return (out, pending),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                     if pending.is_none()
-                        && let Err(e) = py.check_signals().and_then(|()| tick.map_or(Ok(()), |t| t(py)))
+                        && let Err(e) = py.check_signals()
                     {
                         flag.store(true, Ordering::Relaxed);
                         pending = Some(e);
@@ -541,42 +558,41 @@ fn solve<'py>(
     let spec = RunSpec { t0, h: dt.unwrap_or(1e-3), end: End::Time(t_end) };
     let model = &*system.model;
     let n = y0.len();
-    // Fixed steps on small states: a few milliseconds at most, run without the watcher
-    // (and so without a progress bar).
-    let short = !adaptive && progress.is_none() && (t_end - t0) / spec.h * n as f64 <= 4e5;
-    let now = AtomicU64::new(t0.to_bits());
-    let tick = |_: Python<'_>| -> PyResult<()> {
-        match &progress {
-            Some(p) => p.call1((f64::from_bits(now.load(Ordering::Relaxed)),)).map(|_| ()),
-            None => Ok(()),
-        }
-    };
     let watch_events = !specs.is_empty();
-    let (rows, found, stopped, result) =
-        interruptible_with(py, short, progress.as_ref().map(|_| &tick as Tick<'_>), |flag| {
-            let record = dense.then(|| DenseRecord {
-                f: Vec::new(),
-                steps: Vec::new(),
-                coefficients: Vec::new(),
-                terms: 0,
-                complete: true,
-                buf: vec![0.0; n],
-            });
-            let rows = Rows { rows: Vec::new(), interrupted: flag, now: &now, model, dense: record };
-            let mut chain = EndAtEvent { events: EventLocator::new(model, specs), inner: rows };
-            let stepping = if adaptive {
-                Stepping::Adaptive { t_end, h0: dt, tol: &tol }
-            } else {
-                Stepping::Fixed(spec)
-            };
-            // Without events the locator is left out: one call per step less.
-            let observer: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
-            let result = model.solve_fastest(method, &y0, &stepping, observer, None, &Pause::NEVER);
-            let stopped = chain.events.stopped_at().map(|e| e.name.clone());
-            let Rows { rows, dense, .. } = chain.inner;
-            ((rows, dense), chain.events.found, stopped, result)
-        })?;
-    let (rows, record) = rows;
+    let progress = progress.map(Bound::unbind);
+    let (rows, found, stopped, result) = py.detach(|| {
+        let record = dense.then(|| DenseRecord {
+            f: Vec::new(),
+            steps: Vec::new(),
+            coefficients: Vec::new(),
+            terms: 0,
+            complete: true,
+            buf: vec![0.0; n],
+        });
+        let rows = Rows {
+            rows: Vec::new(),
+            model,
+            dense: record,
+            progress,
+            samples: 0,
+            checked: std::time::Instant::now(),
+            pending: None,
+        };
+        let mut chain = EndAtEvent { events: EventLocator::new(model, specs), inner: rows };
+        let stepping =
+            if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
+        // Without events the locator is left out: one call per step less.
+        let observer: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
+        let result = model.solve_fastest(method, &y0, &stepping, observer, None, &Pause::NEVER);
+        let stopped = chain.events.stopped_at().map(|e| e.name.clone());
+        let Rows { rows, dense, pending, .. } = chain.inner;
+        ((rows, dense, pending), chain.events.found, stopped, result)
+    });
+    let (rows, record, pending) = rows;
+    // A Ctrl-C (KeyboardInterrupt) or an exception of the progress callback ended the run.
+    if let Some(e) = pending {
+        return Err(e);
+    }
     let k = rows.len() / (n + 1);
     let t: Vec<f64> = rows.chunks(n + 1).map(|r| r[0]).collect();
     let states: Vec<f64> = rows.chunks(n + 1).flat_map(|r| r[1..].iter().copied()).collect();

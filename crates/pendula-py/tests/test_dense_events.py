@@ -3,6 +3,9 @@ forms, scipy at a tighter tolerance, and the CLI's event locator."""
 
 import math
 import pickle
+import signal
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -138,3 +141,34 @@ def test_a_solution_with_its_dense_output_pickles():
     t = np.linspace(0, 3, 17)
     assert np.array_equal(back.sol(t), sol.sol(t)) and np.array_equal(back.y, sol.y)
     assert np.array_equal(back.t_events[0], sol.t_events[0]) and back.event_names == sol.event_names
+
+
+@pytest.mark.parametrize("method", ["dop853", "rk4", "gauss-legendre-4"])
+def test_ctrl_c_interrupts_a_long_solve_quickly(method):
+    # Runs of minutes; SIGINT after 0.3 s must end each within 0.2 s (the run takes the GIL
+    # back about every 20 ms to let Python's handlers run).
+    sent = []
+
+    def interrupt():
+        time.sleep(0.3)
+        sent.append(time.perf_counter())
+        signal.raise_signal(signal.SIGINT)
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Thread(target=interrupt).start()
+        with pytest.raises(KeyboardInterrupt):
+            pendula.solve("double", (0, 1e6), method=method, dt=1e-3, rtol=None if method != "dop853" else 1e-12,
+                          atol=None if method != "dop853" else 1e-12)
+        latency = time.perf_counter() - sent[0]
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert latency < 0.2, latency
+
+
+def test_an_exception_in_the_progress_callback_ends_the_run():
+    def fail(t):
+        raise RuntimeError(f"stop at {t}")
+
+    with pytest.raises(RuntimeError, match="stop at"):
+        pendula.solve("double", (0, 1e4), method="rk4", progress=fail)
