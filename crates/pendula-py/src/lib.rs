@@ -23,6 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 mod animate;
+mod study;
 
 /// The package's exception `class` (in `pendula.errors`) raised with `message`.
 pub(crate) fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
@@ -827,6 +828,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    study::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -8,13 +8,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use pendula::analysis::strobe::stroboscopic as scalar_strobe;
-use pendula::ensemble::driven::{DrivenMember, StroboSpec, stroboscopic};
-use pendula::integrator::explicit_rk::RK4;
-use pendula::system::Model;
-use pendula::system::driven::DrivenPendulum;
+use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
 use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_unit};
-use rayon::prelude::*;
 use serde_json::json;
 
 use crate::args::{Defaults, PresetArg, SystemArg, ThreadsArg};
@@ -162,14 +157,6 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         })?,
         None => dim / 2,
     };
-    let periods: Vec<(f64, u64)> = all
-        .iter()
-        .map(|v| {
-            let w = v.get("drive_frequency");
-            let period = 2.0 * std::f64::consts::PI / w;
-            (period, (transient / period).ceil() as u64)
-        })
-        .collect();
     if let Some(v) = all.iter().find(|v| v.get("drive_frequency") <= 0.0) {
         bail!(
             "invalid drive_frequency {}: a stroboscopic diagram needs a drive (set drive_frequency > 0)",
@@ -182,50 +169,12 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let data: Vec<f64> =
-        pool.install(|| -> Result<Vec<f64>> {
-            if simd {
-                let members: Vec<DrivenMember> = all
-                    .iter()
-                    .zip(&periods)
-                    .map(|(v, (_, transient))| DrivenMember {
-                        pendulum: DrivenPendulum::from_values(v),
-                        state: [v.initial_state()[0], v.initial_state()[1]],
-                        transient_periods: *transient,
-                    })
-                    .collect();
-                let mut data = vec![0.0; members.len() * samples * 2];
-                stroboscopic(&members, &StroboSpec { steps_per_period: m, samples }, &mut data).map_err(
-                    |e| match e {
-                        pendula::Error::NonFiniteMember { member, t } => anyhow::Error::new(
-                            pendula::Error::NonFinite { t },
-                        )
-                        .context(format!("{} = {}", axis.name, pendula::error::Short(axis.centre(member)))),
-                        other => anyhow::Error::new(other),
-                    },
-                )?;
-                Ok(data)
-            } else {
-                let rows: Vec<Vec<f64>> = all
-                    .par_iter()
-                    .zip(&periods)
-                    .map(|(v, (period, transient))| {
-                        let model = v.build();
-                        let mut rows =
-                            scalar_strobe(&*model, &RK4, v.initial_state(), *period, m, *transient, samples)?;
-                        for row in rows.chunks_exact_mut(dim) {
-                            for (x, q) in row.iter_mut().zip(state) {
-                                if q.is_angle() {
-                                    *x = pendula::system::wrap_angle(*x);
-                                }
-                            }
-                        }
-                        Ok(rows)
-                    })
-                    .collect::<Result<_, pendula::Error>>()?;
-                Ok(rows.concat())
-            }
-        })?;
+    let spec = OrbitDiagramSpec { transient, samples, steps_per_period: m };
+    let data = pool.install(|| orbit_diagram(&all, &spec)).map_err(|e| match e {
+        pendula::Error::NonFiniteMember { member, t } => anyhow::Error::new(pendula::Error::NonFinite { t })
+            .context(format!("{} = {}", axis.name, pendula::error::Short(axis.centre(member)))),
+        other => anyhow::Error::new(other),
+    })?;
     let wall = begin.elapsed().as_secs_f64();
 
     let mut header = vec![axis.name.as_str(), "sample"];

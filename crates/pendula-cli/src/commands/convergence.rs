@@ -10,7 +10,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use pendula::analysis::{self, OrderEstimate, default_ladder, estimate_order};
+use pendula::analysis::{self, OrderEstimate, estimate_order};
 use pendula::integrator::Method;
 use pendula::system::Values;
 use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
@@ -63,21 +63,18 @@ impl MethodConvergence {
     }
 }
 
-/// Most rungs of a default ladder.
-pub const LEVELS: usize = 14;
-
 /// Which steps each method runs.
 #[derive(Debug, Clone)]
 pub enum Ladder {
     /// The same steps for every method (given on the command line).
     Given(Vec<f64>),
-    /// Each method's default ladder ([`default_ladder`]).
+    /// Each method's default ladder ([`analysis::method_ladder`]).
     PerMethod,
 }
 
 /// The horizon on defaults: the system's `study_periods` times its time scale.
 pub fn default_t_end(values: &Values) -> f64 {
-    values.info().study_periods * values.build().time_scale()
+    analysis::study_horizon(values)
 }
 
 /// What convergence runs on without a system named (its methods and steps are its own).
@@ -149,14 +146,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
 pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) -> Vec<f64> {
     match ladder {
         Ladder::Given(hs) => hs.clone(),
-        Ladder::PerMethod => {
-            // Tao's maps are defined only for ω h ≤ 1: the ladder starts inside that.
-            let limit = match method.scheme {
-                pendula::integrator::Scheme::Tao(t) => 1.0 / t.binding,
-                _ => f64::INFINITY,
-            };
-            default_ladder(values.build().time_scale(), method.order, t_end, LEVELS, limit)
-        }
+        Ladder::PerMethod => analysis::method_ladder(method, values.build().time_scale(), t_end),
     }
 }
 
@@ -172,7 +162,7 @@ pub fn study_orders(
     let model = values.build();
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
         .map_err(|e| study::reference_failed(e, t_end))?;
-    let scale = reference.state.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+    let scale = reference.scale();
     let bar = study::progress(methods.len() as u64, "convergence");
     let mut results = Vec::new();
     let mut first_failure = None;

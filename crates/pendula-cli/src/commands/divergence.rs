@@ -92,8 +92,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
     let summary = args.common.summary.open()?;
     let model = values.build();
-    // About 2000 samples, whatever the step.
-    let every = (schedule.steps / 2000).max(1);
+    let every = pendula::analysis::divergence::sample_every(schedule.steps);
     let d = divergence(&*model, method, values.initial_state(), index, delta, &spec, every)?;
     let fit = growth_rate(&d, saturation);
 

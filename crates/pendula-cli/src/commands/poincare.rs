@@ -159,7 +159,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     let other = 1 - section;
     let (q_name, p_name) = (info.state[other].name, format!("p{}", &info.state[other].name[5..]));
     let mut rows = Vec::new();
-    let mut worst_energy: f64 = 0.0;
+    let worst_energy = pendula::analysis::poincare::max_energy_error(&*model, &orbits, energy);
     let mut fig = Figure::new(
         format!(
             "{system}: Poincaré section {} = {} rad (rising), E = {}, {count} orbits ({})",
@@ -176,9 +176,6 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     for (k, orbit) in orbits.iter().enumerate() {
         let mut points = Vec::with_capacity(orbit.crossings.len());
         for (t, z) in orbit.t.iter().zip(&orbit.crossings) {
-            let mut y = [0.0; 4];
-            model.to_velocities(z, &mut y);
-            worst_energy = worst_energy.max((model.energy(*t, &y) - energy).abs());
             let (q, p) = (pendula::system::wrap_angle(z[other]), z[2 + other]);
             rows.push(vec![k.to_string(), num(*t), num(q), num(p), num(z[section]), num(z[2 + section])]);
             points.push((q, p));

@@ -60,10 +60,7 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
             pendula::control::MIN_RTOL
         );
     }
-    // The ends exactly as given; the levels between them geometric.
-    Ok((0..levels)
-        .map(|i| if i + 1 == levels { lo } else { hi * (lo / hi).powf(i as f64 / (levels - 1) as f64) })
-        .collect())
+    Ok(analysis::tolerance_ladder(hi, lo, levels))
 }
 
 /// What work-precision runs on without a system named (its methods and steps are its own).

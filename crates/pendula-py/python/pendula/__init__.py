@@ -30,6 +30,25 @@ from .errors import (
     UnknownNameError,
     UnsuitableMethodError,
 )
+from .study import (
+    BifurcationResult,
+    ConvergenceResult,
+    DivergenceResult,
+    FractalResult,
+    LyapunovResult,
+    MethodConvergence,
+    MethodWork,
+    PoincareResult,
+    WorkPrecisionResult,
+    bifurcation,
+    convergence,
+    divergence,
+    fractal,
+    lyapunov,
+    poincare,
+    work_precision,
+)
+
 
 __version__ = _core.__version__
 
@@ -41,8 +60,22 @@ __all__ = [
     "solve",
     "ensemble",
     "EnsembleResult",
+    "lyapunov",
+    "LyapunovResult",
+    "poincare",
+    "PoincareResult",
+    "fractal",
+    "FractalResult",
+    "bifurcation",
+    "BifurcationResult",
+    "convergence",
+    "ConvergenceResult",
     "MethodConvergence",
+    "work_precision",
+    "WorkPrecisionResult",
     "MethodWork",
+    "divergence",
+    "DivergenceResult",
     "PendulaError",
     "UnknownNameError",
     "InvalidValueError",

@@ -56,6 +56,70 @@ def ensemble(
     threads: Optional[int] = None,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
 
+# The studies (`crates/pendula-py/src/study.rs`), wrapped by `pendula.study`.
+
+def lyapunov(
+    system: CoreSystem,
+    method: str,
+    dt: float,
+    t_end: float,
+    transient: float,
+    renormalise: float,
+    spectrum: bool,
+) -> dict[str, Any]: ...
+def poincare(
+    system: CoreSystem,
+    energy: float,
+    count: int,
+    section: str,
+    value: float,
+    t_end: float,
+    method: str,
+    dt: Optional[float],
+    tol: float,
+) -> dict[str, Any]: ...
+def fractal(
+    system: CoreSystem,
+    theta1: tuple[float, float, int],
+    theta2: tuple[float, float, int],
+    t_max: float,
+    method: str,
+    dt: float,
+    tolerance: float,
+    threads: Optional[int] = None,
+) -> dict[str, Any]: ...
+def bifurcation(
+    system: CoreSystem,
+    param: tuple[str, float, float, int],
+    transient: float,
+    samples: int,
+    steps_per_period: int,
+    threads: Optional[int] = None,
+) -> dict[str, Any]: ...
+def convergence(
+    system: CoreSystem,
+    methods: Optional[list[str]] = None,
+    dts: Optional[list[float]] = None,
+    t_end: Optional[float] = None,
+) -> dict[str, Any]: ...
+def work_precision(
+    system: CoreSystem,
+    tols: list[float],
+    methods: Optional[list[str]] = None,
+    dts: Optional[list[float]] = None,
+    t_end: Optional[float] = None,
+) -> dict[str, Any]: ...
+def divergence(
+    system: CoreSystem,
+    method: str,
+    dt: float,
+    t_end: float,
+    delta: float,
+    variable: Optional[str],
+    saturation: float,
+) -> dict[str, Any]: ...
+def tolerance_ladder(loosest: float, tightest: float, levels: int) -> list[float]: ...
+
 # `Solution.animate()` (`crates/pendula-py/src/animate.rs`).
 
 def animation_gif(

@@ -1,8 +1,8 @@
 //! Global error against step size, and the order fitted to it.
 
 use crate::control::Tolerances;
-use crate::integrator::Method;
 use crate::integrator::embedded::DOP853;
+use crate::integrator::{Method, Scheme};
 use crate::model::DynModel;
 use crate::observe::Ignore;
 use crate::{End, Error, RunSpec};
@@ -39,6 +39,14 @@ pub struct Reference {
     pub state: Vec<f64>,
     /// How it was obtained, for tables and reports.
     pub source: &'static str,
+}
+
+impl Reference {
+    /// The size errors against it are judged by: the largest |component| of the state, at
+    /// least 1 ([`estimate_order`]'s `scale`).
+    pub fn scale(&self) -> f64 {
+        self.state.iter().fold(1.0_f64, |m, v| m.max(v.abs()))
+    }
 }
 
 /// Tolerance of the DOP853 reference runs.
@@ -282,4 +290,38 @@ pub fn default_ladder(time_scale: f64, order: u32, t_end: f64, levels: usize, h_
     };
     let start = (time_scale / divisor).min(t_end / 4.0).min(h_limit);
     (0..levels).map(|k| start / 2f64.powi(k as i32)).take_while(|h| t_end / h <= max_steps).collect()
+}
+
+/// Most rungs of a method's default ladder ([`method_ladder`]).
+pub const DEFAULT_LEVELS: usize = 14;
+
+/// The horizon of an accuracy study on `values`' system: its `study_periods`
+/// small-oscillation periods (its time scale), short of chaos's growth, s.
+pub fn study_horizon(values: &crate::system::Values) -> f64 {
+    values.info().study_periods * values.build().time_scale()
+}
+
+/// The default steps of `method` on a model of time scale `time_scale` (s) to `t_end` (s):
+/// [`default_ladder`] of [`DEFAULT_LEVELS`] rungs at the method's order, starting inside the
+/// method's own limit (Tao's maps are defined only for ω h ≤ 1).
+pub fn method_ladder(method: &Method, time_scale: f64, t_end: f64) -> Vec<f64> {
+    let limit = match method.scheme {
+        Scheme::Tao(t) => 1.0 / t.binding,
+        _ => f64::INFINITY,
+    };
+    default_ladder(time_scale, method.order, t_end, DEFAULT_LEVELS, limit)
+}
+
+/// `levels` tolerances from `loosest` to `tightest`, geometrically spaced, both ends exactly
+/// as given: the tolerances a work-precision study runs an adaptive pair at.
+pub fn tolerance_ladder(loosest: f64, tightest: f64, levels: usize) -> Vec<f64> {
+    (0..levels)
+        .map(|i| {
+            if i + 1 == levels {
+                tightest
+            } else {
+                loosest * (tightest / loosest).powf(i as f64 / (levels - 1) as f64)
+            }
+        })
+        .collect()
 }

@@ -17,6 +17,15 @@ pub struct Divergence {
     pub distance: Vec<f64>,
 }
 
+/// About how many samples of a run [`sample_every`] keeps.
+pub const SAMPLES: u64 = 2000;
+
+/// The thinning that keeps about [`SAMPLES`] samples of a run of `steps` steps, whatever
+/// the step: every (steps / 2000)-th step, at least every step.
+pub fn sample_every(steps: u64) -> u64 {
+    (steps / SAMPLES).max(1)
+}
+
 /// Runs `model` from `y0` and from `y0` with `delta` added to state variable `index`, with the
 /// same method and steps, keeping every `every`-th step.
 ///

@@ -12,9 +12,9 @@ pub mod stability;
 pub mod strobe;
 
 pub use convergence::{
-    OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference, SATURATION, WorkPoint, convergence_errors,
-    default_ladder, estimate_order, fit_order, reference_state, roundoff_floor, work_precision,
-    work_precision_adaptive,
+    DEFAULT_LEVELS, OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference, SATURATION, WorkPoint,
+    convergence_errors, default_ladder, estimate_order, fit_order, method_ladder, reference_state,
+    roundoff_floor, study_horizon, tolerance_ladder, work_precision, work_precision_adaptive,
 };
 pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
 pub use energy::{

@@ -207,3 +207,17 @@ pub fn poincare(
         })
         .collect()
 }
+
+/// The largest |H − `energy`| over every crossing of `orbits` (J): how well the runs kept
+/// the energy surface they started on.
+pub fn max_energy_error(model: &dyn DynModel, orbits: &[Orbit], energy: f64) -> f64 {
+    let mut y = [0.0; 4];
+    orbits
+        .iter()
+        .flat_map(|o| o.t.iter().zip(&o.crossings))
+        .map(|(t, z)| {
+            model.to_velocities(z, &mut y);
+            (model.energy(*t, &y) - energy).abs()
+        })
+        .fold(0.0, f64::max)
+}

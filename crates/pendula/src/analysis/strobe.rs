@@ -5,9 +5,14 @@
 
 use std::ops::ControlFlow;
 
+use rayon::prelude::*;
+
+use crate::ensemble::driven::{self, DrivenMember, StroboSpec};
 use crate::integrator::Method;
+use crate::integrator::explicit_rk::RK4;
 use crate::model::DynModel;
 use crate::observe::{Flow, Observer, Sample};
+use crate::system::{Model, Values, driven::DrivenPendulum, wrap_angle};
 use crate::{End, Error, RunSpec};
 
 /// Keeps the state every `every` steps once `from` steps have passed.
@@ -47,4 +52,100 @@ pub fn stroboscopic(
     let mut strobe = Strobe { every, from: every * (transient_periods + 1), rows: Vec::new() };
     model.solve(method, y0, &spec, &mut strobe)?;
     Ok(strobe.rows)
+}
+
+/// What an orbit diagram ([`orbit_diagram`]) samples for each parameter value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbitDiagramSpec {
+    /// Time discarded before the first sample, s, rounded up to whole drive periods.
+    pub transient: f64,
+    /// Samples (drive periods) per value.
+    pub samples: usize,
+    /// RK4 steps per drive period (≥ 4).
+    pub steps_per_period: u32,
+}
+
+/// A stroboscopic orbit diagram: for each of `values` (one driven system, its parameters
+/// varied along the diagram's axis), the state once per drive period 2π/`drive_frequency`
+/// for `spec.samples` periods after ⌈transient / period⌉ periods, by RK4 at
+/// `spec.steps_per_period` steps a period, from the values' initial state. Rows of the state
+/// (values × samples rows), angles wrapped into [−π, π). The damped, driven pendulum runs on
+/// the ensemble engine's SIMD lanes ([`driven::stroboscopic`]), any other driven system the
+/// scalar RK4 per value; both in parallel on rayon's current pool, with results that do not
+/// depend on its size.
+///
+/// # Errors
+/// [`Error::InvalidValue`] for a drive frequency that is not > 0, fewer than 4 steps a
+/// period or a transient that is not finite and ≥ 0; on the lanes
+/// [`Error::NonFiniteMember`] (member = index into `values`), else the runs' errors.
+pub fn orbit_diagram(values: &[Values], spec: &OrbitDiagramSpec) -> Result<Vec<f64>, Error> {
+    if !(spec.transient.is_finite() && spec.transient >= 0.0) {
+        return Err(Error::InvalidValue {
+            name: "transient".into(),
+            value: spec.transient,
+            allowed: "must be finite and >= 0",
+        });
+    }
+    if spec.steps_per_period < 4 {
+        return Err(Error::InvalidValue {
+            name: "steps_per_period".into(),
+            value: f64::from(spec.steps_per_period),
+            allowed: "must be at least 4",
+        });
+    }
+    let mut periods = Vec::with_capacity(values.len());
+    for v in values {
+        let w = v.get("drive_frequency");
+        if !(w.is_finite() && w > 0.0) {
+            return Err(Error::InvalidValue {
+                name: "drive_frequency".into(),
+                value: w,
+                allowed: "a stroboscopic diagram needs a drive: must be finite and > 0",
+            });
+        }
+        let period = 2.0 * std::f64::consts::PI / w;
+        periods.push((period, (spec.transient / period).ceil() as u64));
+    }
+    let Some(info) = values.first().map(Values::info) else { return Ok(Vec::new()) };
+    if driven::runs(info) {
+        let members: Vec<DrivenMember> = values
+            .iter()
+            .zip(&periods)
+            .map(|(v, (_, transient))| DrivenMember {
+                pendulum: DrivenPendulum::from_values(v),
+                state: [v.initial_state()[0], v.initial_state()[1]],
+                transient_periods: *transient,
+            })
+            .collect();
+        let mut data = vec![0.0; members.len() * spec.samples * 2];
+        let strobe = StroboSpec { steps_per_period: spec.steps_per_period, samples: spec.samples };
+        driven::stroboscopic(&members, &strobe, &mut data)?;
+        return Ok(data);
+    }
+    let state = info.state;
+    let rows: Vec<Vec<f64>> = values
+        .par_iter()
+        .zip(&periods)
+        .map(|(v, (period, transient))| {
+            let model = v.build();
+            let mut rows = stroboscopic(
+                &*model,
+                &RK4,
+                v.initial_state(),
+                *period,
+                spec.steps_per_period,
+                *transient,
+                spec.samples,
+            )?;
+            for row in rows.chunks_exact_mut(state.len()) {
+                for (x, q) in row.iter_mut().zip(state) {
+                    if q.is_angle() {
+                        *x = wrap_angle(*x);
+                    }
+                }
+            }
+            Ok(rows)
+        })
+        .collect::<Result<_, Error>>()?;
+    Ok(rows.concat())
 }

@@ -1,0 +1,893 @@
+"""pendula's studies — the analyses the CLI's study commands run, on the same library, with
+the same defaults: a call with defaults computes what ``pendula <command>`` computes with
+defaults.
+
+=====================  ==============================  ===========================
+function               CLI command                     result
+=====================  ==============================  ===========================
+:func:`lyapunov`       ``pendula lyapunov``            :class:`LyapunovResult`
+:func:`poincare`       ``pendula poincare``            :class:`PoincareResult`
+:func:`fractal`        ``pendula fractal``             :class:`FractalResult`
+:func:`bifurcation`    ``pendula bifurcation``         :class:`BifurcationResult`
+:func:`convergence`    ``pendula convergence``         :class:`ConvergenceResult`
+:func:`work_precision` ``pendula work-precision``      :class:`WorkPrecisionResult`
+:func:`divergence`     ``pendula divergence``          :class:`DivergenceResult`
+=====================  ==============================  ===========================
+
+Each result is a frozen dataclass of numpy arrays and numbers (the numbers of the CLI's
+``--summary`` JSON, by the same names where they fit), with ``plot(ax=None)`` (matplotlib,
+imported only then) and an HTML summary for notebooks; it pickles as plain data.
+Units are SI: times in s, rates in 1/s, energies in J, angles in rad.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import _core
+from .errors import InvalidValueError, UnknownNameError
+
+if TYPE_CHECKING:
+    from . import System
+
+__all__ = [
+    "lyapunov",
+    "poincare",
+    "fractal",
+    "bifurcation",
+    "convergence",
+    "work_precision",
+    "divergence",
+    "LyapunovResult",
+    "PoincareResult",
+    "FractalResult",
+    "BifurcationResult",
+    "ConvergenceResult",
+    "MethodConvergence",
+    "WorkPrecisionResult",
+    "MethodWork",
+    "DivergenceResult",
+]
+
+
+def _system(system: "System | str") -> "System":
+    from . import _system as as_system
+
+    return as_system(system)
+
+
+def _float(name: str, value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InvalidValueError(f"invalid value {value!r} for `{name}`: a number") from None
+
+
+def _int(name: str, value: Any, lo: int, hi: int, what: str) -> int:
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise InvalidValueError(f"invalid value {value!r} for `{name}`: a whole number of {what}, {lo} to {hi}") from None
+    if not lo <= n <= hi:
+        raise InvalidValueError(f"invalid value {n} for `{name}`: {lo} to {hi} {what}")
+    return n
+
+
+def _threads(threads: Any) -> Optional[int]:
+    return None if threads is None else _int("threads", threads, 1, 1024, "threads")
+
+
+def _axis(name: str, axis: Any) -> Tuple[float, float, int]:
+    try:
+        lo, hi, n = axis
+    except (TypeError, ValueError):
+        raise InvalidValueError(f"invalid {name} {axis!r}: (lo, hi, n), n cell centres between lo and hi") from None
+    return _float(name, lo), _float(name, hi), _int(name, n, 1, 1 << 20, "cells")
+
+
+def _names(methods: Any) -> Optional[list]:
+    if methods is None:
+        return None
+    if isinstance(methods, str):
+        return [m.strip() for m in methods.split(",")]
+    return [str(m) for m in methods]
+
+
+def _steps(name: str, values: Any) -> Optional[list]:
+    if values is None:
+        return None
+    a = np.asarray(values, dtype=np.float64).reshape(-1)
+    return [float(v) for v in a]
+
+
+def _table(title: str, rows: Sequence[Tuple[str, Any]]) -> str:
+    body = "".join(f"<tr><th style='text-align:left'>{k}</th><td>{v}</td></tr>" for k, v in rows)
+    return f"<table><caption>{title}</caption>{body}</table>"
+
+
+def _axes(ax):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots()
+    return ax
+
+
+def _time_unit(system: "System") -> str:
+    return "" if system.dimensionless else " (s)"
+
+
+# Lyapunov exponents ------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class LyapunovResult:
+    """The largest Lyapunov exponent (or the spectrum) by Benettin's method.
+
+    ``lambda_max`` and its ``uncertainty`` (standard error of 10 batch means) in 1/s;
+    ``spectrum`` and ``spectrum_uncertainty`` (all exponents, largest first, 1/s) when asked
+    for, else None; the running estimate: ``t`` (s after the transient, one per
+    re-orthonormalisation) and ``running`` (len(t), k) in 1/s.
+    """
+
+    system: "System"
+    method: str
+    dt: float
+    t_end: float
+    transient: float
+    renormalise: float
+    lambda_max: float
+    uncertainty: float
+    spectrum: Optional[np.ndarray]
+    spectrum_uncertainty: Optional[np.ndarray]
+    t: np.ndarray
+    running: np.ndarray
+
+    def plot(self, ax=None):
+        """The running estimates against time, with λ₁ ± its uncertainty dashed; returns
+        the axes (matplotlib needed)."""
+        ax = _axes(ax)
+        for j in range(self.running.shape[1]):
+            ax.plot(self.t, self.running[:, j], label=f"λ{j + 1}")
+        for v in (self.lambda_max - self.uncertainty, self.lambda_max + self.uncertainty):
+            ax.axhline(v, linestyle="--", color="C0", linewidth=0.8)
+        ax.set_xlabel("time after the transient" + _time_unit(self.system))
+        ax.set_ylabel("exponent" + ("" if self.system.dimensionless else " (1/s)"))
+        ax.set_title(f"{self.system.name}: running Lyapunov estimate ({self.method}, dt = {self.dt:g})")
+        ax.legend()
+        return ax
+
+    def _repr_html_(self) -> str:
+        rows = [
+            ("system", self.system.name),
+            ("method", f"{self.method}, dt = {self.dt:g} s"),
+            ("t_end", f"{self.t_end:g} s after a {self.transient:g} s transient"),
+            ("λ_max", f"{self.lambda_max:.5f} ± {self.uncertainty:.5f} 1/s"),
+        ]
+        if self.spectrum is not None:
+            rows += [(f"λ{j + 1}", f"{v:.5f} ± {e:.5f} 1/s") for j, (v, e) in enumerate(zip(self.spectrum, self.spectrum_uncertainty))]
+        return _table("Lyapunov exponents", rows)
+
+
+def lyapunov(
+    system: "System | str" = "double",
+    *,
+    method: str = "rk4",
+    dt: float = 1e-3,
+    t_end: float = 200.0,
+    transient: float = 10.0,
+    renormalise: float = 0.5,
+    spectrum: bool = False,
+) -> LyapunovResult:
+    """The largest Lyapunov exponent of ``system`` (a System or a catalogue name) from its
+    initial state, or the whole ``spectrum``, as ``pendula lyapunov``: the state and its
+    tangent vectors by ``method`` (an explicit Runge–Kutta method, an embedded pair at fixed
+    steps, or Gauss–Legendre) at steps ``dt`` (s), a ``transient`` (s) discarded, then
+    averaged over ``t_end`` (s) with re-orthonormalisation every ``renormalise`` (s; at least
+    20 of them).
+    """
+    system = _system(system)
+    raw = _core.lyapunov(
+        system._core,
+        str(method),
+        _float("dt", dt),
+        _float("t_end", t_end),
+        _float("transient", transient),
+        _float("renormalise", renormalise),
+        bool(spectrum),
+    )
+    running = raw["running"]
+    return LyapunovResult(
+        system=system,
+        method=raw["method"],
+        dt=float(dt),
+        t_end=float(t_end),
+        transient=float(transient),
+        renormalise=float(renormalise),
+        lambda_max=float(raw["exponents"][0]),
+        uncertainty=float(raw["uncertainty"][0]),
+        spectrum=raw["exponents"] if spectrum else None,
+        spectrum_uncertainty=raw["uncertainty"] if spectrum else None,
+        t=np.ascontiguousarray(running[:, 0]),
+        running=np.ascontiguousarray(running[:, 1:]),
+    )
+
+
+# Poincaré sections -------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class PoincareResult:
+    """A Poincaré section: every crossing of ``section`` = ``value`` (rad, rising) by
+    ``count`` orbits of energy ``energy`` (J), in orbit order.
+
+    Per crossing: ``orbit`` (its orbit's index), ``t`` (s), ``states`` (canonical
+    (q₁, q₂, p₁, p₂): rad and kg m²/s), ``q`` and ``p`` (the other angle, wrapped into
+    [−π, π), and its momentum: the section's picture). ``initial`` (count, 4): each orbit's
+    start (positions, velocities). ``crossings``, ``crossings_per_orbit`` and
+    ``max_energy_error`` (J, the largest |H − E| at a crossing) as the CLI's summary.
+    """
+
+    system: "System"
+    method: str
+    energy: float
+    count: int
+    section: str
+    value: float
+    t_end: float
+    other: str
+    orbit: np.ndarray
+    t: np.ndarray
+    states: np.ndarray
+    q: np.ndarray
+    p: np.ndarray
+    initial: np.ndarray
+    crossings_per_orbit: Tuple[int, ...]
+    max_energy_error: float
+
+    @property
+    def crossings(self) -> int:
+        """Crossings of all orbits together."""
+        return len(self.t)
+
+    def orbits(self) -> list:
+        """Per orbit, (t, states) of its crossings."""
+        return [(self.t[self.orbit == k], self.states[self.orbit == k]) for k in range(self.count)]
+
+    def plot(self, ax=None):
+        """The section: the other angle against its momentum, one colour per orbit;
+        returns the axes (matplotlib needed)."""
+        ax = _axes(ax)
+        ax.scatter(self.q, self.p, c=self.orbit, s=2, cmap="tab20")
+        ax.set_xlabel(f"{self.other} (rad)")
+        ax.set_ylabel(f"p{self.other[5:]}")
+        ax.set_title(f"{self.system.name}: {self.section} = {self.value:g} (rising), E = {self.energy:g}")
+        return ax
+
+    def _repr_html_(self) -> str:
+        return _table(
+            "Poincaré section",
+            [
+                ("system", self.system.name),
+                ("method", self.method),
+                ("section", f"{self.section} = {self.value:g} rad, rising"),
+                ("energy", f"{self.energy:g} J"),
+                ("orbits", f"{self.count}, each {self.t_end:g} s"),
+                ("crossings", self.crossings),
+                ("max |H − E|", f"{self.max_energy_error:.2e} J"),
+            ],
+        )
+
+
+def poincare(
+    system: "System | str" = "double",
+    *,
+    energy: float = -15.0,
+    count: int = 30,
+    section: str = "theta1",
+    value: float = 0.0,
+    t_end: float = 300.0,
+    method: str = "dop853",
+    dt: Optional[float] = None,
+    tol: float = 1e-10,
+) -> PoincareResult:
+    """A Poincaré section of a conservative two-degree-of-freedom ``system`` (the double
+    pendulum, or the chain with links=2), as ``pendula poincare``: ``count`` orbits
+    (1 to 10000) started on the surface H = ``energy`` (J) on the section (R2 sequence),
+    each followed for ``t_end`` (s), their crossings of ``section`` = ``value`` (an angle,
+    rad, mod 2π) with that angle increasing located on the dense output. ``method`` adaptive
+    (dop853, dopri5) at rtol = atol = ``tol``, or fixed steps ``dt`` (s) for any method.
+    The system's initial-state values are not used.
+    """
+    system = _system(system)
+    raw = _core.poincare(
+        system._core,
+        _float("energy", energy),
+        _int("count", count, 1, 10_000, "orbits"),
+        str(section),
+        _float("value", value),
+        _float("t_end", t_end),
+        str(method),
+        None if dt is None else _float("dt", dt),
+        _float("tol", tol),
+    )
+    return PoincareResult(
+        system=system,
+        method=raw["method"],
+        energy=float(energy),
+        count=int(count),
+        section=str(section),
+        value=float(value),
+        t_end=float(t_end),
+        other=raw["other"],
+        orbit=raw["orbit"],
+        t=raw["t"],
+        states=raw["states"],
+        q=raw["q"],
+        p=raw["p"],
+        initial=raw["initial"],
+        crossings_per_orbit=tuple(raw["crossings_per_orbit"]),
+        max_energy_error=float(raw["max_energy_error"]),
+    )
+
+
+# The flip fractal --------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class FractalResult:
+    """The flip fractal: ``flip_time`` (n₂, n₁; θ₁ fastest, as the CLI's fractal.npy) the
+    time to the first flip from rest (s; NaN: none by ``t_max`` or forbidden by energy), the
+    same at dt/2 (``flip_time_half_step``), ``converged`` (bool, as fractal-converged.npy):
+    both agree within ``tolerance`` s. Axes ``theta1``, ``theta2`` ((lo, hi, n), rad; the
+    cell centres in ``theta1_centres``, ``theta2_centres``).
+    """
+
+    system: "System"
+    method: str
+    dt: float
+    t_max: float
+    tolerance: float
+    theta1: Tuple[float, float, int]
+    theta2: Tuple[float, float, int]
+    flip_time: np.ndarray
+    flip_time_half_step: np.ndarray
+    converged: np.ndarray
+    forbidden_by_energy: int
+    theta1_centres: np.ndarray
+    theta2_centres: np.ndarray
+
+    @property
+    def dt_check(self) -> float:
+        """The convergence check's step, s."""
+        return self.dt / 2
+
+    @property
+    def shape(self) -> Tuple[int, int]:
+        return self.flip_time.shape
+
+    @property
+    def pixels(self) -> int:
+        return self.flip_time.size
+
+    @property
+    def flipped(self) -> int:
+        """Pixels that flip before ``t_max``."""
+        return int(np.isfinite(self.flip_time).sum())
+
+    @property
+    def unconverged(self) -> int:
+        return int((~self.converged).sum())
+
+    @property
+    def unconverged_share(self) -> float:
+        return self.unconverged / self.pixels
+
+    def plot(self, ax=None):
+        """The flip times on a log colour scale (black: no flip); returns the axes
+        (matplotlib needed)."""
+        import matplotlib
+        from matplotlib.colors import LogNorm
+
+        ax = _axes(ax)
+        cmap = matplotlib.colormaps["viridis"].with_extremes(bad="black")
+        data = np.ma.masked_invalid(self.flip_time)
+        finite = self.flip_time[np.isfinite(self.flip_time)]
+        norm = LogNorm(vmin=max(finite.min(), self.dt), vmax=finite.max()) if finite.size else None
+        image = ax.imshow(
+            data,
+            origin="lower",
+            extent=(self.theta1[0], self.theta1[1], self.theta2[0], self.theta2[1]),
+            cmap=cmap,
+            norm=norm,
+            aspect="auto",
+            interpolation="nearest",
+        )
+        ax.figure.colorbar(image, ax=ax, label="time to first flip (s)")
+        ax.set_xlabel("θ₁ (rad)")
+        ax.set_ylabel("θ₂ (rad)")
+        ax.set_title(f"double pendulum: time to first flip from rest ({self.method}, dt = {self.dt:g} s)")
+        return ax
+
+    def _repr_html_(self) -> str:
+        return _table(
+            "flip fractal",
+            [
+                ("grid", f"{self.shape[1]} × {self.shape[0]} (θ₁ × θ₂)"),
+                ("method", f"{self.method}, dt = {self.dt:g} s and {self.dt_check:g} s"),
+                ("t_max", f"{self.t_max:g} s"),
+                ("flipped", self.flipped),
+                ("forbidden by energy", self.forbidden_by_energy),
+                ("unconverged", f"{self.unconverged} ({100 * self.unconverged_share:.2f}%)"),
+            ],
+        )
+
+
+def fractal(
+    system: "System | str" = "double",
+    *,
+    theta1: Tuple[float, float, int] = (-math.pi, math.pi, 512),
+    theta2: Tuple[float, float, int] = (-math.pi, math.pi, 512),
+    t_max: float = 100.0,
+    method: str = "rk4",
+    dt: float = 0.01,
+    tolerance: float = 0.01,
+    threads: Optional[int] = None,
+) -> FractalResult:
+    """The double pendulum's flip fractal, as ``pendula fractal``: released from rest at the
+    cell centres of ``theta1`` × ``theta2`` ((lo, hi, n), rad), the time to the first flip
+    (either rod past ±π) up to ``t_max`` (s), on the ensemble engine with ``method`` (rk4,
+    tao-2 or tao-4) at ``dt`` (s) and again at dt/2 for the per-pixel convergence flag
+    (agreement within ``tolerance`` s). ``system``: the double pendulum with its parameters
+    (undamped, undriven); its initial-state values are not used. All cores unless
+    ``threads``; the result does not depend on them. Ctrl-C stops it within a slice of
+    pixels.
+    """
+    system = _system(system)
+    t1, t2 = _axis("theta1", theta1), _axis("theta2", theta2)
+    raw = _core.fractal(
+        system._core,
+        t1,
+        t2,
+        _float("t_max", t_max),
+        str(method),
+        _float("dt", dt),
+        _float("tolerance", tolerance),
+        _threads(threads),
+    )
+    return FractalResult(
+        system=system,
+        method=raw["method"],
+        dt=float(dt),
+        t_max=float(t_max),
+        tolerance=float(tolerance),
+        theta1=t1,
+        theta2=t2,
+        flip_time=raw["flip_time"],
+        flip_time_half_step=raw["flip_time_half_step"],
+        converged=raw["converged"],
+        forbidden_by_energy=int(raw["forbidden"]),
+        theta1_centres=raw["theta1_centres"],
+        theta2_centres=raw["theta2_centres"],
+    )
+
+
+# Bifurcation diagrams ----------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class BifurcationResult:
+    """A stroboscopic orbit diagram: for each value of ``param`` (``values``, the cell
+    centres), ``samples`` (n, samples, n_state): the state at drive phase 0 once per drive
+    period after the transient (angles wrapped into [−π, π), rad; velocities rad/s).
+    ``variable`` is the state variable plotted; ``kernel`` the engine that ran it.
+    """
+
+    system: "System"
+    param: Tuple[str, float, float, int]
+    transient: float
+    steps_per_period: int
+    variable: str
+    names: Tuple[str, ...]
+    values: np.ndarray
+    samples: np.ndarray
+    kernel: str
+
+    @property
+    def points(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(parameter, variable) of every sample, flattened: the diagram's dots."""
+        k = self.names.index(self.variable)
+        n, s = self.samples.shape[:2]
+        return np.repeat(self.values, s), self.samples[:, :, k].reshape(n * s)
+
+    def plot(self, ax=None):
+        """The diagram: the variable at drive phase 0 against the parameter; returns the
+        axes (matplotlib needed)."""
+        ax = _axes(ax)
+        x, y = self.points
+        ax.plot(x, y, ",", color="C1")
+        ax.set_xlabel(self.param[0])
+        ax.set_ylabel(f"{self.variable} at drive phase 0")
+        ax.set_title(f"{self.system.name}: {self.samples.shape[1]} samples per value (RK4, {self.steps_per_period} steps/period)")
+        return ax
+
+    def _repr_html_(self) -> str:
+        name, lo, hi, n = self.param
+        return _table(
+            "orbit diagram",
+            [
+                ("system", self.system.name),
+                ("param", f"{name}: {n} values in [{lo:g}, {hi:g}]"),
+                ("transient", f"{self.transient:g} s"),
+                ("samples", f"{self.samples.shape[1]} per value"),
+                ("steps per period", self.steps_per_period),
+                ("kernel", self.kernel),
+            ],
+        )
+
+
+def bifurcation(
+    system: "System | str" = "driven-pendulum",
+    *,
+    param: Optional[Tuple[str, float, float, int]] = None,
+    transient: float = 1000.0,
+    samples: int = 150,
+    steps_per_period: int = 100,
+    variable: Optional[str] = None,
+    threads: Optional[int] = None,
+) -> BifurcationResult:
+    """A stroboscopic orbit diagram of a driven ``system``, as ``pendula bifurcation``:
+    ``param`` = (name, lo, hi, n) swept over n cell centres (default for the driven
+    pendulum: ("drive_amplitude", 1.0, 1.5, 800); required for other systems), the other
+    values the system's; per value, ``samples`` (1 to 10^6) states once per drive period
+    after ``transient`` (s, rounded up to whole periods), RK4 at ``steps_per_period``
+    (4 to 10^6). ``variable``: the state variable the plot shows (default: the first
+    velocity). All cores unless ``threads``; the result does not depend on them.
+    """
+    system = _system(system)
+    if param is None:
+        if system.name != "driven-pendulum":
+            raise InvalidValueError(f"give param=(name, lo, hi, n) for {system.name}: the parameter to sweep")
+        param = ("drive_amplitude", 1.0, 1.5, 800)
+    try:
+        name, lo, hi, n = param
+    except (TypeError, ValueError):
+        raise InvalidValueError(f"invalid param {param!r}: (name, lo, hi, n)") from None
+    param = (str(name), _float("param", lo), _float("param", hi), _int("param", n, 1, 1 << 24, "values"))
+    names = tuple(system.names)
+    if variable is None:
+        variable = names[len(names) // 2]
+    elif variable not in names:
+        raise UnknownNameError(f"unknown variable `{variable}` of {system.name}; valid: {', '.join(names)}")
+    raw = _core.bifurcation(
+        system._core,
+        param,
+        _float("transient", transient),
+        _int("samples", samples, 1, 1_000_000, "samples"),
+        _int("steps_per_period", steps_per_period, 4, 1_000_000, "steps"),
+        _threads(threads),
+    )
+    return BifurcationResult(
+        system=system,
+        param=param,
+        transient=float(transient),
+        steps_per_period=int(steps_per_period),
+        variable=str(variable),
+        names=names,
+        values=raw["values"],
+        samples=raw["samples"],
+        kernel=raw["kernel"],
+    )
+
+
+# Convergence orders ------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class MethodConvergence:
+    """One method's convergence: its steps ``dt`` (s) and max-norm errors ``error`` at the
+    end time; ``order`` fitted over ``fit`` = (points, h_min, h_max) in the asymptotic range,
+    or None with the ``reason``; ``failure``: why steps are missing (the library's message),
+    if any are."""
+
+    method: str
+    dt: np.ndarray
+    error: np.ndarray
+    order: Optional[float]
+    fit: Optional[Tuple[int, float, float]]
+    reason: Optional[str]
+    failure: Optional[str]
+
+    @property
+    def note(self) -> str:
+        """The fit's range or why there is no order, as the CLI's table says."""
+        if self.fit is not None:
+            points, h_min, h_max = self.fit
+            return f"fitted over {points} steps, {h_min:.4g} .. {h_max:.4g}"
+        if self.failure is None:
+            return self.reason or ""
+        return self.failure if len(self.dt) == 0 else f"{self.reason}; {self.failure}"
+
+
+@dataclass(frozen=True, eq=False)
+class ConvergenceResult:
+    """A convergence study: per method (``methods``, in order) errors against steps and the
+    fitted order; ``t_end`` (s) and the ``reference`` the errors are against. ``orders``,
+    ``dt``, ``notes``: dicts by method name, as the CLI's summary."""
+
+    system: "System"
+    t_end: float
+    reference: str
+    methods: Tuple[MethodConvergence, ...]
+
+    def __getitem__(self, method: str) -> MethodConvergence:
+        for m in self.methods:
+            if m.method == method:
+                return m
+        raise KeyError(method)
+
+    @property
+    def orders(self) -> dict:
+        return {m.method: m.order for m in self.methods}
+
+    @property
+    def dt(self) -> dict:
+        return {m.method: m.dt for m in self.methods}
+
+    @property
+    def notes(self) -> dict:
+        return {m.method: m.note for m in self.methods}
+
+    def plot(self, ax=None):
+        """Error against step on log-log axes, one line per method; returns the axes
+        (matplotlib needed)."""
+        ax = _axes(ax)
+        for m in self.methods:
+            if len(m.dt):
+                label = f"{m.method} (order {m.order:.2f})" if m.order is not None else f"{m.method} (no order)"
+                ax.loglog(m.dt, m.error, marker="o", markersize=3, label=label)
+        ax.set_xlabel("step size h" + _time_unit(self.system))
+        ax.set_ylabel("max |y(t) − y_ref(t)|")
+        ax.set_title(f"{self.system.name}: global error at t = {self.t_end:.4g}, against the {self.reference}")
+        ax.legend(fontsize="small")
+        return ax
+
+    def _repr_html_(self) -> str:
+        head = "<tr><th>method</th><th>fitted order</th><th>note</th></tr>"
+        body = "".join(
+            f"<tr><td>{m.method}</td><td>{'-' if m.order is None else f'{m.order:.3f}'}</td><td>{m.note}</td></tr>"
+            for m in self.methods
+        )
+        caption = f"{self.system.name}: error at t = {self.t_end:.4g} s against the {self.reference}"
+        return f"<table><caption>{caption}</caption>{head}{body}</table>"
+
+
+def convergence(
+    system: "System | str" = "oscillator",
+    *,
+    methods: "Sequence[str] | str | None" = None,
+    dts: Any = None,
+    t_end: Optional[float] = None,
+) -> ConvergenceResult:
+    """The order of convergence of ``methods`` (names, or a comma-separated string; default:
+    every method that applies) on ``system``, as ``pendula convergence``: the max-norm error
+    at ``t_end`` (s; default: the system's study horizon, a few small-oscillation periods)
+    against the exact solution or a dop853 reference at tolerance 1e-14, at the steps
+    ``dts`` (s; default: each method's own ladder of halved steps), and the order fitted
+    where the errors are in the asymptotic range. A method that fails at some step keeps
+    the errors of the others and says why (``failure``).
+    """
+    system = _system(system)
+    raw = _core.convergence(
+        system._core, _names(methods), _steps("dts", dts), None if t_end is None else _float("t_end", t_end)
+    )
+    return ConvergenceResult(
+        system=system,
+        t_end=float(raw["t_end"]),
+        reference=raw["reference"],
+        methods=tuple(
+            MethodConvergence(
+                method=m["method"],
+                dt=m["dt"],
+                error=m["error"],
+                order=m["order"],
+                fit=m["fit"],
+                reason=m["reason"],
+                failure=m["failure"],
+            )
+            for m in raw["methods"]
+        ),
+    )
+
+
+# Work-precision diagrams -------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class MethodWork:
+    """One method's work-precision points: ``dt`` (s; for an adaptive run the mean accepted
+    step), ``tol`` (rtol = atol of an adaptive run, NaN for fixed steps), ``error`` (max norm
+    at the end time), ``rhs_evals``, ``wall_s`` (s, median of repeated runs); ``failure``:
+    why points are missing, if any are."""
+
+    method: str
+    dt: np.ndarray
+    tol: np.ndarray
+    error: np.ndarray
+    rhs_evals: np.ndarray
+    wall_s: np.ndarray
+    failure: Optional[str]
+
+
+@dataclass(frozen=True, eq=False)
+class WorkPrecisionResult:
+    """A work-precision study: per method (``methods``) error against cost, at ``t_end``
+    (s) against the ``reference``."""
+
+    system: "System"
+    t_end: float
+    reference: str
+    methods: Tuple[MethodWork, ...]
+
+    def __getitem__(self, method: str) -> MethodWork:
+        for m in self.methods:
+            if m.method == method:
+                return m
+        raise KeyError(method)
+
+    def plot(self, ax=None, cost: str = "rhs_evals"):
+        """Error against cost (``"rhs_evals"`` or ``"wall_s"``) on log-log axes; returns the
+        axes (matplotlib needed)."""
+        if cost not in ("rhs_evals", "wall_s"):
+            raise InvalidValueError(f"invalid cost {cost!r}: 'rhs_evals' or 'wall_s'")
+        ax = _axes(ax)
+        for m in self.methods:
+            if len(m.error):
+                ax.loglog(getattr(m, cost), m.error, marker="o", markersize=3, label=m.method)
+        ax.set_xlabel("right-hand-side evaluations" if cost == "rhs_evals" else "wall time (s)")
+        ax.set_ylabel("max |y(t) − y_ref(t)|")
+        ax.set_title(f"{self.system.name}: work-precision at t = {self.t_end:.4g}, against the {self.reference}")
+        ax.legend(fontsize="small")
+        return ax
+
+    def _repr_html_(self) -> str:
+        head = "<tr><th>method</th><th>rhs evals for error ≤ 1e-6</th><th>smallest error</th><th>note</th></tr>"
+        rows = []
+        for m in self.methods:
+            reach = m.error <= 1e-6
+            best = str(int(m.rhs_evals[reach].min())) if reach.any() else "-"
+            smallest = f"{m.error.min():.3e}" if len(m.error) else "-"
+            rows.append(f"<tr><td>{m.method}</td><td>{best}</td><td>{smallest}</td><td>{m.failure or ''}</td></tr>")
+        caption = f"{self.system.name}: error at t = {self.t_end:.4g} s against the {self.reference}"
+        return f"<table><caption>{caption}</caption>{head}{''.join(rows)}</table>"
+
+
+def work_precision(
+    system: "System | str" = "pendulum",
+    *,
+    methods: "Sequence[str] | str | None" = None,
+    dts: Any = None,
+    tols: Any = None,
+    t_end: Optional[float] = None,
+) -> WorkPrecisionResult:
+    """Error against cost of ``methods`` (default: every method that applies) on
+    ``system``, as ``pendula work-precision``: fixed-step methods at the steps ``dts`` (s;
+    default: each method's own ladder), the adaptive pairs (dopri5, dop853) at the
+    tolerances ``tols`` (rtol = atol; default: 10 from 1e-3 to 1e-12, geometric), the error
+    at ``t_end`` (s; default: the system's study horizon) against the exact solution or a
+    dop853 reference. Wall times are medians of runs repeated for at least 20 ms.
+    """
+    system = _system(system)
+    tols = _core.tolerance_ladder(1e-3, 1e-12, 10) if tols is None else _steps("tols", tols)
+    raw = _core.work_precision(
+        system._core, tols, _names(methods), _steps("dts", dts), None if t_end is None else _float("t_end", t_end)
+    )
+    return WorkPrecisionResult(
+        system=system,
+        t_end=float(raw["t_end"]),
+        reference=raw["reference"],
+        methods=tuple(MethodWork(**m) for m in raw["methods"]),
+    )
+
+
+# Divergence of nearby trajectories ---------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class DivergenceResult:
+    """The distance between two runs started ``delta`` apart in ``variable``: ``t`` (s)
+    and ``distance`` (Euclidean, state units mixed) at about 2000 samples; the exponential
+    ``growth_rate`` (1/s) fitted over ``fit_window`` (s), before the distance first exceeds
+    ``saturation`` (None when too few samples lie below it)."""
+
+    system: "System"
+    method: str
+    dt: float
+    t_end: float
+    delta: float
+    variable: str
+    saturation: float
+    t: np.ndarray
+    distance: np.ndarray
+    growth_rate: Optional[float]
+    fit_window: Optional[Tuple[float, float]]
+
+    def plot(self, ax=None):
+        """The distance on a log scale against time, with the fitted line; returns the axes
+        (matplotlib needed)."""
+        ax = _axes(ax)
+        keep = self.distance > 0
+        ax.semilogy(self.t[keep], self.distance[keep], label="distance")
+        if self.growth_rate is not None:
+            t0, t1 = self.fit_window
+            window = keep & (self.t >= t0) & (self.t <= t1)
+            mean_log = np.log(self.distance[window]).mean()
+            ts = np.linspace(t0, t1, 51)
+            ax.semilogy(ts, np.exp(mean_log + self.growth_rate * (ts - 0.5 * (t0 + t1))), "--", label=f"fit: rate {self.growth_rate:.3f}")
+        ax.set_xlabel("t" + _time_unit(self.system))
+        ax.set_ylabel("distance in state space")
+        ax.set_title(f"{self.system.name}: divergence of trajectories {self.delta:g} apart in {self.variable} ({self.method})")
+        ax.legend()
+        return ax
+
+    def _repr_html_(self) -> str:
+        rate = "too few samples below saturation" if self.growth_rate is None else f"{self.growth_rate:.4f} 1/s"
+        window = "-" if self.fit_window is None else f"{self.fit_window[0]:.2f} … {self.fit_window[1]:.2f} s"
+        return _table(
+            "divergence",
+            [
+                ("system", self.system.name),
+                ("method", f"{self.method}, dt = {self.dt:g} s, to {self.t_end:g} s"),
+                ("separation", f"{self.delta:g} in {self.variable}"),
+                ("growth rate", rate),
+                ("fit window", window),
+            ],
+        )
+
+
+def divergence(
+    system: "System | str" = "double",
+    *,
+    method: str = "rk4",
+    dt: float = 1e-3,
+    t_end: float = 30.0,
+    delta: float = 1e-9,
+    variable: Optional[str] = None,
+    saturation: float = 1e-2,
+) -> DivergenceResult:
+    """The divergence of nearby trajectories, as ``pendula divergence``: ``system`` from its
+    initial state and from the same with ``delta`` added to ``variable`` (default: the first
+    state variable), both by ``method`` at steps ``dt`` (s) to ``t_end`` (s); the distance
+    at about 2000 samples and the exponential growth rate (1/s) fitted to ln(distance)
+    before it first exceeds ``saturation`` — a finite-time estimate of the largest Lyapunov
+    exponent.
+    """
+    system = _system(system)
+    raw = _core.divergence(
+        system._core,
+        str(method),
+        _float("dt", dt),
+        _float("t_end", t_end),
+        _float("delta", delta),
+        None if variable is None else str(variable),
+        _float("saturation", saturation),
+    )
+    window = raw["fit_window"]
+    return DivergenceResult(
+        system=system,
+        method=raw["method"],
+        dt=float(dt),
+        t_end=float(t_end),
+        delta=float(delta),
+        variable=raw["variable"],
+        saturation=float(saturation),
+        t=raw["t"],
+        distance=raw["distance"],
+        growth_rate=raw["growth_rate"],
+        fit_window=None if window is None else tuple(window),
+    )

@@ -1,0 +1,804 @@
+//! The studies (`pendula.lyapunov`, `poincare`, `fractal`, `bifurcation`, `convergence`,
+//! `work_precision`, `divergence`): the library's analyses with the CLI's defaults, their
+//! results as plain dicts of numbers and arrays for `pendula.study` to wrap.
+//!
+//! The arguments arrive with the defaults filled in by Python; what the library does not
+//! check itself (the CLI's own checks) is checked here, naming the Python argument. Every
+//! study runs with the GIL released. Only the fractal stops early on Ctrl-C (between slices
+//! of pixels); the others have no cancellation hook in the library, so a Ctrl-C is raised
+//! once they return.
+
+use std::sync::atomic::Ordering;
+
+use numpy::IntoPyArray;
+use numpy::ndarray::Array2;
+use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times};
+use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
+use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
+use pendula::analysis::{self, LyapunovSpec, OrderEstimate};
+use pendula::control::Tolerances;
+use pendula::ensemble::BatchMethod;
+use pendula::error::Short;
+use pendula::integrator::{self, METHODS, Method, Scheme};
+use pendula::model::DynModel;
+use pendula::system::{AsSystem, Model, double::DoublePendulum};
+use pendula::{End, Error, RunSpec};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::{CoreSystem, interruptible, raise, to_py};
+
+/// An `InvalidValueError` for `name` = `value`, with what is allowed.
+fn invalid(py: Python<'_>, name: &str, value: impl std::fmt::Display, allowed: &str) -> PyErr {
+    raise(py, "InvalidValueError", format!("invalid value {value} for `{name}`: {allowed}"))
+}
+
+/// `value` unless it is not finite and > 0.
+fn positive(py: Python<'_>, name: &str, value: f64) -> PyResult<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(py, name, Short(value), "a finite number > 0"))
+    }
+}
+
+/// The library's error, its quantities named as the Python arguments (`h` → `dt`).
+fn renamed(py: Python<'_>, e: Error, names: &[(&str, &str)]) -> PyErr {
+    match e {
+        Error::InvalidValue { name, value, allowed } => {
+            let name = names.iter().find(|(from, _)| *from == name).map_or(name, |(_, to)| (*to).to_owned());
+            to_py(py, &Error::InvalidValue { name, value, allowed })
+        }
+        other => to_py(py, &other),
+    }
+}
+
+/// A worker pool of `threads` (default: every core).
+fn pool(py: Python<'_>, threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err(invalid(py, "threads", 0, "at least 1"));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| raise(py, "PendulaError", format!("cannot start {threads} threads: {e}")))
+}
+
+fn rows<'py>(py: Python<'py>, data: Vec<f64>, cols: usize) -> Bound<'py, numpy::PyArray2<f64>> {
+    let n = data.len() / cols.max(1);
+    Array2::from_shape_vec((n, cols), data).expect("whole rows").into_pyarray(py)
+}
+
+/// The largest Lyapunov exponent (or all, `spectrum`) of `system` from its initial state,
+/// as `pendula lyapunov`. Returns `exponents`, `uncertainty` (1/s), `running` (rows of t
+/// since the transient, λ₁ … λ_k).
+#[pyfunction]
+#[pyo3(signature = (system, method, dt, t_end, transient, renormalise, spectrum))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
+pub(crate) fn lyapunov<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    method: &str,
+    dt: f64,
+    t_end: f64,
+    transient: f64,
+    renormalise: f64,
+    spectrum: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    let dt = positive(py, "dt", dt)?;
+    let t_end = positive(py, "t_end", t_end)?;
+    if !(transient.is_finite() && transient >= 0.0) {
+        return Err(invalid(py, "transient", Short(transient), "a finite time >= 0 (s)"));
+    }
+    let renormalise = positive(py, "renormalise", renormalise)?;
+    // As the CLI: the step is blamed before the interval, and the uncertainty needs blocks.
+    if dt > renormalise {
+        return Err(invalid(
+            py,
+            "dt",
+            Short(dt),
+            &format!(
+                "at most renormalise = {} s (the tangent vectors are re-orthonormalised that often, at whole steps)",
+                Short(renormalise)
+            ),
+        ));
+    }
+    if t_end / renormalise < 20.0 {
+        return Err(invalid(
+            py,
+            "t_end",
+            Short(t_end),
+            &format!(
+                "at least 20 re-orthonormalisations (every renormalise = {} s) are needed for the uncertainty",
+                Short(renormalise)
+            ),
+        ));
+    }
+    let count = if spectrum { system.values.info().state.len() } else { 1 };
+    let spec = LyapunovSpec { h: dt, transient, t_end, renormalise, count, blocks: 10 };
+    let model = &*system.model;
+    let y0 = system.values.initial_state();
+    let result = interruptible(py, false, |_| analysis::lyapunov(&AsSystem(model), method, y0, &spec))?
+        .map_err(|e| renamed(py, e, &[("h", "dt")]))?;
+    let out = PyDict::new(py);
+    out.set_item("method", method.name)?;
+    out.set_item("exponents", result.exponents.into_pyarray(py))?;
+    out.set_item("uncertainty", result.uncertainty.into_pyarray(py))?;
+    out.set_item("running", rows(py, result.running, count + 1))?;
+    Ok(out)
+}
+
+/// A Poincaré section as `pendula poincare`: `count` orbits at `energy` (J) crossing
+/// `section` = `value` (rad) rising. Adaptive (`dt` None, an embedded pair, rtol = atol =
+/// `tol`) or fixed steps `dt`. Returns per crossing `orbit`, `t`, `states` (canonical
+/// q₁, q₂, p₁, p₂), `q`, `p` (the other angle, wrapped, and its momentum); `initial`
+/// (count, 4); `max_energy_error` (J); `section_index`.
+#[pyfunction]
+#[pyo3(signature = (system, energy, count, section, value, t_end, method, dt, tol))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
+pub(crate) fn poincare<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    energy: f64,
+    count: usize,
+    section: &str,
+    value: f64,
+    t_end: f64,
+    method: &str,
+    dt: Option<f64>,
+    tol: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = &*system.model;
+    let info = system.values.info();
+    // The system first, as the CLI: a system without an energy surface has no section.
+    section_of::check_system(model).map_err(|e| to_py(py, &e))?;
+    if !energy.is_finite() {
+        return Err(invalid(py, "energy", Short(energy), "a finite energy (J)"));
+    }
+    if !(1..=10_000).contains(&count) {
+        return Err(invalid(py, "count", count, "1 to 10000 orbits"));
+    }
+    let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
+    let Some(index) = info.state.iter().position(|q| q.name == section && q.is_angle()) else {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid section `{section}`: not an angle of {}; valid: {}",
+                info.name,
+                angles.join(", ")
+            ),
+        ));
+    };
+    if !value.is_finite() {
+        return Err(invalid(py, "value", Short(value), "a finite angle (rad)"));
+    }
+    let t_end = positive(py, "t_end", t_end)?;
+    let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    let stepping = match (dt, method.scheme) {
+        (Some(h), _) => {
+            if !(h.is_finite() && h > 0.0 && h <= t_end) {
+                return Err(invalid(py, "dt", Short(h), "finite, > 0 and at most t_end"));
+            }
+            Stepping::Fixed(h)
+        }
+        (None, Scheme::Embedded(_)) => {
+            let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
+            tol.validate().map_err(|e| renamed(py, e, &[("rtol", "tol"), ("atol", "tol")]))?;
+            Stepping::Adaptive(tol)
+        }
+        (None, _) => {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("method `{}` takes fixed steps: give dt", method.name),
+            ));
+        }
+    };
+    let spec = PoincareSpec { energy, count, section: index, value, t_end };
+    let orbits = interruptible(py, false, |_| section_of::poincare(model, method, stepping, &spec))?
+        .map_err(|e| to_py(py, &e))?;
+    let worst = section_of::max_energy_error(model, &orbits, energy);
+    let other = 1 - index;
+    let (mut orbit, mut t, mut states, mut q, mut p, mut initial) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (k, o) in orbits.iter().enumerate() {
+        initial.extend_from_slice(&o.initial);
+        for (tc, z) in o.t.iter().zip(&o.crossings) {
+            orbit.push(k as i64);
+            t.push(*tc);
+            states.extend_from_slice(z);
+            q.push(pendula::system::wrap_angle(z[other]));
+            p.push(z[2 + other]);
+        }
+    }
+    let out = PyDict::new(py);
+    out.set_item("method", method.name)?;
+    out.set_item("section_index", index)?;
+    out.set_item("other", info.state[other].name)?;
+    out.set_item("orbit", orbit.into_pyarray(py))?;
+    out.set_item("t", t.into_pyarray(py))?;
+    out.set_item("states", rows(py, states, 4))?;
+    out.set_item("q", q.into_pyarray(py))?;
+    out.set_item("p", p.into_pyarray(py))?;
+    out.set_item("initial", rows(py, initial, 4))?;
+    out.set_item("crossings_per_orbit", orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>())?;
+    out.set_item("max_energy_error", worst)?;
+    Ok(out)
+}
+
+/// The flip fractal as `pendula fractal`: the double pendulum `system` (its parameters; it
+/// starts at rest at each pixel) over the grid `theta1` × `theta2` ((lo, hi, n), cell
+/// centres), flip times at `dt` and `dt`/2 to `t_max`, pixels converged within
+/// `tolerance` (s). Computed in slices of pixels, Ctrl-C honoured between them. Returns
+/// `flip_time`, `flip_time_half_step` (n₂, n₁; NaN: no flip), `converged` (bool),
+/// `forbidden`, the axes' cell centres `theta1_centres`, `theta2_centres` (rad).
+#[pyfunction]
+#[pyo3(signature = (system, theta1, theta2, t_max, method, dt, tolerance, threads=None))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
+pub(crate) fn fractal<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    theta1: (f64, f64, usize),
+    theta2: (f64, f64, usize),
+    t_max: f64,
+    method: &str,
+    dt: f64,
+    tolerance: f64,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let info = system.values.info();
+    if !std::ptr::eq(info, <DoublePendulum as Model>::INFO) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!("invalid system `{}`: the flip fractal is the double pendulum's (`double`)", info.name),
+        ));
+    }
+    let pendulum = DoublePendulum::from_values(&system.values);
+    if pendulum.is_forced() {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            "invalid system: the fractal's ensemble kernels integrate the free double pendulum (damping and drive_amplitude must be 0)".to_owned(),
+        ));
+    }
+    let axis = |name: &str, (lo, hi, n): (f64, f64, usize)| -> PyResult<GridAxis> {
+        if !(lo.is_finite() && hi.is_finite() && lo < hi && n >= 1) {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!(
+                    "invalid {name} = ({lo}, {hi}, {n}): (lo, hi, n) with finite lo < hi (rad) and n >= 1"
+                ),
+            ));
+        }
+        Ok(GridAxis { lo, hi, n })
+    };
+    let (theta1, theta2) = (axis("theta1", theta1)?, axis("theta2", theta2)?);
+    let t_max = positive(py, "t_max", t_max)?;
+    let h = positive(py, "dt", dt)?;
+    if h > t_max {
+        return Err(invalid(py, "dt", Short(h), &format!("at most t_max = {} s", Short(t_max))));
+    }
+    if !(tolerance.is_finite() && tolerance >= 0.0) {
+        return Err(invalid(py, "tolerance", Short(tolerance), "a finite time >= 0 (s)"));
+    }
+    let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    let Some(batch) = BatchMethod::of(method) else {
+        return Err(raise(
+            py,
+            "UnsuitableMethodError",
+            format!(
+                "invalid method `{}`: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
+                method.name
+            ),
+        ));
+    };
+    if let Scheme::Tao(scheme) = method.scheme {
+        integrator::tao::check_binding_step(&scheme, h).map_err(|e| to_py(py, &e))?;
+    }
+    let pool = pool(py, threads)?;
+    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
+    let pixels = theta1.n * theta2.n;
+    // Slices of pixels, the flag looked at between them: a pixel's flip times do not depend
+    // on which others are computed with it (`flip_times`), so the slicing changes no bit.
+    let slice = (pool.current_num_threads() * 256).max(1);
+    // At dt and at dt/2, per pixel; None when interrupted.
+    type FlipTimes = (Vec<f64>, Vec<f64>);
+    let times = interruptible(py, false, |flag| {
+        pool.install(|| -> Result<Option<FlipTimes>, Error> {
+            let (mut at_h, mut at_half) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
+            for start in (0..pixels).step_by(slice) {
+                if flag.load(Ordering::Relaxed) {
+                    return Ok(None);
+                }
+                let (a, b) = flip_times(&spec, start..(start + slice).min(pixels), &|_| ())?;
+                at_h.extend(a);
+                at_half.extend(b);
+            }
+            Ok(Some((at_h, at_half)))
+        })
+    })?;
+    let (at_h, at_half) = match times {
+        Ok(Some(t)) => t,
+        // Interrupted: the KeyboardInterrupt was raised above.
+        Ok(None) => return Err(raise(py, "PendulaError", "the fractal was interrupted".to_owned())),
+        Err(Error::NonFiniteMember { member, t }) => {
+            let (i, j) = (member % theta1.n, member / theta1.n);
+            return Err(raise(
+                py,
+                "NonFiniteStateError",
+                format!(
+                    "{} (fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {})",
+                    Error::NonFinite { t },
+                    theta1.centre(i),
+                    theta2.centre(j)
+                ),
+            ));
+        }
+        Err(e) => return Err(to_py(py, &e)),
+    };
+    let fractal = assemble(&spec, at_h, at_half);
+    let shape = (theta2.n, theta1.n);
+    let out = PyDict::new(py);
+    out.set_item("method", method.name)?;
+    let grid = |v: Vec<f64>| Array2::from_shape_vec(shape, v).expect("the grid").into_pyarray(py);
+    out.set_item("flip_time", grid(fractal.flip_time))?;
+    out.set_item("flip_time_half_step", grid(fractal.flip_time_half_step))?;
+    out.set_item(
+        "converged",
+        Array2::from_shape_vec(shape, fractal.converged).expect("the grid").into_pyarray(py),
+    )?;
+    out.set_item("forbidden", fractal.forbidden)?;
+    let centres = |a: GridAxis| (0..a.n).map(|i| a.centre(i)).collect::<Vec<_>>().into_pyarray(py);
+    out.set_item("theta1_centres", centres(theta1))?;
+    out.set_item("theta2_centres", centres(theta2))?;
+    Ok(out)
+}
+
+/// A stroboscopic orbit diagram as `pendula bifurcation`: `system` (a driven one) with
+/// parameter `param` at the n cell centres of (lo, hi), the state once per drive period for
+/// `samples` periods after `transient` (s, whole periods), RK4 at `steps_per_period`.
+/// Returns `values` (n,), `samples` (n, samples, n_state), `kernel`.
+#[pyfunction]
+#[pyo3(signature = (system, param, transient, samples, steps_per_period, threads=None))]
+pub(crate) fn bifurcation<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    param: (String, f64, f64, usize),
+    transient: f64,
+    samples: usize,
+    steps_per_period: u32,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let info = system.values.info();
+    if info.quantity("drive_frequency").is_err() {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid system `{}`: bifurcation needs a driven system (a drive_frequency parameter)",
+                info.name
+            ),
+        ));
+    }
+    let (name, lo, hi, n) = param;
+    let q = info.quantity(&name).map_err(|e| to_py(py, &e))?;
+    if !info.parameters.iter().any(|p| p.name == q.name) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid param `{name}`: not a parameter of {}; set the initial state on the System",
+                info.name
+            ),
+        ));
+    }
+    if !(lo.is_finite() && hi.is_finite() && lo < hi && n >= 1) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid param ({name:?}, {lo}, {hi}, {n}): (name, lo, hi, n) with finite lo < hi and n >= 1"
+            ),
+        ));
+    }
+    if !(transient.is_finite() && transient >= 0.0) {
+        return Err(invalid(py, "transient", Short(transient), "a finite time >= 0 (s)"));
+    }
+    if !(1..=1_000_000).contains(&samples) {
+        return Err(invalid(py, "samples", samples, "1 to 10^6 samples"));
+    }
+    if !(4..=1_000_000).contains(&steps_per_period) {
+        return Err(invalid(py, "steps_per_period", steps_per_period, "4 to 10^6 steps"));
+    }
+    let axis = GridAxis { lo, hi, n };
+    let base: Vec<(String, f64)> =
+        info.quantities().map(|q| (q.name.to_owned(), system.values.get(q.name))).collect();
+    let mut all = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut s = base.clone();
+        s.push((q.name.to_owned(), axis.centre(i)));
+        all.push(info.values(&s).map_err(|e| to_py(py, &e))?);
+    }
+    let pool = pool(py, threads)?;
+    let spec = OrbitDiagramSpec { transient, samples, steps_per_period };
+    let data =
+        interruptible(py, false, |_| pool.install(|| orbit_diagram(&all, &spec)))?.map_err(|e| match e {
+            Error::NonFiniteMember { member, t } => raise(
+                py,
+                "NonFiniteStateError",
+                format!("{} ({} = {})", Error::NonFinite { t }, q.name, axis.centre(member)),
+            ),
+            other => to_py(py, &other),
+        })?;
+    let dim = info.state.len();
+    let out = PyDict::new(py);
+    out.set_item("values", (0..n).map(|i| axis.centre(i)).collect::<Vec<_>>().into_pyarray(py))?;
+    out.set_item(
+        "samples",
+        numpy::ndarray::Array3::from_shape_vec((n, samples, dim), data)
+            .expect("the samples")
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "kernel",
+        if pendula::ensemble::driven::runs(info) {
+            "simd lanes (ensemble engine)"
+        } else {
+            "scalar, per value"
+        },
+    )?;
+    Ok(out)
+}
+
+/// The methods named (each must apply to `model`, listed once), or every method that
+/// applies.
+fn methods_of(
+    py: Python<'_>,
+    model: &dyn DynModel,
+    names: Option<Vec<String>>,
+) -> PyResult<Vec<&'static Method>> {
+    let Some(names) = names else {
+        return Ok(METHODS.iter().copied().filter(|m| model.check(m).is_ok()).collect());
+    };
+    let mut methods: Vec<&'static Method> = Vec::new();
+    for name in &names {
+        let method = integrator::find(name.trim()).map_err(|e| to_py(py, &e))?;
+        model.check(method).map_err(|e| to_py(py, &e))?;
+        if methods.iter().any(|m| m.name == method.name) {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                format!("invalid methods: {} is listed twice; list each method once", method.name),
+            ));
+        }
+        methods.push(method);
+    }
+    if methods.is_empty() {
+        return Err(raise(py, "InvalidValueError", "invalid methods []: name at least one".to_owned()));
+    }
+    Ok(methods)
+}
+
+/// Whether a run's failure drops its point with a note (as the CLI's studies do) rather
+/// than ending the study.
+fn droppable(e: &Error) -> bool {
+    matches!(
+        e,
+        Error::NonFinite { .. }
+            | Error::NewtonDidNotConverge { .. }
+            | Error::InvalidValue { .. }
+            | Error::UnmetRequirement { .. }
+    )
+}
+
+/// The end time (default: the system's study horizon) and the given steps, checked.
+fn horizon_and_steps(
+    py: Python<'_>,
+    system: &CoreSystem,
+    t_end: Option<f64>,
+    dts: Option<Vec<f64>>,
+) -> PyResult<(f64, Option<Vec<f64>>)> {
+    let t_end = positive(py, "t_end", t_end.unwrap_or_else(|| analysis::study_horizon(&system.values)))?;
+    if let Some(hs) = &dts {
+        if hs.is_empty() {
+            return Err(raise(
+                py,
+                "InvalidValueError",
+                "invalid dts []: give at least one step (s)".to_owned(),
+            ));
+        }
+        for h in hs {
+            positive(py, "dts", *h)?;
+        }
+    }
+    Ok((t_end, dts))
+}
+
+/// A convergence study as `pendula convergence`: each method's steps (`dts`, or its default
+/// ladder) to `t_end` (default: the study horizon), the max-norm error against the exact
+/// solution or a dop853 reference, and the order fitted in the asymptotic range.
+#[pyfunction]
+#[pyo3(signature = (system, methods=None, dts=None, t_end=None))]
+pub(crate) fn convergence<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    methods: Option<Vec<String>>,
+    dts: Option<Vec<f64>>,
+    t_end: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
+    let model = &*system.model;
+    let methods = methods_of(py, model, methods)?;
+    let ladder =
+        |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
+    if methods.iter().all(|&m| ladder(m).is_empty()) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid t_end {}: no step of the methods' default ladders fits within their cost caps (at most 2e6 steps a run); give a shorter t_end, or dts",
+                Short(t_end)
+            ),
+        ));
+    }
+    let y0 = system.values.initial_state();
+    type Row = (&'static str, Vec<f64>, Vec<f64>, OrderEstimate, Option<String>);
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+        let reference = analysis::reference_state(model, y0, t_end)?;
+        let scale = reference.scale();
+        let (mut results, mut first) = (Vec::new(), None);
+        for &method in &methods {
+            let (mut hs, mut errors, mut failure) = (Vec::new(), Vec::new(), None);
+            for h in ladder(method) {
+                match analysis::convergence_errors(model, method, y0, t_end, &[h], &reference.state) {
+                    Ok(e) => {
+                        hs.push(h);
+                        errors.push(e[0]);
+                    }
+                    Err(e) if droppable(&e) => {
+                        failure = Some(format!("at h = {}: {e}", Short(h)));
+                        first.get_or_insert(e);
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            let estimate = analysis::estimate_order(&hs, &errors, scale, t_end);
+            results.push((method.name, hs, errors, estimate, failure));
+        }
+        Ok((reference, results, first))
+    };
+    let (reference, results, first) = interruptible(py, false, |_| run())?.map_err(|e| to_py(py, &e))?;
+    if results.iter().all(|r| r.1.is_empty())
+        && let Some(e) = first
+    {
+        return Err(to_py(py, &e));
+    }
+    let list = PyList::empty(py);
+    for (name, hs, errors, estimate, failure) in results {
+        let d = PyDict::new(py);
+        d.set_item("method", name)?;
+        d.set_item("dt", hs.into_pyarray(py))?;
+        d.set_item("error", errors.into_pyarray(py))?;
+        d.set_item("order", estimate.order())?;
+        match estimate {
+            OrderEstimate::Fitted { points, h_min, h_max, .. } => {
+                d.set_item("fit", (points, h_min, h_max))?;
+            }
+            _ => d.set_item("fit", py.None())?,
+        }
+        d.set_item("reason", estimate.reason())?;
+        d.set_item("failure", failure)?;
+        list.append(d)?;
+    }
+    let out = PyDict::new(py);
+    out.set_item("t_end", t_end)?;
+    out.set_item("reference", reference.source)?;
+    out.set_item("methods", list)?;
+    Ok(out)
+}
+
+/// A work-precision study as `pendula work-precision`: fixed-step methods at their steps
+/// (`dts`, or each one's default ladder), embedded pairs at the tolerances `tols`
+/// (rtol = atol), to `t_end` (default: the study horizon). Per method, points (dt, tol,
+/// error, rhs_evals, wall_s) and why some are missing.
+#[pyfunction]
+#[pyo3(signature = (system, tols, methods=None, dts=None, t_end=None))]
+pub(crate) fn work_precision<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    tols: Vec<f64>,
+    methods: Option<Vec<String>>,
+    dts: Option<Vec<f64>>,
+    t_end: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
+    if tols.is_empty() {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            "invalid tols []: give at least one tolerance".to_owned(),
+        ));
+    }
+    for tol in &tols {
+        if !(*tol >= pendula::control::MIN_RTOL && *tol < 1.0) {
+            return Err(invalid(
+                py,
+                "tols",
+                Short(*tol),
+                &format!(
+                    "tolerances in [{:e}, 1) (a smaller one is below round-off)",
+                    pendula::control::MIN_RTOL
+                ),
+            ));
+        }
+    }
+    let model = &*system.model;
+    let methods = methods_of(py, model, methods)?;
+    let ladder =
+        |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
+    let any = methods.iter().any(|&m| matches!(m.scheme, Scheme::Embedded(_)) || !ladder(m).is_empty());
+    if !any {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid t_end {}: no step of the methods' default ladders fits within their cost caps (at most 2e6 steps a run); give a shorter t_end, or dts",
+                Short(t_end)
+            ),
+        ));
+    }
+    let y0 = system.values.initial_state();
+    type Row = (&'static str, Vec<analysis::WorkPoint>, Option<String>);
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+        let reference = analysis::reference_state(model, y0, t_end)?;
+        let (mut results, mut first) = (Vec::new(), None);
+        for &method in &methods {
+            let adaptive = matches!(method.scheme, Scheme::Embedded(_));
+            let xs = if adaptive { tols.clone() } else { ladder(method) };
+            let (mut points, mut note) = (Vec::new(), None);
+            for x in xs {
+                let point = if adaptive {
+                    analysis::work_precision_adaptive(model, method, y0, t_end, &[x], &reference.state)
+                } else {
+                    analysis::work_precision(model, method, y0, t_end, &[x], &reference.state)
+                };
+                match point {
+                    Ok(p) => points.extend(p),
+                    Err(e) if droppable(&e) => {
+                        note = Some(format!("at {} = {}: {e}", if adaptive { "tol" } else { "h" }, Short(x)));
+                        first.get_or_insert(e);
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            results.push((method.name, points, note));
+        }
+        Ok((reference, results, first))
+    };
+    let (reference, results, first) = interruptible(py, false, |_| run())?.map_err(|e| to_py(py, &e))?;
+    if results.iter().all(|r| r.1.is_empty())
+        && let Some(e) = first
+    {
+        return Err(to_py(py, &e));
+    }
+    let list = PyList::empty(py);
+    for (name, points, note) in results {
+        let d = PyDict::new(py);
+        d.set_item("method", name)?;
+        d.set_item("dt", points.iter().map(|p| p.h).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item(
+            "tol",
+            points.iter().map(|p| p.tol.unwrap_or(f64::NAN)).collect::<Vec<_>>().into_pyarray(py),
+        )?;
+        d.set_item("error", points.iter().map(|p| p.error).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item("rhs_evals", points.iter().map(|p| p.rhs_evals).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item("wall_s", points.iter().map(|p| p.wall_s).collect::<Vec<_>>().into_pyarray(py))?;
+        d.set_item("failure", note)?;
+        list.append(d)?;
+    }
+    let out = PyDict::new(py);
+    out.set_item("t_end", t_end)?;
+    out.set_item("reference", reference.source)?;
+    out.set_item("methods", list)?;
+    Ok(out)
+}
+
+/// The divergence of two runs `delta` apart in state variable `variable`, as `pendula
+/// divergence`: distances at about 2000 samples, and the exponential rate fitted before
+/// they exceed `saturation`. Returns `t`, `distance`, `growth_rate` (1/s or None),
+/// `fit_window` ((t₀, t₁) or None), `variable`.
+#[pyfunction]
+#[pyo3(signature = (system, method, dt, t_end, delta, variable, saturation))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
+pub(crate) fn divergence<'py>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    method: &str,
+    dt: f64,
+    t_end: f64,
+    delta: f64,
+    variable: Option<&str>,
+    saturation: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let info = system.values.info();
+    if !delta.is_finite() || delta == 0.0 {
+        return Err(invalid(
+            py,
+            "delta",
+            Short(delta),
+            "a finite separation, not 0 (the two runs must start apart)",
+        ));
+    }
+    if !(saturation.is_finite() && saturation > delta.abs()) {
+        return Err(invalid(
+            py,
+            "saturation",
+            Short(saturation),
+            &format!("finite and larger than |delta| = {}", Short(delta.abs())),
+        ));
+    }
+    let index = match variable {
+        None => 0,
+        Some(name) => info.state.iter().position(|q| q.name == name).ok_or_else(|| {
+            to_py(py, &Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name)))
+        })?,
+    };
+    // As the CLI: the separation must survive being added to the start.
+    let start = system.values.initial_state()[index];
+    if (((start + delta) - start) - delta).abs() > 1e-3 * delta.abs() {
+        return Err(invalid(
+            py,
+            "delta",
+            Short(delta),
+            &format!(
+                "added to {} = {} it is lost in rounding; use a larger delta or a smaller start",
+                info.state[index].name,
+                Short(start)
+            ),
+        ));
+    }
+    let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
+    let spec = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
+    let names = [("h", "dt")];
+    let schedule = spec.schedule().map_err(|e| renamed(py, e, &names))?;
+    let every = analysis::divergence::sample_every(schedule.steps);
+    let model = &*system.model;
+    let y0 = system.values.initial_state();
+    let d =
+        interruptible(py, false, |_| analysis::divergence(model, method, y0, index, delta, &spec, every))?
+            .map_err(|e| renamed(py, e, &names))?;
+    let fit = analysis::growth_rate(&d, saturation);
+    let out = PyDict::new(py);
+    out.set_item("method", method.name)?;
+    out.set_item("variable", info.state[index].name)?;
+    out.set_item("t", d.t.into_pyarray(py))?;
+    out.set_item("distance", d.distance.into_pyarray(py))?;
+    out.set_item("growth_rate", fit.map(|f| f.rate))?;
+    out.set_item("fit_window", fit.map(|f| (f.t_start, f.t_end)))?;
+    Ok(out)
+}
+
+/// The tolerances of a work-precision study: `levels` from `loosest` to `tightest`,
+/// geometric, the ends exact.
+#[pyfunction]
+pub(crate) fn tolerance_ladder(loosest: f64, tightest: f64, levels: usize) -> Vec<f64> {
+    analysis::convergence::tolerance_ladder(loosest, tightest, levels)
+}
+
+/// Adds the studies to the module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(lyapunov, m)?)?;
+    m.add_function(wrap_pyfunction!(poincare, m)?)?;
+    m.add_function(wrap_pyfunction!(fractal, m)?)?;
+    m.add_function(wrap_pyfunction!(bifurcation, m)?)?;
+    m.add_function(wrap_pyfunction!(convergence, m)?)?;
+    m.add_function(wrap_pyfunction!(work_precision, m)?)?;
+    m.add_function(wrap_pyfunction!(divergence, m)?)?;
+    m.add_function(wrap_pyfunction!(tolerance_ladder, m)?)?;
+    Ok(())
+}
