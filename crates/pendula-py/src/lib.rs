@@ -24,6 +24,7 @@ use pyo3::types::{PyDict, PyList};
 
 mod animate;
 mod study;
+mod sweep;
 
 /// The package's exception `class` (in `pendula.errors`) raised with `message`.
 pub(crate) fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
@@ -790,12 +791,27 @@ fn ensemble<'py>(
                         .map_err(|e| shift(e, start))?;
                     }
                     EnsemblePath::Scalar => {
-                        return Err(Error::UnmetRequirement {
-                            method: method.name,
-                            needs: "an explicit method with SIMD lanes on this system",
-                            reason: format!("`{}` has no lanes on `{}`", method.name, info.name),
-                            suggestion: "rk4, or pendula.solve per member",
-                        });
+                        // One scalar run per member, as a sweep's scalar cells run.
+                        let spec = pendula::sweep::ScalarSpec {
+                            method,
+                            h: dt,
+                            steps,
+                            stop_at_flip: until_flip,
+                            cancel: Some(flag),
+                        };
+                        pendula::sweep::run_scalar(
+                            info,
+                            count,
+                            &member,
+                            &spec,
+                            rows,
+                            cols,
+                            &|_, state, flip, row: &mut [f64]| {
+                                row[..dim].copy_from_slice(state);
+                                row[dim] = flip;
+                            },
+                        )
+                        .map_err(|e| shift(e.into_error(), start))?;
                     }
                 }
             }
@@ -829,6 +845,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     study::register(m)?;
+    sweep::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

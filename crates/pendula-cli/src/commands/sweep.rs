@@ -2,26 +2,25 @@
 //! initial-state variables, in parallel, into one .npy array — whole, or one deterministic
 //! shard of it (`--shard K/N`, assembled by `pendula merge`).
 //!
-//! Where the library's `ensemble_path` says so — every system with an explicit Runge–Kutta
-//! method, separable systems with the explicit partitioned methods, the free double pendulum
-//! with Tao's map — the cells run on the SIMD ensemble engine (`pendula::ensemble`);
-//! everything else runs the scalar integrators cell by cell, also in parallel. Either way a
-//! cell's result does not depend on the thread count or the sharding.
+//! The computation is the library's ([`pendula::sweep`]): the validated sweep, its
+//! cells on the SIMD lanes where `ensemble_path` says so and the scalar integrators cell by
+//! cell otherwise, a cell's result independent of the thread count and the sharding (Python's
+//! `pendula.sweep` runs the same code). This command parses the flags into it, checks the
+//! limits, and writes the array, the shard's description, the summary and the checkpoint.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
-use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
-use pendula::ensemble::{self, BatchSpec};
+use pendula::ensemble;
 use pendula::error::{Short, did_you_mean, suggestions};
-use pendula::integrator::{self, Method};
+use pendula::integrator;
 use pendula::model::EnsemblePath;
-use pendula::observe::{Observer, Sample};
-use pendula::system::{SystemInfo, Values};
+pub(crate) use pendula::sweep::Axis;
+use pendula::sweep::{CellError, Record, Sweep, SweepSpec};
+use pendula::system::SystemInfo;
 use pendula::{End, RunSpec};
-use rayon::prelude::*;
 use serde_json::json;
 
 use crate::args::{Defaults, EndArg, LargeArg, MethodArgs, SetArgs, SummaryArg, SystemArg, ThreadsArg};
@@ -84,96 +83,6 @@ pub struct SweepArgs {
     #[command(flatten)]
     #[serde(flatten)]
     pub large: LargeArg,
-}
-
-/// One axis of the grid.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Axis {
-    pub name: String,
-    pub lo: f64,
-    pub hi: f64,
-    pub n: usize,
-}
-
-impl Axis {
-    pub(crate) fn centre(&self, i: usize) -> f64 {
-        self.lo + (i as f64 + 0.5) * (self.hi - self.lo) / self.n as f64
-    }
-}
-
-/// A recorded quantity.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Record {
-    Final,
-    FlipTime,
-    EnergyError,
-}
-
-/// The validated sweep.
-struct Sweep {
-    info: &'static SystemInfo,
-    base: Vec<(String, f64)>,
-    axes: Vec<Axis>,
-    method: &'static Method,
-    h: f64,
-    steps: u64,
-    until_flip: bool,
-    records: Vec<Record>,
-    columns: Vec<String>,
-    shard: (usize, usize),
-}
-
-impl Sweep {
-    fn cells(&self) -> usize {
-        self.axes.iter().map(|a| a.n).product()
-    }
-
-    /// The values of cell `index` (flattened, first axis fastest).
-    fn values(&self, index: usize) -> Result<Values, pendula::Error> {
-        let mut settings = self.base.clone();
-        let mut rest = index;
-        for axis in &self.axes {
-            settings.push((axis.name.clone(), axis.centre(rest % axis.n)));
-            rest /= axis.n;
-        }
-        self.info.values(&settings)
-    }
-
-    /// The output's shape: the axes, slowest first, then the columns.
-    fn shape(&self) -> Vec<usize> {
-        let mut shape: Vec<usize> = self.axes.iter().rev().map(|a| a.n).collect();
-        shape.push(self.columns.len());
-        shape
-    }
-
-    /// Cells [start, end) of this shard: N contiguous slices as equal as possible.
-    fn range(&self) -> (usize, usize) {
-        let (k, n) = self.shard;
-        // In u128: k × cells overflows usize for large grids cut in many shards.
-        let (k, n, cells) = (k as u128, n as u128, self.cells() as u128);
-        (((k - 1) * cells / n) as usize, (k * cells / n) as usize)
-    }
-
-    /// A digest of everything that determines the full array, so that `merge` refuses
-    /// shards of different sweeps.
-    fn fingerprint(&self) -> String {
-        let text = format!(
-            "{}|{:?}|{:?}|{}|{:e}|{}|{}|{:?}",
-            self.info.name,
-            self.base,
-            self.axes,
-            self.method.name,
-            self.h,
-            self.steps,
-            self.until_flip,
-            self.records
-        );
-        // FNV-1a, 64 bits: a label, not a security measure.
-        let hash = text
-            .bytes()
-            .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
-        format!("{hash:016x}")
-    }
 }
 
 /// An example `--grid` axis for `info`: its first angle over a turn, else its first state
@@ -287,14 +196,6 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         }
         records.push(record);
     }
-    let mut columns = Vec::new();
-    for r in &records {
-        match r {
-            Record::Final => columns.extend(info.state.iter().map(|q| q.name.to_owned())),
-            Record::FlipTime => columns.push("flip_time".into()),
-            Record::EnergyError => columns.push("energy_error".into()),
-        }
-    }
     let shard = match &args.shard {
         None => (1, 1),
         Some(text) => {
@@ -308,29 +209,42 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             (k, n)
         }
     };
-    let sweep =
-        Sweep { info, base, axes, method, h, steps: schedule.steps, until_flip, records, columns, shard };
-    if sweep.shard.1 > sweep.cells() {
-        bail!("invalid --shard {}/{}: more shards than the {} cells", shard.0, shard.1, sweep.cells());
+    let cells: usize = axes.iter().map(|a| a.n).product();
+    if shard.1 > cells {
+        bail!("invalid --shard {}/{}: more shards than the {cells} cells", shard.0, shard.1);
     }
-    // Every cell's values are in their domains if the extreme cell centres are (the
-    // domains are intervals): check both corners now, before any work.
-    sweep.values(0)?;
-    sweep.values(sweep.cells() - 1)?;
+    // The flags' own checks above name the flags; the library's checks the rest (the
+    // corners of the grid in their domains, the method's requirement) in its words.
+    let sweep = SweepSpec {
+        system: family,
+        set: base,
+        axes,
+        method,
+        h,
+        steps: schedule.steps,
+        until_flip,
+        records,
+        shard,
+    }
+    .validate()?;
     // What it costs, before any of it: the steps of every cell of this shard, and the array
     // (held whole in memory, then written).
     let (start, end) = sweep.range();
     let cells = (end - start) as f64;
-    let bytes = cells * sweep.columns.len() as f64 * 8.0;
-    let how = format!("{} cells x {} bytes", limits::round(cells), sweep.columns.len() * 8);
+    let bytes = cells * sweep.columns().len() as f64 * 8.0;
+    let how = format!("{} cells x {} bytes", limits::round(cells), sweep.columns().len() * 8);
     limits::check(
         "sweep",
         args.large.allow_large,
         &[
             Estimate::new(
-                if matches!(path(&sweep)?, EnsemblePath::Scalar) { Cost::Steps } else { Cost::LaneSteps },
-                cells * sweep.steps as f64,
-                format!("{} cells x {} steps", limits::round(cells), limits::round(sweep.steps as f64)),
+                if matches!(sweep.path(), EnsemblePath::Scalar) { Cost::Steps } else { Cost::LaneSteps },
+                cells * sweep.spec().steps as f64,
+                format!(
+                    "{} cells x {} steps",
+                    limits::round(cells),
+                    limits::round(sweep.spec().steps as f64)
+                ),
             ),
             Estimate::new(Cost::Output, bytes, how.clone()),
             Estimate::new(Cost::Memory, bytes, how),
@@ -353,41 +267,6 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
             if numerical { e.context("cell 0 of the sweep") } else { e }
         })?;
     Ok(sweep)
-}
-
-/// Watches a scalar run for the first flip (linear interpolation of |θ| within the step).
-struct FlipWatch {
-    angles: Vec<usize>,
-    previous: Vec<f64>,
-    t_previous: f64,
-    flip_time: f64,
-    stop: bool,
-}
-
-impl Observer for FlipWatch {
-    fn observe(&mut self, s: &Sample<'_>) -> pendula::observe::Flow {
-        use std::f64::consts::PI;
-        if s.step > 0 && self.flip_time.is_nan() {
-            let mut fraction = f64::INFINITY;
-            for (&i, &old) in self.angles.iter().zip(&self.previous) {
-                let (a, b) = (old.abs(), s.y[i].abs());
-                if a <= PI && b > PI {
-                    fraction = fraction.min((PI - a) / (b - a));
-                }
-            }
-            if fraction.is_finite() {
-                self.flip_time = self.t_previous + fraction * (s.t - self.t_previous);
-                if self.stop {
-                    return std::ops::ControlFlow::Break(pendula::observe::Stop::Enough);
-                }
-            }
-        }
-        for (p, &i) in self.previous.iter_mut().zip(&self.angles) {
-            *p = s.y[i];
-        }
-        self.t_previous = s.t;
-        std::ops::ControlFlow::Continue(())
-    }
 }
 
 /// What sweep runs without arguments.
@@ -414,7 +293,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
     }
-    let sharded = sweep.shard != (1, 1);
+    let sharded = sweep.spec().shard != (1, 1);
     let side_path = PathBuf::from(format!("{}.json", out_path.display()));
     let checkpoint = match &args.checkpoint {
         Some(c) => {
@@ -434,7 +313,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     }
 
     let (start, end) = sweep.range();
-    let cols = sweep.columns.len();
+    let cols = sweep.columns().len();
     // Its size was checked against the limits (or allowed); a failed allocation is an error,
     // not an abort.
     let mut data = Vec::new();
@@ -445,13 +324,10 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
-    let engine = path(&sweep)?;
     let progress = Progress::new((end - start) as u64);
     let compute = |cells: std::ops::Range<usize>, data: &mut [f64]| {
-        pool.install(|| match engine {
-            EnsemblePath::Scalar => run_scalar(&sweep, start + cells.start, data, &progress),
-            lanes => run_lanes(&sweep, lanes, start + cells.start, data, &progress),
-        })
+        pool.install(|| sweep.compute(start + cells.start, data, None, &|| progress.cell_done()))
+            .map_err(cell_error)
     };
     let chunks = match checkpoint {
         None => {
@@ -497,24 +373,20 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let written = write_npy(&out_file, &shape, &data)?;
     let description = json!({
         "pendula_sweep": SHARD_FORMAT,
-        "system": sweep.info.name,
-        "method": sweep.method.name,
-        "dt": sweep.h,
-        "steps": sweep.steps,
-        "axes": sweep.axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
-        "columns": sweep.columns,
+        "system": sweep.info().name,
+        "method": sweep.spec().method.name,
+        "dt": sweep.spec().h,
+        "steps": sweep.spec().steps,
+        "axes": sweep.spec().axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
+        "columns": sweep.columns(),
         "shape": sweep.shape(),
-        "shard": sweep.shard.0,
-        "shards": sweep.shard.1,
+        "shard": sweep.spec().shard.0,
+        "shards": sweep.spec().shard.1,
         "offset": start,
         "count": end - start,
         "fingerprint": sweep.fingerprint(),
         "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
-        "kernel": match engine {
-            EnsemblePath::DoubleKernel(_) => "simd lanes (the double pendulum's kernel)",
-            EnsemblePath::Engine(_) => "simd lanes (ensemble engine)",
-            EnsemblePath::Scalar => "scalar, per cell",
-        },
+        "kernel": sweep.kernel(),
         "threads": threads,
         "wall_s": wall_s,
     });
@@ -528,28 +400,21 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     summary.write_then(&description, files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
     eprintln!(
         "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
-        sweep.info.name,
+        sweep.info().name,
         end - start,
         if sharded {
-            format!(" (shard {}/{} of {})", sweep.shard.0, sweep.shard.1, sweep.cells())
+            format!(" (shard {}/{} of {})", sweep.spec().shard.0, sweep.spec().shard.1, sweep.cells())
         } else {
             String::new()
         },
-        sweep.method.name,
-        sweep.steps,
-        Short(sweep.h),
+        sweep.spec().method.name,
+        sweep.spec().steps,
+        Short(sweep.spec().h),
         out_path.display(),
         shape,
         if sharded { format!(" and {}", side_path.display()) } else { String::new() },
     );
     Ok(())
-}
-
-/// The engine the sweep runs on, as the library decides it for the method, the base values
-/// and the swept quantities.
-fn path(sweep: &Sweep) -> Result<EnsemblePath> {
-    let swept: Vec<&str> = sweep.axes.iter().map(|a| a.name.as_str()).collect();
-    Ok(pendula::model::ensemble_path(sweep.method, &sweep.values(0)?, &swept))
 }
 
 /// Refuses a quantity both set (`--set NAME=…`) and swept (`flag NAME=…`), naming both: the
@@ -574,25 +439,11 @@ pub(crate) fn refuse_set_and_swept(
     Ok(())
 }
 
-/// Writes a row of results: the recorded columns (`energy_error` is called only if needed).
-fn store(sweep: &Sweep, state: &[f64], flip_time: f64, energy_error: impl FnOnce() -> f64, row: &mut [f64]) {
-    let mut c = 0;
-    let mut energy_error = Some(energy_error);
-    for r in &sweep.records {
-        match r {
-            Record::Final => {
-                row[c..c + state.len()].copy_from_slice(state);
-                c += state.len();
-            }
-            Record::FlipTime => {
-                row[c] = flip_time;
-                c += 1;
-            }
-            Record::EnergyError => {
-                row[c] = energy_error.take().map_or(f64::NAN, |f| f());
-                c += 1;
-            }
-        }
+/// A cell's failure in the sweep's words: "cell N of the sweep" around the library's error.
+fn cell_error(e: CellError) -> anyhow::Error {
+    match e.cell {
+        Some(c) => anyhow::Error::new(e.error).context(format!("cell {c} of the sweep")),
+        None => anyhow::Error::new(e.error),
     }
 }
 
@@ -620,116 +471,6 @@ impl Progress {
             self.bar.set_position(n);
         }
     }
-}
-
-/// The cells on lanes: every cell's values (parameters then state, in the catalogue's order)
-/// from the first cell's and the axes, without an allocation per cell.
-fn run_lanes(
-    sweep: &Sweep,
-    path: EnsemblePath,
-    start: usize,
-    data: &mut [f64],
-    progress: &Progress,
-) -> Result<()> {
-    let cols = sweep.columns.len();
-    let count = data.len() / cols;
-    let first = sweep.values(0)?;
-    // The member's entry (for the chain, the one with its links): its quantities' order.
-    let info = first.info();
-    let base: Vec<f64> =
-        first.parameters().map(|(_, v)| v).chain(first.initial_state().iter().copied()).collect();
-    let slots: Vec<usize> = sweep
-        .axes
-        .iter()
-        .map(|a| info.quantities().position(|q| q.name == a.name).expect("a checked name"))
-        .collect();
-    let np = info.parameters.len();
-    let fill = |i: usize, v: &mut [f64]| {
-        v.copy_from_slice(&base);
-        let mut rest = start + i;
-        for (axis, &slot) in sweep.axes.iter().zip(&slots) {
-            v[slot] = axis.centre(rest % axis.n);
-            rest /= axis.n;
-        }
-    };
-    let store_row = |i: usize, state: &[f64], flip_time: f64, row: &mut [f64]| {
-        // The energy error (if recorded) from the cell's own model: built only then.
-        let energy = || {
-            let mut v = base.clone();
-            fill(i, &mut v);
-            let settings: Vec<(String, f64)> =
-                info.quantities().map(|q| q.name.to_owned()).zip(v.iter().copied()).collect();
-            info.values(&settings).map_or(f64::NAN, |values| {
-                let model = values.build();
-                model.energy(0.0, state) - model.energy(0.0, &v[np..])
-            })
-        };
-        store(sweep, state, flip_time, energy, row);
-        progress.cell_done();
-    };
-    let failed = |member: usize, t: f64| {
-        anyhow::Error::new(pendula::Error::NonFinite { t })
-            .context(format!("cell {} of the sweep", start + member))
-    };
-    let track_flips = sweep.records.contains(&Record::FlipTime);
-    match path {
-        EnsemblePath::DoubleKernel(method) => {
-            let spec = BatchSpec {
-                method,
-                h: sweep.h,
-                steps: sweep.steps,
-                stop_at_flip: sweep.until_flip,
-                track_flips,
-            };
-            ensemble::run_values(count, &fill, &spec, data, cols, &store_row).map_err(|e| match e {
-                pendula::Error::NonFiniteMember { member, t } => failed(member, t),
-                other => anyhow::Error::new(other),
-            })
-        }
-        EnsemblePath::Engine(method) => {
-            let spec = LaneSpec {
-                method,
-                h: sweep.h,
-                steps: sweep.steps,
-                stop_at_flip: sweep.until_flip,
-                track_flips,
-                cancel: None,
-            };
-            let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
-                store_row(i, &o.state[..info.state.len()], o.flip_time, row)
-            };
-            first.build().ensemble(info, count, &fill, &spec, data, cols, &store).map_err(|e| match e {
-                pendula::Error::NonFiniteMember { member, t } => failed(member, t),
-                other => anyhow::Error::new(other),
-            })
-        }
-        EnsemblePath::Scalar => unreachable!("scalar sweeps run in run_scalar"),
-    }
-}
-
-fn run_scalar(sweep: &Sweep, start: usize, data: &mut [f64], progress: &Progress) -> Result<()> {
-    let cols = sweep.columns.len();
-    let angles: Vec<usize> =
-        sweep.info.state.iter().enumerate().filter(|(_, q)| q.is_angle()).map(|(i, _)| i).collect();
-    let spec = RunSpec { t0: 0.0, h: sweep.h, end: End::Steps(sweep.steps) };
-    data.par_chunks_mut(cols).enumerate().try_for_each(|(i, row)| -> Result<()> {
-        let v = sweep.values(start + i)?;
-        let model = v.build();
-        let mut watch = FlipWatch {
-            previous: vec![0.0; angles.len()],
-            angles: angles.clone(),
-            t_previous: 0.0,
-            flip_time: f64::NAN,
-            stop: sweep.until_flip,
-        };
-        let report = model
-            .solve(sweep.method, v.initial_state(), &spec, &mut watch)
-            .with_context(|| format!("cell {} of the sweep", start + i))?;
-        let energy = || model.energy(0.0, &report.state) - model.energy(0.0, v.initial_state());
-        store(sweep, &report.state, watch.flip_time, energy, row);
-        progress.cell_done();
-        Ok(())
-    })
 }
 
 /// The format of a shard's description (FILE.npy.json), in `pendula_sweep`. Format 2 added

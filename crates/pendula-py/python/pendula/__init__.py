@@ -49,6 +49,7 @@ from .study import (
     work_precision,
 )
 
+from .sweep import SweepResult, merge, sweep
 
 __version__ = _core.__version__
 
@@ -60,6 +61,9 @@ __all__ = [
     "solve",
     "ensemble",
     "EnsembleResult",
+    "sweep",
+    "merge",
+    "SweepResult",
     "lyapunov",
     "LyapunovResult",
     "poincare",
@@ -666,8 +670,9 @@ def ensemble(
 ) -> EnsembleResult:
     """Integrates m members of ``system`` from the rows of ``y0s`` (m, n_state), with
     per-member parameters ``params`` ({name: array of m}), ``steps`` steps of ``dt`` (or to
-    ``t_end``, s) on the SIMD lanes and all cores (``threads``). ``until="flip"`` stops each
-    member at its first flip. Results are bitwise identical whatever the thread count.
+    ``t_end``, s) on the SIMD lanes where the method has them, else one scalar run per member
+    (``kernel`` says which), on all cores (``threads``). ``until="flip"`` stops each member
+    at its first flip. Results are bitwise identical whatever the thread count.
     """
     system = _system(system)
     y0s = np.ascontiguousarray(np.atleast_2d(np.asarray(y0s, dtype=np.float64)))

@@ -133,3 +133,19 @@ def animation_gif(
     width: int,
     height: int,
 ) -> bytes: ...
+
+# `pendula.sweep` (`crates/pendula-py/src/sweep.rs`): the library's sweep, the CLI's.
+
+def sweep(
+    system: str,
+    set: list[tuple[str, float]],
+    axes: list[tuple[str, float, float, int]],
+    method: str,
+    dt: float,
+    steps: Optional[int],
+    t_end: Optional[float],
+    until: Optional[str],
+    records: list[str],
+    shard: tuple[int, int],
+    threads: Optional[int] = None,
+) -> dict[str, Any]: ...

@@ -63,7 +63,7 @@ pub const LANES: usize = 16;
 
 /// Members per parallel work item (a multiple of [`LANES`]): large enough to amortise the
 /// scheduling, small enough to balance the load of early-retiring members.
-const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 
 /// One double pendulum of an ensemble: its parameters and its initial state
 /// (θ₁, θ₂, ω₁, ω₂).

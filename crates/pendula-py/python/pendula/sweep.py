@@ -1,0 +1,416 @@
+"""pendula.sweep and pendula.merge: a system integrated from every cell of a grid over
+parameters and initial-state variables — the library's sweep, the one `pendula sweep` runs —
+and the assembly of its shards, as `pendula merge` assembles them.
+
+The array is the CLI's, bit for bit: the axes slowest first (the first axis given varies
+fastest), then the recorded columns; a shard ``K/N`` is ``(count, columns)``, a contiguous
+slice of the cells. :meth:`SweepResult.save` writes the CLI's ``.npy`` bytes (and, for a
+shard, its ``FILE.npy.json`` description), so shards from Python and from the CLI merge
+together, either way.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+import operator
+import os
+import struct
+import zlib
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _core
+from .errors import InvalidValueError, PendulaError
+
+__all__ = ["sweep", "merge", "SweepResult"]
+
+#: The version of SweepResult's pickled form.
+PICKLE_VERSION = 1
+
+#: The shard description's format (`pendula_sweep`), the CLI's SHARD_FORMAT: format 2 has
+#: `data` (the .npy file's length and CRC-32).
+SHARD_FORMAT = 2
+
+#: What `pendula sweep` runs without those arguments.
+DEFAULT_DT = 0.01
+DEFAULT_T_END = 10.0
+
+
+def _value(name: str, value: Any) -> float:
+    """A number, or a string as the CLI reads one: ``2``, ``-pi``, ``0.5pi``, ``2*pi``,
+    ``120deg`` (the suffixes for angles, in radians; the library checks the domains)."""
+    if isinstance(value, str):
+        text = value.strip()
+        factor = 1.0
+        if text.endswith("deg"):
+            text, factor = text[:-3].strip(), None
+        elif text.endswith("pi"):
+            text, factor = text[:-2].strip().rstrip("*"), math.pi
+        try:
+            if factor is math.pi and text in ("", "+", "-"):
+                number = -1.0 if text == "-" else 1.0
+            else:
+                number = float(text)
+        except ValueError:
+            raise InvalidValueError(
+                f"invalid value {value!r} for `{name}`: a number (radians), or degrees with a deg suffix (120deg)"
+            ) from None
+        # The CLI's arithmetic: (deg · π) / 180, or the number times π.
+        return number * math.pi / 180.0 if factor is None else number * factor
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InvalidValueError(f"invalid value {value!r} for `{name}`: a number") from None
+
+
+def _axes(grid: Any) -> list:
+    """[(name, lo, hi, n)] from {name: (lo, hi, n)} or ["NAME=LO:HI:N", ...]."""
+    if isinstance(grid, Mapping):
+        items = list(grid.items())
+    elif isinstance(grid, str):
+        items = [grid]
+    else:
+        try:
+            items = list(grid)
+        except TypeError:
+            raise InvalidValueError(f"invalid grid {grid!r}: {{name: (lo, hi, n)}} or ['NAME=LO:HI:N', ...]") from None
+    axes = []
+    for item in items:
+        if isinstance(item, str):
+            name, eq, rest = item.partition("=")
+            parts = rest.split(":")
+            if not eq or len(parts) != 3:
+                raise InvalidValueError(f"invalid grid {item!r}: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256")
+            name, (lo, hi, n) = name.strip(), parts
+            try:
+                n = int(n.strip())
+            except ValueError:
+                raise InvalidValueError(f"invalid grid {item!r}: N, the number of cells, is a whole number") from None
+        else:
+            try:
+                name, (lo, hi, n) = item
+            except (TypeError, ValueError):
+                raise InvalidValueError(f"invalid grid axis {item!r}: name: (lo, hi, n)") from None
+            try:
+                n = operator.index(n)
+            except TypeError:
+                raise InvalidValueError(f"invalid n {n!r} for the {name} axis: a whole number of cells") from None
+        if n < 1:
+            raise InvalidValueError(f"invalid n {n} for the {name} axis: at least 1 cell")
+        axes.append((str(name), _value(name, lo), _value(name, hi), n))
+    if not axes:
+        raise InvalidValueError("invalid grid: give at least one axis")
+    return axes
+
+
+def _shard(shard: Any) -> tuple:
+    if shard is None:
+        return (1, 1)
+    try:
+        k, n = map(int, shard.split("/")) if isinstance(shard, str) else map(operator.index, shard)
+    except (TypeError, ValueError):
+        raise InvalidValueError(f"invalid shard {shard!r}: (K, N) or 'K/N' with 1 <= K <= N, e.g. (3, 8)") from None
+    if not 1 <= k <= n:
+        raise InvalidValueError(f"invalid shard {shard!r}: (K, N) or 'K/N' with 1 <= K <= N, e.g. (3, 8)")
+    return (k, n)
+
+
+def _centres(lo: float, hi: float, n: int) -> np.ndarray:
+    # The library's Axis::centre, lo + (i + ½)(hi − lo)/n, in the same order of operations.
+    return lo + (np.arange(n) + 0.5) * (hi - lo) / n
+
+
+def npy_header(shape: Sequence[int]) -> bytes:
+    """The header the CLI writes (Rust's ndarray-npy) before a C-order float64 array of
+    ``shape``: ``{'descr': '<f8', 'fortran_order': False, 'shape': (…)}`` padded with spaces
+    and a newline to a multiple of 64 bytes, format 1.0 (2.0 past 65535 bytes). numpy.save's
+    differs (a trailing ``, }`` and room to grow the shape), so it is written here."""
+    text = ("{'descr': '<f8', 'fortran_order': False, 'shape': %r}" % (tuple(int(a) for a in shape),)).encode()
+    for major, size, fmt in ((1, 2, "<H"), (2, 4, "<I")):
+        prefix = 6 + 2 + size
+        pad = 64 - (prefix + len(text) + 1) % 64
+        length = len(text) + pad + 1
+        if length < 1 << (8 * size):
+            return b"\x93NUMPY" + bytes((major, 0)) + struct.pack(fmt, length) + text + b" " * pad + b"\n"
+    raise InvalidValueError(f"a shape {tuple(shape)} too long for a .npy header")
+
+
+class SweepResult:
+    """A sweep's results, or one shard's.
+
+    ``data``: the array as the CLI's ``.npy`` holds it — the axes slowest first, then the
+    ``columns`` (state variables for ``final``, ``flip_time`` s, ``energy_error`` J); a
+    shard's is ``(count, columns)``, cells ``offset`` … ``offset + count`` of the whole
+    grid in order (first axis fastest). ``axes``: ((name, cell centres), …) in the order
+    given. ``description``: what the CLI writes next to a shard (``FILE.npy.json``) and in
+    its summary.
+    """
+
+    def __init__(self, data: np.ndarray, description: Mapping[str, Any]):
+        self.data = data
+        self._description = dict(description)
+        self._data_info: Optional[dict] = None
+
+    @property
+    def columns(self) -> tuple:
+        return tuple(self._description["columns"])
+
+    @property
+    def axes(self) -> tuple:
+        return tuple((a["name"], _centres(a["lo"], a["hi"], a["n"])) for a in self._description["axes"])
+
+    @property
+    def shard(self) -> tuple:
+        """(K, N): shard K of N; (1, 1) for a whole sweep."""
+        return (self._description["shard"], self._description["shards"])
+
+    @property
+    def sharded(self) -> bool:
+        return self.shard[1] > 1
+
+    @property
+    def kernel(self) -> str:
+        return self._description["kernel"]
+
+    @property
+    def description(self) -> dict:
+        """The CLI's description of the run: system, method, dt (s), steps, axes, columns,
+        the whole shape, the shard, its offset and count, the fingerprint `merge` matches,
+        ``data`` (the .npy file's bytes and CRC-32), kernel, threads, wall_s."""
+        d = dict(self._description)
+        if self._data_info is None:
+            header = npy_header(self.data.shape)
+            body = memoryview(np.ascontiguousarray(self.data, dtype="<f8")).cast("B")
+            crc = zlib.crc32(body, zlib.crc32(header))
+            self._data_info = {"bytes": len(header) + body.nbytes, "crc32": f"{crc:08x}"}
+        # In the CLI's order of keys: `data` after the fingerprint.
+        out = {}
+        for k, v in d.items():
+            out[k] = v
+            if k == "fingerprint":
+                out["data"] = dict(self._data_info)
+        return out
+
+    def save(self, path: Union[str, os.PathLike]) -> Path:
+        """Writes the array as the CLI writes it (the same bytes, header included) to
+        ``path`` (``.npy``); for a shard, its description to ``path + ".json"``, so that
+        ``pendula merge`` (or :func:`merge`) assembles it."""
+        path = Path(path)
+        if path.suffix != ".npy":
+            raise InvalidValueError(f"invalid path {str(path)!r}: a sweep is saved as .npy")
+        body = np.ascontiguousarray(self.data, dtype="<f8")
+        with open(path, "wb") as f:
+            f.write(npy_header(body.shape))
+            f.write(memoryview(body).cast("B"))
+        if self.sharded:
+            side = Path(f"{path}.json")
+            side.write_text(json.dumps(self.description, indent=2) + "\n")
+        return path
+
+    def __reduce__(self):
+        return (_sweep_from_pickle, (PICKLE_VERSION, self.data, self._description))
+
+    def __repr__(self) -> str:
+        d = self._description
+        shard = f" shard {d['shard']}/{d['shards']}" if self.sharded else ""
+        return f"<SweepResult {d['system']} {d['method']}{shard}: {d['count']} cells {self.data.shape} on {d['kernel']}>"
+
+    def _repr_html_(self) -> str:
+        d = self._description
+        rows = [
+            ("system", d["system"]),
+            ("method", f"{d['method']}, {d['steps']} steps of {d['dt']:g} s"),
+            ("axes", ", ".join(f"{a['name']} {a['lo']:g} … {a['hi']:g} ({a['n']})" for a in d["axes"])),
+            ("columns", ", ".join(d["columns"])),
+            ("shape", tuple(self.data.shape)),
+            ("shard", f"{d['shard']}/{d['shards']} (cells {d['offset']} … {d['offset'] + d['count']})"),
+            ("kernel", d["kernel"]),
+            ("wall", f"{d['wall_s']:.3g} s on {d['threads']} threads"),
+        ]
+        body = "".join(f"<tr><th>{k}</th><td>{html.escape(str(v))}</td></tr>" for k, v in rows)
+        return f"<table>{body}</table>"
+
+
+def _sweep_from_pickle(version, data, description):
+    if version != PICKLE_VERSION:
+        raise PendulaError(f"a pickled SweepResult of version {version}; this pendula reads version {PICKLE_VERSION}")
+    return SweepResult(data, description)
+
+
+def sweep(
+    system: Any,
+    grid: Any,
+    *,
+    set: Optional[Mapping[str, Any]] = None,
+    method: str = "rk4",
+    dt: float = DEFAULT_DT,
+    steps: Optional[int] = None,
+    t_end: Optional[float] = None,
+    until: Optional[str] = None,
+    record: Union[str, Iterable[str]] = ("final",),
+    threads: Optional[int] = None,
+    shard: Any = None,
+) -> SweepResult:
+    """Integrates ``system`` (a name, or a System: its values are the ``set`` ones) from
+    every cell of ``grid`` — ``{name: (lo, hi, n)}`` or ``["NAME=LO:HI:N", ...]``, the
+    first axis varying fastest, cells sampled at their centres lo + (i + ½)(hi − lo)/n —
+    ``steps`` fixed steps of ``dt`` s (or to ``t_end`` s; 10 s if neither) with ``method``,
+    all cores (``threads``). ``set``: values the same for every cell. ``until="flip"``
+    stops each cell at its first flip. ``record``: ``final`` (the state), ``flip-time`` (s,
+    NaN without a flip), ``energy-error`` (E_end − E_0, J), in that column order.
+    ``shard=(K, N)`` or ``"K/N"`` computes shard K of N only (assemble them with
+    :func:`merge`). Bitwise the CLI's ``pendula sweep``, for any thread count.
+    """
+    settings = []
+    if not isinstance(system, str):
+        # A System: its name, and its values where `set` does not say otherwise.
+        if set:
+            raise InvalidValueError("give the values in the System or in set=, not both")
+        core = getattr(system, "_core", None)
+        if core is None:
+            raise InvalidValueError(f"invalid system {system!r}: a System or a catalogue name")
+        defaults = dict(_core.CoreSystem(core.name, []).values())
+        settings = [(n, v) for n, v in core.values() if v != defaults[n]]
+        system = core.name
+    settings += [(str(n), _value(n, v)) for n, v in (set or {}).items()]
+    axes = _axes(grid)
+    if steps is not None and t_end is not None:
+        raise InvalidValueError("give steps or t_end (s), not both")
+    if steps is not None:
+        try:
+            steps = operator.index(steps)
+        except TypeError:
+            raise InvalidValueError(f"invalid value {steps!r} for `steps`: a whole number") from None
+        if steps < 1:
+            raise InvalidValueError(f"invalid value {steps} for `steps`: at least 1")
+    elif t_end is None:
+        t_end = DEFAULT_T_END
+    records = [record] if isinstance(record, str) else list(record)
+    # The CLI's comma-separated form too: "final,flip-time".
+    records = [r.strip() for item in records for r in str(item).split(",")]
+    if threads is not None:
+        threads = operator.index(threads)
+        if threads < 1:
+            raise InvalidValueError(f"invalid value {threads} for `threads`: at least 1")
+    out = _core.sweep(
+        str(system),
+        settings,
+        axes,
+        str(method),
+        _value("dt", dt),
+        steps,
+        None if t_end is None else _value("t_end", t_end),
+        until,
+        records,
+        _shard(shard),
+        threads,
+    )
+    return _result(out)
+
+
+def _result(out: dict) -> SweepResult:
+    data = out.pop("data")
+    d = {
+        "pendula_sweep": SHARD_FORMAT,
+        "system": out["system"],
+        "method": out["method"],
+        "dt": out["dt"],
+        "steps": out["steps"],
+        "axes": [{"name": n, "lo": lo, "hi": hi, "n": k} for n, lo, hi, k in out["axes"]],
+        "columns": list(out["columns"]),
+        "shape": list(out["shape"]),
+        "shard": out["shard"],
+        "shards": out["shards"],
+        "offset": out["offset"],
+        "count": out["count"],
+        "fingerprint": out["fingerprint"],
+        "kernel": out["kernel"],
+        "threads": out["threads"],
+        "wall_s": out["wall_s"],
+    }
+    if d["shards"] == 1:
+        data = data.reshape(d["shape"])
+    return SweepResult(data, d)
+
+
+def _load(path: Union[str, os.PathLike]) -> SweepResult:
+    """A shard saved by :meth:`SweepResult.save` or ``pendula sweep --shard``: its
+    description, then the file checked against the length and CRC-32 it gives."""
+    path = Path(path)
+    side = Path(f"{path}.json")
+    try:
+        d = json.loads(side.read_text())
+    except OSError as e:
+        raise InvalidValueError(f"cannot read {side} (the shard's description, written with the shard): {e.strerror}") from None
+    except ValueError as e:
+        raise InvalidValueError(f"invalid shard description {side}: {e}") from None
+    if not isinstance(d, dict) or "pendula_sweep" not in d:
+        raise InvalidValueError(f"{side} is not a sweep shard's description (it has no `pendula_sweep` format number)")
+    if d["pendula_sweep"] != SHARD_FORMAT:
+        raise InvalidValueError(f"{side} is a shard description of format {d['pendula_sweep']}; this pendula reads format {SHARD_FORMAT}")
+    missing = [k for k in ("shape", "shard", "shards", "offset", "count", "fingerprint", "data", "columns", "axes") if k not in d]
+    if missing:
+        raise InvalidValueError(f"{side} has no `{missing[0]}`")
+    raw = path.read_bytes()
+    crc = zlib.crc32(raw)
+    if len(raw) != d["data"]["bytes"] or f"{crc:08x}" != d["data"]["crc32"]:
+        raise InvalidValueError(
+            f"{path}: {len(raw)} bytes of CRC-32 {crc:08x}, but its description {side} says {d['data']['bytes']} bytes of "
+            f"{d['data']['crc32']}: the file is truncated, corrupted or not the shard described"
+        )
+    data = np.load(path)
+    if data.dtype != np.float64 or data.shape != (d["count"], d["shape"][-1]):
+        raise InvalidValueError(f"{path}: shape {data.shape} of {data.dtype}, its description says ({d['count']}, {d['shape'][-1]}) float64")
+    result = SweepResult(data, {k: v for k, v in d.items() if k != "data"})
+    result._data_info = dict(d["data"])
+    return result
+
+
+def merge(shards: Iterable[Union[SweepResult, str, os.PathLike]]) -> SweepResult:
+    """The whole sweep from all N of its shards (SweepResults, or ``.npy`` paths with their
+    ``.json`` descriptions, from Python or the CLI), in any order: bitwise the unsharded
+    run's. Shards of different sweeps, a shard given twice and missing shards are refused,
+    naming which."""
+    parts = []
+    for s in shards:
+        if isinstance(s, SweepResult):
+            parts.append((f"shard {s.shard[0]}/{s.shard[1]}", s))
+        else:
+            parts.append((str(s), _load(s)))
+    if not parts:
+        raise InvalidValueError("merge: give the shards")
+    first_name, first = parts[0]
+    f = first._description
+    for name, s in parts:
+        d = s._description
+        if (d["fingerprint"], list(d["shape"]), d["shards"]) != (f["fingerprint"], list(f["shape"]), f["shards"]):
+            raise InvalidValueError(f"{name} is a shard of another sweep than {first_name} (its grid, method or records differ)")
+    n = f["shards"]
+    seen: dict = {}
+    for name, s in parts:
+        k = s._description["shard"]
+        if k in seen:
+            raise InvalidValueError(f"{seen[k]} and {name} are both shard {k}/{n}: give each shard once")
+        seen[k] = name
+    missing = [f"{k}/{n}" for k in range(1, n + 1) if k not in seen]
+    if missing:
+        are = "shards" if len(missing) > 1 else "shard"
+        raise InvalidValueError(f"{are} {', '.join(missing)} {'are' if len(missing) > 1 else 'is'} missing: give all {n} shards")
+    shape = [int(a) for a in f["shape"]]
+    cols = shape[-1]
+    whole = np.full((math.prod(shape[:-1]), cols), np.nan)
+    for _, s in parts:
+        d = s._description
+        rows = np.asarray(s.data).reshape(-1, cols)
+        if rows.shape[0] != d["count"]:
+            raise InvalidValueError(f"shard {d['shard']}/{n}: {rows.shape[0]} cells, its description says {d['count']}")
+        whole[d["offset"] : d["offset"] + d["count"]] = rows
+    d = dict(f)
+    d.pop("data", None)
+    d.update(shard=1, shards=1, offset=0, count=whole.shape[0])
+    d["wall_s"] = sum(s._description["wall_s"] for _, s in parts)
+    return SweepResult(whole.reshape(shape), d)
