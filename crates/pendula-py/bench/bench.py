@@ -141,7 +141,8 @@ def w3(runs, threads):
     c = np.array([-math.pi + (i + 0.5) * (2 * math.pi) / n for i in range(n)])
     g1, g2 = np.meshgrid(c, c)
     y0s = np.stack([g1.ravel(), g2.ravel(), np.zeros(n * n), np.zeros(n * n)], axis=1)
-    tp, r = timed(lambda: pendula.ensemble("double", y0s, method="rk4", dt=1e-2, steps=1000, threads=threads), runs)
+    tp, r = timed(lambda: pendula.ensemble("double", y0s, method="rk4", dt=1e-2, steps=1000, threads=threads,
+                                                record=("final", "flip-time")), runs)
     cli = str(Path(os.environ.get("PENDULA", ROOT / "target" / "release" / "pendula")).resolve())
     with tempfile.TemporaryDirectory() as tmp:
         args = [cli, "sweep", "double", "--grid", "theta1=-pi:pi:256", "--grid", "theta2=-pi:pi:256", "--dt", "1e-2",

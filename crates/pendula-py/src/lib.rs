@@ -650,10 +650,11 @@ fn solve<'py>(
 /// An ensemble: `m` members of `system`, member i's parameters `params[i]` (columns named by
 /// `param_names`, the rest the system's values) and initial state `y0s[i]`, `steps` steps of
 /// `dt` with `method`. On the SIMD lanes when the library says so (`ensemble_path`), else one
-/// scalar run per member; all cores (`threads`). Returns (rows (m, n_state + 1): the final
-/// state then the first flip time or NaN, the engine's name).
+/// scalar run per member; all cores (`threads`). Returns (rows (m, n_state + 1, or + 2 with
+/// `energy_error`): the final state, the first flip time or NaN, and E_end − E_0 (J) from the
+/// member's own model; the engine's name).
 #[pyfunction]
-#[pyo3(signature = (system, y0s, param_names, params, method, dt, steps, until_flip, threads=None))]
+#[pyo3(signature = (system, y0s, param_names, params, method, dt, steps, until_flip, threads=None, energy_error=false))]
 #[allow(clippy::too_many_arguments)] // the ensemble's description, as Python passes it
 fn ensemble<'py>(
     py: Python<'py>,
@@ -666,6 +667,7 @@ fn ensemble<'py>(
     steps: u64,
     until_flip: bool,
     threads: Option<usize>,
+    energy_error: bool,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, &'static str)> {
     let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
     let info = system.values.info();
@@ -731,7 +733,7 @@ fn ensemble<'py>(
     }
     let swept: Vec<&str> = param_names.iter().map(String::as_str).collect();
     let path = ensemble_path(method, &system.values, &swept);
-    let cols = dim + 1;
+    let cols = dim + 1 + usize::from(energy_error);
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if threads == 0 {
         return Err(raise(py, "InvalidValueError", "invalid value 0 for `threads`: at least 1".to_owned()));
@@ -751,6 +753,18 @@ fn ensemble<'py>(
                 let start = c * slice;
                 let count = rows.len() / cols;
                 let member = |i: usize, v: &mut [f64]| member(start + i, v);
+                // The final state, the flip time and, if asked, the energy error from the
+                // member's own model (built only then).
+                let write = |i: usize, state: &[f64], flip: f64, row: &mut [f64]| {
+                    row[..dim].copy_from_slice(&state[..dim]);
+                    row[dim] = flip;
+                    if energy_error {
+                        let mut v = vec![0.0; base.len()];
+                        member(i, &mut v);
+                        let model = info.values(&settings_of(&v)).expect("validated above").build();
+                        row[dim + 1] = model.energy(0.0, &state[..dim]) - model.energy(0.0, &v[np..]);
+                    }
+                };
                 match path {
                     EnsemblePath::Engine(lanes) => {
                         let spec = LaneSpec {
@@ -761,10 +775,8 @@ fn ensemble<'py>(
                             track_flips: true,
                             cancel: Some(flag),
                         };
-                        let store = |_: usize, o: &LaneOutcome, row: &mut [f64]| {
-                            row[..dim].copy_from_slice(&o.state[..dim]);
-                            row[dim] = o.flip_time;
-                        };
+                        let store =
+                            |i: usize, o: &LaneOutcome, row: &mut [f64]| write(i, &o.state, o.flip_time, row);
                         model
                             .ensemble(info, count, &member, &spec, rows, cols, &store)
                             .map_err(|e| shift(e, start))?;
@@ -783,10 +795,7 @@ fn ensemble<'py>(
                             &spec,
                             rows,
                             cols,
-                            &|_, state, flip, row: &mut [f64]| {
-                                row[..dim].copy_from_slice(state);
-                                row[dim] = flip;
-                            },
+                            &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
                         )
                         .map_err(|e| shift(e, start))?;
                     }
@@ -806,10 +815,7 @@ fn ensemble<'py>(
                             &spec,
                             rows,
                             cols,
-                            &|_, state, flip, row: &mut [f64]| {
-                                row[..dim].copy_from_slice(state);
-                                row[dim] = flip;
-                            },
+                            &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
                         )
                         .map_err(|e| shift(e.into_error(), start))?;
                     }

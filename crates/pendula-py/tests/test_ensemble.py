@@ -28,27 +28,41 @@ def test_ensemble_equals_the_sweep_byte_for_byte(cli, tmp_path):
     t1, t2 = centres(-3, 3, 37), centres(-2, 2, 23)
     g1, g2 = np.meshgrid(t1, t2)  # theta1 fastest, as the sweep lays it out
     y0s = np.stack([g1.ravel(), g2.ravel(), np.zeros(g1.size), np.zeros(g1.size)], axis=1)
-    r = pendula.ensemble("double", y0s, method="rk4", dt=0.01, steps=300)
+    r = pendula.ensemble("double", y0s, method="rk4", dt=0.01, steps=300, record=("final", "flip-time"))
     assert r.kernel.startswith("simd lanes")
     assert r.data.tobytes() == sweep.reshape(-1, 5).tobytes()
-    # Parameters per member: the sweep over m2 with theta1 fixed.
+    # Parameters per member: the sweep over m2 with theta1 fixed, every record, in the
+    # sweep's order (the energy error from each member's own masses).
     cli(["sweep", "double", "--grid", "m2=0.5:3:40", "--set", "theta1=2", "--dt", "0.01", "--steps", "200",
-         "--record", "final,flip-time", "--out", "m2.npy"], tmp_path)
+         "--record", "energy-error,final,flip-time", "--out", "m2.npy"], tmp_path)
     m2 = np.load(tmp_path / "m2.npy")
     y0 = pendula.System("double", theta1=2).y0
-    r = pendula.ensemble("double", np.tile(y0, (40, 1)), params={"m2": centres(0.5, 3, 40)}, dt=0.01, steps=200)
+    r = pendula.ensemble("double", np.tile(y0, (40, 1)), params={"m2": centres(0.5, 3, 40)}, dt=0.01, steps=200,
+                         record="energy-error,final,flip-time")
     assert r.data.tobytes() == m2.tobytes()
+    assert r.columns == ["energy_error", "theta1", "theta2", "omega1", "omega2", "flip_time"]
+    # Independently: E_end − E_0 from the member's System.
+    for k in (0, 17, 39):
+        member = pendula.System("double", m2=centres(0.5, 3, 40)[k], theta1=2)
+        assert r.energy_error[k] == member.energy(r.final[k]) - member.energy(y0)
+    default = pendula.ensemble("double", y0s[:10], dt=0.01, steps=20)
+    assert default.records == ("final",) and default.data.shape == (10, 4)
+    with pytest.raises(pendula.InvalidValueError, match="was not recorded"):
+        default.flip_time
+    with pytest.raises(pendula.InvalidValueError, match="did you mean 'flip-time'"):
+        pendula.ensemble("double", y0s[:10], dt=0.01, steps=20, record="flip_time")
 
 
 def test_threads_do_not_change_the_bits_and_results_pickle():
     rng = np.random.default_rng(3)
     y0s = np.column_stack([rng.uniform(-3, 3, (1000, 2)), np.zeros((1000, 2))])
-    one = pendula.ensemble("double", y0s, t_end=3, dt=0.01, threads=1, until="flip")
-    two = pendula.ensemble("double", y0s, t_end=3, dt=0.01, threads=2, until="flip")
+    kw = dict(t_end=3, dt=0.01, until="flip", record=("final", "flip-time", "energy-error"))
+    one = pendula.ensemble("double", y0s, threads=1, **kw)
+    two = pendula.ensemble("double", y0s, threads=2, **kw)
     assert one.data.tobytes() == two.data.tobytes()
     assert np.isnan(one.flip_time).any() and (~np.isnan(one.flip_time)).any()
     back = pickle.loads(pickle.dumps(one))
-    assert back.data.tobytes() == one.data.tobytes() and back.system == one.system
+    assert back.data.tobytes() == one.data.tobytes() and back.system == one.system and back.records == one.records
     s = pendula.System("double", m2=2.5, theta1=1.0)
     assert pickle.loads(pickle.dumps(s)) == s
     sol = pendula.solve(s, (0, 1), method="rk4")

@@ -67,7 +67,8 @@ def test_the_scalar_path_is_the_clis_too_and_the_ensembles(cli, tmp_path):
     (_, t1), (_, t2) = r.axes
     g1, g2 = np.meshgrid(t1, t2)
     y0s = np.stack([g1.ravel(), g2.ravel(), np.zeros(g1.size), np.zeros(g1.size)], axis=1)
-    e = pendula.ensemble("double", y0s, method="gauss-legendre-4", dt=0.01, steps=40, threads=2)
+    e = pendula.ensemble("double", y0s, method="gauss-legendre-4", dt=0.01, steps=40, threads=2,
+                         record=("final", "flip-time"))
     assert e.kernel == "scalar"
     assert e.data.tobytes() == r.data.reshape(-1, 5).tobytes()
 

@@ -11,6 +11,7 @@ pendulum is dimensionless. Every computation releases the GIL.
 
 from __future__ import annotations
 
+import difflib
 import html
 import math
 from dataclasses import dataclass, field
@@ -622,38 +623,67 @@ def solve(
 
 
 class EnsembleResult:
-    """An ensemble's results: ``final`` (m, n_state), ``flip_time`` (m,; NaN where no
-    angle passed ±π), ``names``, ``kernel`` (which engine ran it)."""
+    """An ensemble's results: ``data`` (m, columns), the recorded columns in the order of
+    ``records`` (as ``pendula sweep --record`` writes them), named by ``columns``; by name
+    ``final`` (m, n_state), ``flip_time`` (m,; s, NaN where no angle passed ±π) and
+    ``energy_error`` (m,; E_end − E_0, J); ``kernel`` (which engine ran it)."""
 
-    def __init__(self, system: System, data: np.ndarray, method: str, kernel: str):
+    def __init__(self, system: System, data: np.ndarray, method: str, kernel: str, records: Sequence[str] = ("final", "flip-time")):
         self.system = system
         self.data = data
         self.method = method
         self.kernel = kernel
+        self.records = tuple(records)
 
     @property
     def names(self) -> list[str]:
         return self.system.names
 
     @property
+    def columns(self) -> list[str]:
+        """The names of ``data``'s columns."""
+        out: list[str] = []
+        for r in self.records:
+            out += self.names if r == "final" else [r.replace("-", "_")]
+        return out
+
+    def _column(self, record: str) -> slice:
+        if record not in self.records:
+            raise InvalidValueError(f"`{record}` was not recorded: pass record=(..., {record!r}) to ensemble()")
+        start = 0
+        for r in self.records:
+            width = len(self.names) if r == "final" else 1
+            if r == record:
+                return slice(start, start + width)
+            start += width
+        raise AssertionError(record)
+
+    @property
     def final(self) -> np.ndarray:
-        return self.data[:, : len(self.names)]
+        """The final states, (m, n_state)."""
+        return self.data[:, self._column("final")]
 
     @property
     def flip_time(self) -> np.ndarray:
-        return self.data[:, len(self.names)]
+        """The first flip time of each member, s (NaN: none)."""
+        return self.data[:, self._column("flip-time")][:, 0]
+
+    @property
+    def energy_error(self) -> np.ndarray:
+        """E_end − E_0 of each member, J (dimensionless for dimensionless systems)."""
+        return self.data[:, self._column("energy-error")][:, 0]
 
     def __reduce__(self):
-        return (_ensemble_from_pickle, (PICKLE_VERSION, self.system, self.data, self.method, self.kernel))
+        return (_ensemble_from_pickle, (PICKLE_VERSION, self.system, self.data, self.method, self.kernel, self.records))
 
     def __repr__(self) -> str:
         return f"<EnsembleResult {self.system.name} {self.method}: {len(self.data)} members on {self.kernel}>"
 
 
-def _ensemble_from_pickle(version, system, data, method, kernel):
+def _ensemble_from_pickle(version, system, data, method, kernel, records=("final", "flip-time")):
     if version != PICKLE_VERSION:
         raise PendulaError(f"a pickled EnsembleResult of version {version}; this pendula reads version {PICKLE_VERSION}")
-    return EnsembleResult(system, data, method, kernel)
+    return EnsembleResult(system, data, method, kernel, records)
 
 
 def ensemble(
@@ -665,6 +695,7 @@ def ensemble(
     method: str = "rk4",
     dt: float = 1e-3,
     steps: int | None = None,
+    record: Sequence[str] | str = ("final",),
     until: str | None = None,
     threads: int | None = None,
 ) -> EnsembleResult:
@@ -672,7 +703,10 @@ def ensemble(
     per-member parameters ``params`` ({name: array of m}), ``steps`` steps of ``dt`` (or to
     ``t_end``, s) on the SIMD lanes where the method has them, else one scalar run per member
     (``kernel`` says which), on all cores (``threads``). ``until="flip"`` stops each member
-    at its first flip. Results are bitwise identical whatever the thread count.
+    at its first flip. ``record``: what ``data`` holds per member, in this order, as
+    ``pendula sweep --record``: ``"final"`` (the state), ``"flip-time"`` (s, NaN if no flip),
+    ``"energy-error"`` (E_end − E_0, J). Results are bitwise identical whatever the thread
+    count.
     """
     system = _system(system)
     y0s = np.ascontiguousarray(np.atleast_2d(np.asarray(y0s, dtype=np.float64)))
@@ -690,5 +724,20 @@ def ensemble(
         steps = max(1, round(t_end / dt))
     if until not in (None, "flip"):
         raise InvalidValueError(f"invalid value {until!r} for `until`: None or 'flip'")
-    data, kernel = _core.ensemble(system._core, y0s, names, p, str(method), float(dt), int(steps), until == "flip", threads)
-    return EnsembleResult(system, data, method, kernel)
+    records = tuple(r.strip() for r in record.split(",")) if isinstance(record, str) else tuple(record)
+    allowed = ("final", "flip-time", "energy-error")
+    for r in records:
+        if r not in allowed:
+            close = difflib.get_close_matches(str(r), allowed, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise InvalidValueError(f"invalid record {r!r}{hint}: one of {', '.join(allowed)}")
+    if not records or len(set(records)) != len(records):
+        raise InvalidValueError(f"invalid record {record!r}: each of {', '.join(allowed)} at most once, at least one")
+    raw, kernel = _core.ensemble(
+        system._core, y0s, names, p, str(method), float(dt), int(steps), until == "flip", threads,
+        "energy-error" in records,
+    )
+    n = len(system.names)
+    parts = {"final": raw[:, :n], "flip-time": raw[:, n : n + 1], "energy-error": raw[:, n + 1 : n + 2]}
+    data = raw if records == ("final", "flip-time") else np.ascontiguousarray(np.hstack([parts[r] for r in records]))
+    return EnsembleResult(system, data, method, kernel, records)

@@ -54,6 +54,7 @@ def ensemble(
     steps: int,
     until_flip: bool,
     threads: Optional[int] = None,
+    energy_error: bool = False,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
 
 # The studies (`crates/pendula-py/src/study.rs`), wrapped by `pendula.study`.
