@@ -260,6 +260,11 @@ def test_results_pickle_plot_and_show_a_table():
         plt.close(fig)
     conv = pickle.loads(pickle.dumps(results[4]))
     assert conv.orders == results[4].orders
+    # Versioned: the form names the class and its fields, and a future version is refused.
+    reduced = results[6].__reduce__()
+    assert reduced[1][:2] == (1, "DivergenceResult") and "growth_rate" in reduced[1][2]
+    with pytest.raises(pendula.PendulaError, match="version 2"):
+        reduced[0](2, *reduced[1][1:])
 
 
 def test_ctrl_c_interrupts_a_long_fractal_quickly():

@@ -16,7 +16,8 @@ function               CLI command                     result
 
 Each result is a frozen dataclass of numpy arrays and numbers (the numbers of the CLI's
 ``--summary`` JSON, by the same names where they fit), with ``plot(ax=None)`` (matplotlib,
-imported only then) and an HTML summary for notebooks; it pickles as plain data.
+imported only then) and an HTML summary for notebooks; it pickles as plain data with a
+version (its fields by name), so multiprocessing and Dask can ship it.
 Units are SI: times in s, rates in 1/s, energies in J, angles in rad.
 """
 
@@ -24,13 +25,13 @@ from __future__ import annotations
 
 import math
 import operator
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
 
 import numpy as np
 
 from . import _core
-from .errors import InvalidValueError, UnknownNameError
+from .errors import InvalidValueError, PendulaError, UnknownNameError
 
 if TYPE_CHECKING:
     from . import System
@@ -125,8 +126,29 @@ def _time_unit(system: "System") -> str:
 # Lyapunov exponents ------------------------------------------------------------------
 
 
+#: The version of the studies' pickled forms.
+STUDY_PICKLE_VERSION = 1
+
+
+class _Pickled:
+    """Pickles a result as its class name and its fields by name, with a version: portable
+    across builds, never raw memory."""
+
+    def __reduce__(self):
+        return (_from_pickle, (STUDY_PICKLE_VERSION, type(self).__name__, {f.name: getattr(self, f.name) for f in fields(self)}))
+
+
+def _from_pickle(version: int, name: str, values: dict):
+    if version != STUDY_PICKLE_VERSION:
+        raise PendulaError(f"a pickled {name} of version {version}; this pendula reads version {STUDY_PICKLE_VERSION}")
+    cls = globals().get(name)
+    if not (isinstance(cls, type) and issubclass(cls, _Pickled)):
+        raise PendulaError(f"a pickled study result of unknown kind {name!r}")
+    return cls(**values)
+
+
 @dataclass(frozen=True, eq=False)
-class LyapunovResult:
+class LyapunovResult(_Pickled):
     """The largest Lyapunov exponent (or the spectrum) by Benettin's method.
 
     ``lambda_max`` and its ``uncertainty`` (standard error of 10 batch means) in 1/s;
@@ -222,7 +244,7 @@ def lyapunov(
 
 
 @dataclass(frozen=True, eq=False)
-class PoincareResult:
+class PoincareResult(_Pickled):
     """A Poincaré section: every crossing of ``section`` = ``value`` (rad, rising) by
     ``count`` orbits of energy ``energy`` (J), in orbit order.
 
@@ -340,7 +362,7 @@ def poincare(
 
 
 @dataclass(frozen=True, eq=False)
-class FractalResult:
+class FractalResult(_Pickled):
     """The flip fractal: ``flip_time`` (n₂, n₁; θ₁ fastest, as the CLI's fractal.npy) the
     time to the first flip from rest (s; NaN: none by ``t_max`` or forbidden by energy), the
     same at dt/2 (``flip_time_half_step``), ``converged`` (bool, as fractal-converged.npy):
@@ -481,7 +503,7 @@ def fractal(
 
 
 @dataclass(frozen=True, eq=False)
-class BifurcationResult:
+class BifurcationResult(_Pickled):
     """A stroboscopic orbit diagram: for each value of ``param`` (``values``, the cell
     centres), ``samples`` (n, samples, n_state): the state at drive phase 0 once per drive
     period after the transient (angles wrapped into [−π, π), rad; velocities rad/s).
@@ -589,7 +611,7 @@ def bifurcation(
 
 
 @dataclass(frozen=True, eq=False)
-class MethodConvergence:
+class MethodConvergence(_Pickled):
     """One method's convergence: its steps ``dt`` (s) and max-norm errors ``error`` at the
     end time; ``order`` fitted over ``fit`` = (points, h_min, h_max) in the asymptotic range,
     or None with the ``reason``; ``failure``: why steps are missing (the library's message),
@@ -615,7 +637,7 @@ class MethodConvergence:
 
 
 @dataclass(frozen=True, eq=False)
-class ConvergenceResult:
+class ConvergenceResult(_Pickled):
     """A convergence study: per method (``methods``, in order) errors against steps and the
     fitted order; ``t_end`` (s) and the ``reference`` the errors are against. ``orders``,
     ``dt``, ``notes``: dicts by method name, as the CLI's summary."""
@@ -709,7 +731,7 @@ def convergence(
 
 
 @dataclass(frozen=True, eq=False)
-class MethodWork:
+class MethodWork(_Pickled):
     """One method's work-precision points: ``dt`` (s; for an adaptive run the mean accepted
     step), ``tol`` (rtol = atol of an adaptive run, NaN for fixed steps), ``error`` (max norm
     at the end time), ``rhs_evals``, ``wall_s`` (s, median of repeated runs); ``failure``:
@@ -725,7 +747,7 @@ class MethodWork:
 
 
 @dataclass(frozen=True, eq=False)
-class WorkPrecisionResult:
+class WorkPrecisionResult(_Pickled):
     """A work-precision study: per method (``methods``) error against cost, at ``t_end``
     (s) against the ``reference``."""
 
@@ -799,7 +821,7 @@ def work_precision(
 
 
 @dataclass(frozen=True, eq=False)
-class DivergenceResult:
+class DivergenceResult(_Pickled):
     """The distance between two runs started ``delta`` apart in ``variable``: ``t`` (s)
     and ``distance`` (Euclidean, state units mixed) at about 2000 samples; the exponential
     ``growth_rate`` (1/s) fitted over ``fit_window`` (s), before the distance first exceeds
