@@ -7,7 +7,7 @@
 //! (`pendula.errors`), chosen here by the error's kind: bad input is a `ValueError` subclass
 //! that names the value and what is allowed, a failed run an `IntegrationError` with the time.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pendula::checkpoint::{Leg, Pause};
@@ -410,6 +410,20 @@ pub(crate) fn interruptible<T: Send>(
     short: bool,
     f: impl FnOnce(&AtomicBool) -> T + Send,
 ) -> PyResult<T> {
+    let done = AtomicU64::new(0);
+    interruptible_counted(py, short, None, &done, |flag| f(flag))
+}
+
+/// [`interruptible`] for a run that counts what it has finished in `done` (members, cells,
+/// pixels): `progress`, if given, is called with the count at each check, and an exception it
+/// raises stops the run as a Ctrl-C does.
+pub(crate) fn interruptible_counted<T: Send>(
+    py: Python<'_>,
+    short: bool,
+    progress: Option<&Bound<'_, PyAny>>,
+    done: &AtomicU64,
+    f: impl FnOnce(&AtomicBool) -> T + Send,
+) -> PyResult<T> {
     let flag = AtomicBool::new(false);
     if short {
         return Ok(py.detach(|| f(&flag)));
@@ -431,8 +445,12 @@ pub(crate) fn interruptible<T: Send>(
             match received {
                 Ok(out) => return (out, pending),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    let tick = || match progress {
+                        Some(p) => p.call1((done.load(Ordering::Relaxed),)).map(|_| ()),
+                        None => Ok(()),
+                    };
                     if pending.is_none()
-                        && let Err(e) = py.check_signals()
+                        && let Err(e) = py.check_signals().and_then(|()| tick())
                     {
                         flag.store(true, Ordering::Relaxed);
                         pending = Some(e);
@@ -654,7 +672,7 @@ fn solve<'py>(
 /// `energy_error`): the final state, the first flip time or NaN, and E_end − E_0 (J) from the
 /// member's own model; the engine's name).
 #[pyfunction]
-#[pyo3(signature = (system, y0s, param_names, params, method, dt, steps, until_flip, threads=None, energy_error=false))]
+#[pyo3(signature = (system, y0s, param_names, params, method, dt, steps, until_flip, threads=None, energy_error=false, progress=None))]
 #[allow(clippy::too_many_arguments)] // the ensemble's description, as Python passes it
 fn ensemble<'py>(
     py: Python<'py>,
@@ -668,6 +686,7 @@ fn ensemble<'py>(
     until_flip: bool,
     threads: Option<usize>,
     energy_error: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, &'static str)> {
     let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
     let info = system.values.info();
@@ -743,7 +762,8 @@ fn ensemble<'py>(
     // In slices of members, the interrupt flag looked at between them: a member's result
     // does not depend on the slicing (nor on the thread count).
     let slice = (threads * 16 * 16).max(1);
-    let result = interruptible(py, false, |flag| {
+    let done = AtomicU64::new(0);
+    let result = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("threads");
         pool.install(|| -> Result<(), Error> {
             for (c, rows) in data.chunks_mut(slice * cols).enumerate() {
@@ -820,6 +840,7 @@ fn ensemble<'py>(
                         .map_err(|e| shift(e.into_error(), start))?;
                     }
                 }
+                done.fetch_add(count as u64, Ordering::Relaxed);
             }
             Ok(())
         })

@@ -26,7 +26,7 @@ use pendula::{End, Error, RunSpec};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::{CoreSystem, interruptible, raise, to_py};
+use crate::{CoreSystem, interruptible, interruptible_counted, raise, to_py};
 
 /// An `InvalidValueError` for `name` = `value`, with what is allowed.
 fn invalid(py: Python<'_>, name: &str, value: impl std::fmt::Display, allowed: &str) -> PyErr {
@@ -236,7 +236,7 @@ pub(crate) fn poincare<'py>(
 /// `flip_time`, `flip_time_half_step` (n₂, n₁; NaN: no flip), `converged` (bool),
 /// `forbidden`, the axes' cell centres `theta1_centres`, `theta2_centres` (rad).
 #[pyfunction]
-#[pyo3(signature = (system, theta1, theta2, t_max, method, dt, tolerance, threads=None))]
+#[pyo3(signature = (system, theta1, theta2, t_max, method, dt, tolerance, threads=None, progress=None))]
 #[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn fractal<'py>(
     py: Python<'py>,
@@ -248,6 +248,7 @@ pub(crate) fn fractal<'py>(
     dt: f64,
     tolerance: f64,
     threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let info = system.values.info();
     if !std::ptr::eq(info, <DoublePendulum as Model>::INFO) {
@@ -308,7 +309,8 @@ pub(crate) fn fractal<'py>(
     let slice = (pool.current_num_threads() * 256).max(1);
     // At dt and at dt/2, per pixel; None when interrupted.
     type FlipTimes = (Vec<f64>, Vec<f64>);
-    let times = interruptible(py, false, |flag| {
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let times = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
         pool.install(|| -> Result<Option<FlipTimes>, Error> {
             let (mut at_h, mut at_half) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
             for start in (0..pixels).step_by(slice) {
@@ -318,6 +320,7 @@ pub(crate) fn fractal<'py>(
                 let (a, b) = flip_times(&spec, start..(start + slice).min(pixels), &|_| ())?;
                 at_h.extend(a);
                 at_half.extend(b);
+                done.store(at_h.len() as u64, Ordering::Relaxed);
             }
             Ok(Some((at_h, at_half)))
         })

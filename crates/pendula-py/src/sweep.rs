@@ -14,7 +14,9 @@ use pendula::{End, Error, RunSpec, integrator};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{interruptible, raise, to_py};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::{interruptible_counted, raise, to_py};
 
 /// Adds the sweep's function to the extension module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -47,7 +49,7 @@ fn cell_error(py: Python<'_>, e: CellError) -> PyErr {
 /// `"flip"` stops each cell at its first flip; `records` the recorded quantities' names;
 /// shard (K, N) of the cells. Returns the rows (count, columns) and the run's description.
 #[pyfunction]
-#[pyo3(signature = (system, set, axes, method, dt, steps, t_end, until, records, shard, threads=None))]
+#[pyo3(signature = (system, set, axes, method, dt, steps, t_end, until, records, shard, threads=None, progress=None))]
 #[allow(clippy::too_many_arguments)] // the sweep's description, as Python passes it
 fn sweep<'py>(
     py: Python<'py>,
@@ -62,6 +64,7 @@ fn sweep<'py>(
     records: Vec<String>,
     shard: (usize, usize),
     threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let family = pendula::model::find(system).map_err(|e| to_py(py, &e))?;
     let info = family.values(&set).map_err(|e| to_py(py, &e))?.info();
@@ -145,8 +148,13 @@ fn sweep<'py>(
         .build()
         .map_err(|e| raise(py, "PendulaError", format!("cannot start {threads} threads: {e}")))?;
     let begin = Instant::now();
-    let result = interruptible(py, false, |flag| {
-        pool.install(|| sweep.compute(start, &mut data, Some(flag), &|| {}))
+    let done = AtomicU64::new(0);
+    let result = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
+        pool.install(|| {
+            sweep.compute(start, &mut data, Some(flag), &|| {
+                done.fetch_add(1, Ordering::Relaxed);
+            })
+        })
     })?;
     // An interrupted run raised KeyboardInterrupt above; what is left is the run's own.
     result.map_err(|e| cell_error(py, e))?;

@@ -172,3 +172,18 @@ def test_an_exception_in_the_progress_callback_ends_the_run():
 
     with pytest.raises(RuntimeError, match="stop at"):
         pendula.solve("double", (0, 1e4), method="rk4", progress=fail)
+
+
+def test_counted_runs_report_progress(capfd):
+    # Ensembles count members, sweeps cells, fractals pixels; the last count is the total.
+    seen = {"members": [], "cells": [], "pixels": []}
+    y0s = np.zeros((5000, 4))
+    y0s[:, 0] = np.linspace(-3, 3, 5000)
+    pendula.ensemble("double", y0s, steps=3000, dt=1e-3, progress=seen["members"].append)
+    pendula.sweep("double", ["theta1=-3:3:60", "theta2=-3:3:50"], steps=3000, shard=(2, 3), progress=seen["cells"].append)
+    pendula.fractal(theta1=(-3, 3, 40), theta2=(-3, 3, 30), t_max=10, progress=seen["pixels"].append)
+    for kind, total in (("members", 5000), ("cells", 1000), ("pixels", 1200)):
+        assert seen[kind][-1] == total and seen[kind] == sorted(seen[kind]), (kind, seen[kind][:5])
+        assert len(seen[kind]) >= 2, kind  # counts arrived while the run went on
+    pendula.ensemble("double", y0s[:100], steps=10, progress=True)
+    assert "100 of 100 members" in capfd.readouterr().err

@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from . import _core
-from .dense import DenseOutput, Progress, locate
+from .dense import DenseOutput, Progress, counted, locate
 from .errors import (
     IntegrationError,
     InvalidValueError,
@@ -698,6 +698,7 @@ def ensemble(
     record: Sequence[str] | str = ("final",),
     until: str | None = None,
     threads: int | None = None,
+    progress: bool | Callable[[int], None] = False,
 ) -> EnsembleResult:
     """Integrates m members of ``system`` from the rows of ``y0s`` (m, n_state), with
     per-member parameters ``params`` ({name: array of m}), ``steps`` steps of ``dt`` (or to
@@ -706,7 +707,7 @@ def ensemble(
     at its first flip. ``record``: what ``data`` holds per member, in this order, as
     ``pendula sweep --record``: ``"final"`` (the state), ``"flip-time"`` (s, NaN if no flip),
     ``"energy-error"`` (E_end − E_0, J). Results are bitwise identical whatever the thread
-    count.
+    count. ``progress=True`` shows a bar of the members done (a callable gets the count).
     """
     system = _system(system)
     y0s = np.ascontiguousarray(np.atleast_2d(np.asarray(y0s, dtype=np.float64)))
@@ -733,9 +734,12 @@ def ensemble(
             raise InvalidValueError(f"invalid record {r!r}{hint}: one of {', '.join(allowed)}")
     if not records or len(set(records)) != len(records):
         raise InvalidValueError(f"invalid record {record!r}: each of {', '.join(allowed)} at most once, at least one")
-    raw, kernel = _core.ensemble(
-        system._core, y0s, names, p, str(method), float(dt), int(steps), until == "flip", threads,
-        "energy-error" in records,
+    raw, kernel = counted(
+        progress, m, "members",
+        lambda tick: _core.ensemble(
+            system._core, y0s, names, p, str(method), float(dt), int(steps), until == "flip", threads,
+            "energy-error" in records, tick,
+        ),
     )
     n = len(system.names)
     parts = {"final": raw[:, :n], "flip-time": raw[:, n : n + 1], "energy-error": raw[:, n + 1 : n + 2]}

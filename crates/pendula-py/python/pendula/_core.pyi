@@ -55,6 +55,7 @@ def ensemble(
     until_flip: bool,
     threads: Optional[int] = None,
     energy_error: bool = False,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
 
 # The studies (`crates/pendula-py/src/study.rs`), wrapped by `pendula.study`.
@@ -88,6 +89,7 @@ def fractal(
     dt: float,
     tolerance: float,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def bifurcation(
     system: CoreSystem,
@@ -149,4 +151,5 @@ def sweep(
     records: list[str],
     shard: tuple[int, int],
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...

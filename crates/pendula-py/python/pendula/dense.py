@@ -136,12 +136,14 @@ def locate(g: Callable[[float, np.ndarray], float], sol: DenseOutput, t: np.ndar
 
 
 class Progress:
-    """A bar for a run from t0 to t_end: tqdm's (``tqdm.auto``: terminal or notebook) when
-    tqdm is installed, else a line on stderr redrawn in place."""
+    """A bar for a run from t0 to t_end (or a count of members, cells, pixels from 0 to a
+    total, with ``label=None``): tqdm's (``tqdm.auto``: terminal or notebook) when tqdm is
+    installed, else a line on stderr redrawn in place."""
 
-    def __init__(self, t0: float, t_end: float, unit: str = "s", desc: str = "pendula"):
+    def __init__(self, t0: float, t_end: float, unit: str = "s", desc: str = "pendula", label: str | None = "t"):
         self.t0, self.span = t0, t_end - t0
         self.unit = unit
+        self.label = label
         try:
             from tqdm.auto import tqdm
         except ImportError:
@@ -156,10 +158,13 @@ class Progress:
             self.bar.update(done - self.done)
         else:
             filled = int(30 * done / self.span) if self.span > 0 else 30
-            sys.stderr.write(
-                f"\r[{'#' * filled}{'.' * (30 - filled)}] {100 * done / self.span:5.1f}%  t = {done + self.t0:.4g}"
-                f"{' ' + self.unit if self.unit else ''}"
+            share = 100 * done / self.span if self.span > 0 else 100.0
+            where = (
+                f"{self.label} = {done + self.t0:.4g}{' ' + self.unit if self.unit else ''}"
+                if self.label
+                else f"{done:.0f} of {self.span:.0f} {self.unit}"
             )
+            sys.stderr.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] {share:5.1f}%  {where}")
             sys.stderr.flush()
         self.done = done
 
@@ -172,3 +177,33 @@ class Progress:
         else:
             sys.stderr.write("\n")
             sys.stderr.flush()
+
+
+def counter(progress: Any, total: int, unit: str) -> tuple[Any, Progress | None]:
+    """What a counted run (members, cells, pixels) calls with its count: a bar for
+    ``progress=True``, the user's callable, or None; and the bar to close afterwards."""
+    if progress is True:
+        bar = Progress(0, total, unit=unit, label=None)
+        return bar, bar
+    if progress is False or progress is None:
+        return None, None
+    if callable(progress):
+        return progress, None
+    raise InvalidValueError(f"invalid value {progress!r} for `progress`: True, False or a callable of the count")
+
+
+def counted(progress: Any, total: int, unit: str, run: Callable[[Any], Any]) -> Any:
+    """``run(tick)`` with the progress of ``counter``; the bar ends at ``total`` when the run
+    returns (where it was, when it raised), and a callable hears ``total`` last."""
+    tick, bar = counter(progress, total, unit)
+    try:
+        out = run(tick)
+    except BaseException:
+        if bar is not None:
+            bar.close(None)
+        raise
+    if bar is not None:
+        bar.close(total)
+    elif tick is not None:
+        tick(total)
+    return out

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _core
+from .dense import counted
 from .errors import InvalidValueError, PendulaError, UnknownNameError
 
 if TYPE_CHECKING:
@@ -460,6 +461,7 @@ def fractal(
     dt: float = 0.01,
     tolerance: float = 0.01,
     threads: Optional[int] = None,
+    progress: Any = False,
 ) -> FractalResult:
     """The double pendulum's flip fractal, as ``pendula fractal``: released from rest at the
     cell centres of ``theta1`` × ``theta2`` ((lo, hi, n), rad), the time to the first flip
@@ -468,19 +470,25 @@ def fractal(
     (agreement within ``tolerance`` s). ``system``: the double pendulum with its parameters
     (undamped, undriven); its initial-state values are not used. All cores unless
     ``threads``; the result does not depend on them. Ctrl-C stops it within a slice of
-    pixels.
+    pixels. ``progress=True`` shows a bar of the pixels done (a callable gets the count).
     """
     system = _system(system)
     t1, t2 = _axis("theta1", theta1), _axis("theta2", theta2)
-    raw = _core.fractal(
-        system._core,
-        t1,
-        t2,
-        _float("t_max", t_max),
-        str(method),
-        _float("dt", dt),
-        _float("tolerance", tolerance),
-        _threads(threads),
+    raw = counted(
+        progress,
+        t1[2] * t2[2],
+        "pixels",
+        lambda tick: _core.fractal(
+            system._core,
+            t1,
+            t2,
+            _float("t_max", t_max),
+            str(method),
+            _float("dt", dt),
+            _float("tolerance", tolerance),
+            _threads(threads),
+            tick,
+        ),
     )
     return FractalResult(
         system=system,

@@ -24,6 +24,7 @@ from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import _core
+from .dense import counted
 from .errors import InvalidValueError, PendulaError
 
 __all__ = ["sweep", "merge", "SweepResult"]
@@ -254,6 +255,7 @@ def sweep(
     record: Union[str, Iterable[str]] = ("final",),
     threads: Optional[int] = None,
     shard: Any = None,
+    progress: Any = False,
 ) -> SweepResult:
     """Integrates ``system`` (a name, or a System: its values are the ``set`` ones) from
     every cell of ``grid`` — ``{name: (lo, hi, n)}`` or ``["NAME=LO:HI:N", ...]``, the
@@ -264,6 +266,7 @@ def sweep(
     NaN without a flip), ``energy-error`` (E_end − E_0, J), in that column order.
     ``shard=(K, N)`` or ``"K/N"`` computes shard K of N only (assemble them with
     :func:`merge`). Bitwise the CLI's ``pendula sweep``, for any thread count.
+    ``progress=True`` shows a bar of the cells done (a callable gets the count).
     """
     settings = []
     if not isinstance(system, str):
@@ -296,18 +299,26 @@ def sweep(
         threads = operator.index(threads)
         if threads < 1:
             raise InvalidValueError(f"invalid value {threads} for `threads`: at least 1")
-    out = _core.sweep(
-        str(system),
-        settings,
-        axes,
-        str(method),
-        _value("dt", dt),
-        steps,
-        None if t_end is None else _value("t_end", t_end),
-        until,
-        records,
-        _shard(shard),
-        threads,
+    k, n = _shard(shard)
+    cells = math.prod(a[3] for a in axes)
+    out = counted(
+        progress,
+        k * cells // n - (k - 1) * cells // n,
+        "cells",
+        lambda tick: _core.sweep(
+            str(system),
+            settings,
+            axes,
+            str(method),
+            _value("dt", dt),
+            steps,
+            None if t_end is None else _value("t_end", t_end),
+            until,
+            records,
+            (k, n),
+            threads,
+            tick,
+        ),
     )
     return _result(out)
 
