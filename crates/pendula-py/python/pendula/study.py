@@ -683,7 +683,8 @@ class ConvergenceResult(_Pickled):
                 ax.loglog(m.dt, m.error, marker="o", markersize=3, label=label)
         ax.set_xlabel("step size h" + _time_unit(self.system))
         ax.set_ylabel("max |y(t) − y_ref(t)|")
-        ax.set_title(f"{self.system.name}: global error at t = {self.t_end:.4g}, against the {self.reference}")
+        unit = "" if self.system.dimensionless else " s"
+        ax.set_title(f"{self.system.name}: global error at t = {self.t_end:.4g}{unit}, against the {self.reference}")
         ax.legend(fontsize="small")
         return ax
 
