@@ -236,7 +236,7 @@ pub(crate) fn poincare<'py>(
 /// `flip_time`, `flip_time_half_step` (n₂, n₁; NaN: no flip), `converged` (bool),
 /// `forbidden`, the axes' cell centres `theta1_centres`, `theta2_centres` (rad).
 #[pyfunction]
-#[pyo3(signature = (system, theta1, theta2, t_max, method, dt, tolerance, threads=None, progress=None))]
+#[pyo3(signature = (system, theta1, theta2, t_max, method, dt, tolerance, threads=None, progress=None, pixels=None, times=None))]
 #[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn fractal<'py>(
     py: Python<'py>,
@@ -249,6 +249,8 @@ pub(crate) fn fractal<'py>(
     tolerance: f64,
     threads: Option<usize>,
     progress: Option<Bound<'py, PyAny>>,
+    pixels: Option<(usize, usize)>,
+    times: Option<(Vec<f64>, Vec<f64>)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let info = system.values.info();
     if !std::ptr::eq(info, <DoublePendulum as Model>::INFO) {
@@ -303,17 +305,44 @@ pub(crate) fn fractal<'py>(
     }
     let pool = pool(py, threads)?;
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
-    let pixels = theta1.n * theta2.n;
+    let all = theta1.n * theta2.n;
+    // A part of the map (`pixels`, for `pendula.distributed`): its flip times alone, row-major
+    // pixel indices [start, end). Or the whole map's flip times already computed (`times`,
+    // the parts put together): assembled without computing.
+    let (first, pixels) = match pixels {
+        Some((start, end)) if start < end && end <= all => (start, end),
+        Some((start, end)) => {
+            return Err(invalid(
+                py,
+                "pixels",
+                format!("({start}, {end})"),
+                &format!("0 <= start < end <= {all}"),
+            ));
+        }
+        None => (0, all),
+    };
     // Slices of pixels, the flag looked at between them: a pixel's flip times do not depend
     // on which others are computed with it (`flip_times`), so the slicing changes no bit.
     let slice = (pool.current_num_threads() * 256).max(1);
     // At dt and at dt/2, per pixel; None when interrupted.
     type FlipTimes = (Vec<f64>, Vec<f64>);
     let done = std::sync::atomic::AtomicU64::new(0);
+    if let Some((at_h, at_half)) = times {
+        if at_h.len() != all || at_half.len() != all {
+            return Err(invalid(
+                py,
+                "times",
+                format!("{} and {} values", at_h.len(), at_half.len()),
+                &format!("{all} flip times at dt and {all} at dt/2"),
+            ));
+        }
+        return assembled(py, method, &spec, at_h, at_half);
+    }
     let times = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
         pool.install(|| -> Result<Option<FlipTimes>, Error> {
-            let (mut at_h, mut at_half) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
-            for start in (0..pixels).step_by(slice) {
+            let (mut at_h, mut at_half) =
+                (Vec::with_capacity(pixels - first), Vec::with_capacity(pixels - first));
+            for start in (first..pixels).step_by(slice) {
                 if flag.load(Ordering::Relaxed) {
                     return Ok(None);
                 }
@@ -344,7 +373,25 @@ pub(crate) fn fractal<'py>(
         }
         Err(e) => return Err(to_py(py, &e)),
     };
-    let fractal = assemble(&spec, at_h, at_half);
+    if first > 0 || pixels < all {
+        let out = PyDict::new(py);
+        out.set_item("flip_time", at_h.into_pyarray(py))?;
+        out.set_item("flip_time_half_step", at_half.into_pyarray(py))?;
+        return Ok(out);
+    }
+    assembled(py, method, &spec, at_h, at_half)
+}
+
+/// The fractal's result from its flip times at dt and dt/2 (every pixel, row-major).
+fn assembled<'py>(
+    py: Python<'py>,
+    method: &Method,
+    spec: &FractalSpec,
+    at_h: Vec<f64>,
+    at_half: Vec<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (theta1, theta2) = (spec.theta1, spec.theta2);
+    let fractal = assemble(spec, at_h, at_half);
     let shape = (theta2.n, theta1.n);
     let out = PyDict::new(py);
     out.set_item("method", method.name)?;

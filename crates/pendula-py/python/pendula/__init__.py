@@ -51,6 +51,7 @@ from .study import (
 )
 
 from .sweep import SweepResult, merge, sweep
+from . import distributed  # noqa: E402  (after the names it uses)
 
 __version__ = _core.__version__
 

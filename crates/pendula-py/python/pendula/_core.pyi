@@ -90,6 +90,8 @@ def fractal(
     tolerance: float,
     threads: Optional[int] = None,
     progress: Optional[Callable[[int], None]] = None,
+    pixels: Optional[tuple[int, int]] = None,
+    times: Optional[tuple[list[float], list[float]]] = None,
 ) -> dict[str, Any]: ...
 def bifurcation(
     system: CoreSystem,

@@ -490,6 +490,10 @@ def fractal(
             tick,
         ),
     )
+    return _fractal_result(system, raw, t1, t2, dt, t_max, tolerance)
+
+
+def _fractal_result(system, raw, t1, t2, dt, t_max, tolerance) -> FractalResult:
     return FractalResult(
         system=system,
         method=raw["method"],
