@@ -23,3 +23,29 @@ def cli():
 
 def summary(path):
     return json.loads(Path(path).read_text())
+
+
+def ctrl_c_latency(run, after):
+    """Seconds from a SIGINT, sent `after` s into `run()`, to the KeyboardInterrupt it must
+    raise. A process started in the background by a non-interactive shell (as CI may be)
+    begins with SIGINT ignored, and Python then leaves it so: the handler a terminal's Python
+    has is installed for the run."""
+    import signal
+    import threading
+    import time
+
+    sent = []
+
+    def interrupt():
+        time.sleep(after)
+        sent.append(time.perf_counter())
+        signal.raise_signal(signal.SIGINT)
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Thread(target=interrupt).start()
+        with pytest.raises(KeyboardInterrupt):
+            run()
+        return time.perf_counter() - sent[0]
+    finally:
+        signal.signal(signal.SIGINT, previous)

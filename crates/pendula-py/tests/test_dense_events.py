@@ -3,16 +3,13 @@ forms, scipy at a tighter tolerance, and the CLI's event locator."""
 
 import math
 import pickle
-import signal
-import threading
-import time
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 import pendula
-from conftest import summary
+from conftest import ctrl_c_latency, summary
 
 
 def _reference(system, t_end):
@@ -147,22 +144,10 @@ def test_a_solution_with_its_dense_output_pickles():
 def test_ctrl_c_interrupts_a_long_solve_quickly(method):
     # Runs of minutes; SIGINT after 0.3 s must end each within 0.2 s (the run takes the GIL
     # back about every 20 ms to let Python's handlers run).
-    sent = []
-
-    def interrupt():
-        time.sleep(0.3)
-        sent.append(time.perf_counter())
-        signal.raise_signal(signal.SIGINT)
-
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        threading.Thread(target=interrupt).start()
-        with pytest.raises(KeyboardInterrupt):
-            pendula.solve("double", (0, 1e6), method=method, dt=1e-3, rtol=None if method != "dop853" else 1e-12,
-                          atol=None if method != "dop853" else 1e-12)
-        latency = time.perf_counter() - sent[0]
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    tight = None if method != "dop853" else 1e-12
+    latency = ctrl_c_latency(
+        lambda: pendula.solve("double", (0, 1e6), method=method, dt=1e-3, rtol=tight, atol=tight), after=0.3
+    )
     assert latency < 0.2, latency
 
 

@@ -2,7 +2,6 @@
 Ctrl-C."""
 
 import pickle
-import signal
 import threading
 import time
 
@@ -10,6 +9,7 @@ import numpy as np
 import pytest
 
 import pendula
+from conftest import ctrl_c_latency
 
 
 def centres(lo, hi, n):
@@ -112,22 +112,5 @@ def test_ctrl_c_interrupts_a_long_ensemble_quickly():
     # About 100 s of work on two cores; SIGINT after 0.5 s must end it within 0.2 s.
     y0s = np.zeros((1_000_000, 4))
     y0s[:, 0] = np.linspace(-1, 1, len(y0s))
-    sent = []
-
-    def interrupt():
-        time.sleep(0.5)
-        sent.append(time.perf_counter())
-        signal.raise_signal(signal.SIGINT)
-
-    # A process started in the background by a non-interactive shell (as CI may be) begins
-    # with SIGINT ignored, and Python then leaves it so: install the handler a terminal's
-    # Python has.
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        threading.Thread(target=interrupt).start()
-        with pytest.raises(KeyboardInterrupt):
-            pendula.ensemble("double", y0s, steps=10_000, dt=0.001)
-        latency = time.perf_counter() - sent[0]
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    latency = ctrl_c_latency(lambda: pendula.ensemble("double", y0s, steps=10_000, dt=0.001), after=0.5)
     assert latency < 0.2, latency

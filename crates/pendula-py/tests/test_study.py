@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import pendula
-from conftest import summary
+from conftest import ctrl_c_latency, summary
 
 
 def read_csv(path):
@@ -269,23 +269,8 @@ def test_results_pickle_plot_and_show_a_table():
 
 def test_ctrl_c_interrupts_a_long_fractal_quickly():
     # A 512² map to 100 s (tens of CPU-seconds); SIGINT after 0.5 s must end it within 0.2 s.
-    import signal
-    import threading
-    import time
-
-    sent = []
-
-    def interrupt():
-        time.sleep(0.5)
-        sent.append(time.perf_counter())
-        signal.raise_signal(signal.SIGINT)
-
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        threading.Thread(target=interrupt).start()
-        with pytest.raises(KeyboardInterrupt):
-            pendula.fractal(theta1=(-math.pi, math.pi, 512), theta2=(-math.pi, math.pi, 512), t_max=100)
-        latency = time.perf_counter() - sent[0]
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    latency = ctrl_c_latency(
+        lambda: pendula.fractal(theta1=(-math.pi, math.pi, 512), theta2=(-math.pi, math.pi, 512), t_max=100),
+        after=0.5,
+    )
     assert latency < 0.2, latency

@@ -4,14 +4,12 @@ pendula.ensemble's scalar path."""
 
 import json
 import pickle
-import signal
-import threading
-import time
 
 import numpy as np
 import pytest
 
 import pendula
+from conftest import ctrl_c_latency
 
 # A small grid: 11 x 7 cells of the double pendulum, 150 steps of 10 ms.
 GRID = ["theta1=-3:3:11", "theta2=-pi:pi:7"]
@@ -146,20 +144,8 @@ def test_bad_input_names_the_value():
 def test_ctrl_c_interrupts_a_long_sweep_quickly(method):
     # Minutes of work on the scalar path and on the double pendulum's kernel (which takes
     # its cells in slices to look at the flag); SIGINT after 0.3 s must end it within 0.2 s.
-    sent = []
-
-    def interrupt():
-        time.sleep(0.3)
-        sent.append(time.perf_counter())
-        signal.raise_signal(signal.SIGINT)
-
-    # A background process may start with SIGINT ignored: install Python's usual handler.
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        threading.Thread(target=interrupt).start()
-        with pytest.raises(KeyboardInterrupt):
-            pendula.sweep("double", ["theta1=-3:3:2000", "theta2=-3:3:500"], method=method, dt=0.001, steps=5_000)
-        latency = time.perf_counter() - sent[0]
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    latency = ctrl_c_latency(
+        lambda: pendula.sweep("double", ["theta1=-3:3:2000", "theta2=-3:3:500"], method=method, dt=0.001, steps=5_000),
+        after=0.3,
+    )
     assert latency < 0.2, latency
