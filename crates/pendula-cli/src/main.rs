@@ -19,6 +19,7 @@ mod output;
 mod run_state;
 mod simulate;
 mod sink;
+mod slurm;
 mod watch;
 
 use std::io::Write;

@@ -1,6 +1,7 @@
-//! `pendula sweep` and `pendula merge` end to end: the grid's layout and cell centres,
-//! recorded columns, bitwise determinism across thread counts, shards merged back to the
-//! unsharded array, the scalar path for other systems and methods, and bad input.
+//! `pendula sweep`, `pendula merge` and `fractal --shard` end to end: the grid's layout and
+//! cell centres, recorded columns, bitwise determinism across thread counts, shards merged
+//! back to the unsharded array (and the fractal drawn from its shards), `--check` and
+//! `--emit-slurm`, the scalar path for other systems and methods, and bad input.
 
 use std::path::Path;
 
@@ -193,4 +194,158 @@ fn bad_input_is_refused_with_exit_2_and_no_file() {
         pendula(dir.path(), args).code(2).stderr(predicates::str::contains(needle));
         assert_eq!(files(dir.path()), Vec::<String>::new(), "{args:?} left files behind");
     }
+}
+
+/// `--shard K/N --check`: exit 0 for the shard this sweep wrote, and 2 naming what is wrong
+/// for a missing file, another shard, another sweep, and a truncated or corrupted file;
+/// nothing is computed or written.
+#[test]
+fn check_finds_missing_foreign_and_damaged_shards() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let run = ["sweep", "pendulum", "--grid", "theta=0:1:8", "--steps", "10"];
+    let with = |extra: &[&'static str]| [&run[..], extra].concat();
+    pendula(d, &with(&["--shard", "2/3", "--out", "s.npy", "--check"]))
+        .code(2)
+        .stderr(predicates::str::contains("shard 2/3: s.npy does not exist"));
+    assert!(files(d).is_empty(), "--check wrote {:?}", files(d));
+    pendula(d, &with(&["--shard", "2/3", "--out", "s.npy"])).success();
+    pendula(d, &with(&["--shard", "2/3", "--out", "s.npy", "--check"]))
+        .success()
+        .stderr(predicates::str::contains("shard 2/3: s.npy holds it, intact"));
+    pendula(d, &with(&["--shard", "1/3", "--out", "s.npy", "--check"]))
+        .code(2)
+        .stderr(predicates::str::contains("s.npy is shard 2/3 of this sweep"));
+    pendula(d, &[&run[..4], &["--steps", "11", "--shard", "2/3", "--out", "s.npy", "--check"]].concat())
+        .code(2)
+        .stderr(predicates::str::contains("is a shard of another run"));
+    let bytes = std::fs::read(d.join("s.npy")).unwrap();
+    let mut flipped = bytes.clone();
+    *flipped.last_mut().unwrap() ^= 1;
+    std::fs::write(d.join("s.npy"), &flipped).unwrap();
+    pendula(d, &with(&["--shard", "2/3", "--out", "s.npy", "--check"]))
+        .code(2)
+        .stderr(predicates::str::contains("the file is corrupted"));
+    std::fs::write(d.join("s.npy"), &bytes[..bytes.len() - 8]).unwrap();
+    pendula(d, &with(&["--shard", "2/3", "--out", "s.npy", "--check"]))
+        .code(2)
+        .stderr(predicates::str::contains("the file is truncated"));
+    // Without --shard there is no shard to check.
+    pendula(d, &with(&["--check"])).code(2).stderr(predicates::str::contains("--shard"));
+}
+
+/// `--emit-slurm N` writes only the script (no array), whose run reproduces the sweep's own
+/// flags; its flags' bad values are refused with exit 2, naming them, and no file is left.
+#[test]
+fn emit_slurm_writes_the_script_and_refuses_bad_flags() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let run =
+        ["sweep", "double", "--grid", "theta1=-pi:pi:4", "--set", "m2=2", "--steps", "5", "--out", "g.npy"];
+    let with = |extra: &[&'static str]| [&run[..], extra].concat();
+    for (extra, says) in [
+        (&["--emit-slurm", "0"][..], "invalid value `0` for --emit-slurm"),
+        (&["--emit-slurm", "5"], "invalid --emit-slurm 5: more shards than the 4 cells"),
+        (&["--emit-slurm", "2", "--partition", "a;rm"], "invalid --partition `a;rm`"),
+        (&["--emit-slurm", "2", "--time", "1h"], "invalid --time `1h`"),
+        (&["--emit-slurm", "2", "--cpus", "0"], "invalid value `0` for --cpus"),
+        (&["--cpus", "2"], "--emit-slurm"),
+        (&["--emit-slurm", "2", "--shard", "1/2"], "cannot be used with"),
+    ] {
+        pendula(d, &with(extra)).code(2).stderr(predicates::str::contains(says));
+        assert!(files(d).is_empty(), "{extra:?} left {:?}", files(d));
+    }
+    pendula(d, &with(&["--emit-slurm", "2", "--partition", "short", "--time", "0-01:00:00", "--cpus", "3"]))
+        .success();
+    assert_eq!(files(d), ["g.slurm"]);
+    let script = std::fs::read_to_string(d.join("g.slurm")).unwrap();
+    for line in [
+        "#SBATCH --partition=short",
+        "#SBATCH --time=0-01:00:00",
+        "#SBATCH --cpus-per-task=3",
+        "run() { \"$PENDULA\" sweep 'double' '--steps' '5' '--grid' 'theta1=-pi:pi:4' '--set' 'm2=2' \"$@\"; }",
+        "N=2",
+        "--dependency=\"afterok:$array\" --kill-on-invalid-dep=yes",
+    ] {
+        assert!(script.contains(line), "the script lacks {line:?}:\n{script}");
+    }
+    // The script is valid bash, and refuses being given to sbatch as a job.
+    let syntax = std::process::Command::new("bash").arg("-n").arg(d.join("g.slurm")).status().unwrap();
+    assert!(syntax.success());
+    let as_job =
+        std::process::Command::new("bash").arg(d.join("g.slurm")).env("SLURM_JOB_ID", "1").output().unwrap();
+    assert_eq!(as_job.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&as_job.stderr).contains("not sbatch"));
+}
+
+/// `fractal --shard K/N` and `--merge-shards`: the four files drawn from three shards are
+/// the unsharded fractal's, byte for byte; shards of another fractal are refused, naming
+/// one; `pendula merge` reads them as a (n2, n1, 2) array of the flip times; `--emit-slurm`
+/// writes a script that draws with `--merge-shards`.
+#[test]
+fn fractal_shards_draw_the_same_files() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let run = ["fractal", "--grid", "theta1=-3:3:20", "--grid", "theta2=-3:3:15", "--t-max", "6"];
+    let with = |extra: &[&'static str]| [&run[..], extra].concat();
+    pendula(d, &with(&["--out", "whole.npy"])).success();
+    for (k, out) in [("1/3", "s1.npy"), ("2/3", "s2.npy"), ("3/3", "s3.npy")] {
+        pendula(d, &with(&["--shard", k, "--out", out])).success();
+        pendula(d, &with(&["--shard", k, "--out", out, "--check"])).success();
+    }
+    pendula(d, &with(&["--merge-shards", "s3.npy", "s1.npy", "s2.npy", "--out", "drawn.npy"])).success();
+    for (a, b) in [
+        ("whole.npy", "drawn.npy"),
+        ("whole.png", "drawn.png"),
+        ("whole-converged.npy", "drawn-converged.npy"),
+        ("whole-converged.png", "drawn-converged.png"),
+    ] {
+        assert_eq!(std::fs::read(d.join(a)).unwrap(), std::fs::read(d.join(b)).unwrap(), "{a} and {b}");
+    }
+    let other = ["fractal", "--grid", "theta1=-3:3:20", "--grid", "theta2=-3:3:15", "--t-max", "7"];
+    pendula(d, &[&other[..], &["--merge-shards", "s1.npy", "s2.npy", "s3.npy", "--out", "x.npy"]].concat())
+        .code(2)
+        .stderr(predicates::str::contains("s1.npy is a shard of another fractal"));
+    assert!(!d.join("x.npy").exists() && !d.join("x.png").exists());
+    pendula(d, &with(&["--merge-shards", "s1.npy", "s2.npy", "--out", "x.npy"]))
+        .code(2)
+        .stderr(predicates::str::contains("shard 3/3 is missing"));
+    pendula(d, &["merge", "s1.npy", "s2.npy", "s3.npy", "--out", "raw.npy"]).success();
+    let raw = load(&d.join("raw.npy"));
+    let whole = load(&d.join("whole.npy"));
+    assert_eq!(raw.shape(), &[15, 20, 2]);
+    for (r, w) in raw.index_axis(ndarray::Axis(2), 0).iter().zip(whole.iter()) {
+        assert!(r.to_bits() == w.to_bits(), "{r} against {w}");
+    }
+    pendula(d, &with(&["--shard", "1/3"])).code(2).stderr(predicates::str::contains("--out"));
+    pendula(d, &with(&["--emit-slurm", "3", "--out", "f.npy"])).success();
+    let script = std::fs::read_to_string(d.join("f.slurm")).unwrap();
+    assert!(script.contains("run --merge-shards \"$SHARDS\"/shard-{1..3}.npy --out \"$OUT\""), "{script}");
+}
+
+/// Shards computed on CPUs that round differently (with and without fused multiply-adds, as
+/// their descriptions say) are merged with a warning naming one of each: the array is right,
+/// but not bitwise what one machine computes.
+#[test]
+fn merging_shards_from_fma_and_plain_cpus_warns() {
+    use predicates::prelude::*;
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let run = ["sweep", "pendulum", "--grid", "theta=0:1:6", "--steps", "10"];
+    for (k, out) in [("1/2", "a.npy"), ("2/2", "b.npy")] {
+        pendula(d, &[&run[..], &["--shard", k, "--out", out]].concat()).success();
+    }
+    pendula(d, &["merge", "a.npy", "b.npy", "--out", "same.npy"])
+        .success()
+        .stderr(predicates::str::contains("warning").not());
+    let path = d.join("b.npy.json");
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let fma = doc["fma"].as_bool().expect("the description says whether the CPU had FMA");
+    doc["fma"] = serde_json::Value::Bool(!fma);
+    std::fs::write(&path, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+    pendula(d, &["merge", "a.npy", "b.npy", "--out", "mixed.npy"])
+        .success()
+        .stderr(predicates::str::contains("round differently"))
+        .stderr(predicates::str::contains("a.npy").and(predicates::str::contains("b.npy")));
+    assert_eq!(std::fs::read(d.join("same.npy")).unwrap(), std::fs::read(d.join("mixed.npy")).unwrap());
 }

@@ -759,90 +759,79 @@ fn ensemble<'py>(
     }
     let mut data = vec![0.0; m * cols];
     let model = &*system.model;
-    // In slices of members, the interrupt flag looked at between them: a member's result
-    // does not depend on the slicing (nor on the thread count).
-    let slice = (threads * 16 * 16).max(1);
+    // One run over all the members, the interrupt flag looked at by each work item (slices
+    // would each wait for their slowest member); a member's result does not depend on the
+    // thread count.
     let done = AtomicU64::new(0);
     let result = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("threads");
         pool.install(|| -> Result<(), Error> {
-            for (c, rows) in data.chunks_mut(slice * cols).enumerate() {
-                if flag.load(Ordering::Relaxed) {
-                    return Ok(());
+            // The final state, the flip time and, if asked, the energy error from the
+            // member's own model (built only then).
+            let write = |i: usize, state: &[f64], flip: f64, row: &mut [f64]| {
+                row[..dim].copy_from_slice(&state[..dim]);
+                row[dim] = flip;
+                if energy_error {
+                    let mut v = vec![0.0; base.len()];
+                    member(i, &mut v);
+                    let model = info.values(&settings_of(&v)).expect("validated above").build();
+                    row[dim + 1] = model.energy(0.0, &state[..dim]) - model.energy(0.0, &v[np..]);
                 }
-                let start = c * slice;
-                let count = rows.len() / cols;
-                let member = |i: usize, v: &mut [f64]| member(start + i, v);
-                // The final state, the flip time and, if asked, the energy error from the
-                // member's own model (built only then).
-                let write = |i: usize, state: &[f64], flip: f64, row: &mut [f64]| {
-                    row[..dim].copy_from_slice(&state[..dim]);
-                    row[dim] = flip;
-                    if energy_error {
-                        let mut v = vec![0.0; base.len()];
-                        member(i, &mut v);
-                        let model = info.values(&settings_of(&v)).expect("validated above").build();
-                        row[dim + 1] = model.energy(0.0, &state[..dim]) - model.energy(0.0, &v[np..]);
-                    }
-                };
-                match path {
-                    EnsemblePath::Engine(lanes) => {
-                        let spec = LaneSpec {
-                            method: lanes,
-                            h: dt,
-                            steps,
-                            stop_at_flip: until_flip,
-                            track_flips: true,
-                            cancel: Some(flag),
-                        };
-                        let store =
-                            |i: usize, o: &LaneOutcome, row: &mut [f64]| write(i, &o.state, o.flip_time, row);
-                        model
-                            .ensemble(info, count, &member, &spec, rows, cols, &store)
-                            .map_err(|e| shift(e, start))?;
-                    }
-                    EnsemblePath::DoubleKernel(batch) => {
-                        let spec = pendula::ensemble::BatchSpec {
-                            method: batch,
-                            h: dt,
-                            steps,
-                            stop_at_flip: until_flip,
-                            track_flips: true,
-                        };
-                        pendula::ensemble::run_values(
-                            count,
-                            &member,
-                            &spec,
-                            rows,
-                            cols,
-                            &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
-                        )
-                        .map_err(|e| shift(e, start))?;
-                    }
-                    EnsemblePath::Scalar => {
-                        // One scalar run per member, as a sweep's scalar cells run.
-                        let spec = pendula::sweep::ScalarSpec {
-                            method,
-                            h: dt,
-                            steps,
-                            stop_at_flip: until_flip,
-                            cancel: Some(flag),
-                        };
-                        pendula::sweep::run_scalar(
-                            info,
-                            count,
-                            &member,
-                            &spec,
-                            rows,
-                            cols,
-                            &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
-                        )
-                        .map_err(|e| shift(e.into_error(), start))?;
-                    }
+                done.fetch_add(1, Ordering::Relaxed);
+            };
+            match path {
+                EnsemblePath::Engine(lanes) => {
+                    let spec = LaneSpec {
+                        method: lanes,
+                        h: dt,
+                        steps,
+                        stop_at_flip: until_flip,
+                        track_flips: true,
+                        cancel: Some(flag),
+                    };
+                    let store =
+                        |i: usize, o: &LaneOutcome, row: &mut [f64]| write(i, &o.state, o.flip_time, row);
+                    model.ensemble(info, m, &member, &spec, &mut data, cols, &store)
                 }
-                done.fetch_add(count as u64, Ordering::Relaxed);
+                EnsemblePath::DoubleKernel(batch) => {
+                    let spec = pendula::ensemble::BatchSpec {
+                        method: batch,
+                        h: dt,
+                        steps,
+                        stop_at_flip: until_flip,
+                        track_flips: true,
+                    };
+                    pendula::ensemble::run_values_cancellable(
+                        m,
+                        &member,
+                        &spec,
+                        &mut data,
+                        cols,
+                        &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
+                        Some(flag),
+                    )
+                }
+                EnsemblePath::Scalar => {
+                    // One scalar run per member, as a sweep's scalar cells run.
+                    let spec = pendula::sweep::ScalarSpec {
+                        method,
+                        h: dt,
+                        steps,
+                        stop_at_flip: until_flip,
+                        cancel: Some(flag),
+                    };
+                    pendula::sweep::run_scalar(
+                        info,
+                        m,
+                        &member,
+                        &spec,
+                        &mut data,
+                        cols,
+                        &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
+                    )
+                    .map_err(|e| e.into_error())
+                }
             }
-            Ok(())
         })
     })?;
     // An interrupted run raised KeyboardInterrupt above; what is left is the run's own.
@@ -855,14 +844,6 @@ fn ensemble<'py>(
             EnsemblePath::Scalar => "scalar",
         },
     ))
-}
-
-/// `e` with its member index counted from the ensemble's start, not the slice's.
-fn shift(e: Error, start: usize) -> Error {
-    match e {
-        Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: member + start, t },
-        other => other,
-    }
 }
 
 /// The extension module.

@@ -12,7 +12,7 @@ use std::sync::atomic::Ordering;
 
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
-use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times};
+use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
 use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
 use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
 use pendula::analysis::{self, LyapunovSpec, OrderEstimate};
@@ -321,9 +321,6 @@ pub(crate) fn fractal<'py>(
         }
         None => (0, all),
     };
-    // Slices of pixels, the flag looked at between them: a pixel's flip times do not depend
-    // on which others are computed with it (`flip_times`), so the slicing changes no bit.
-    let slice = (pool.current_num_threads() * 256).max(1);
     // At dt and at dt/2, per pixel; None when interrupted.
     type FlipTimes = (Vec<f64>, Vec<f64>);
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -338,20 +335,21 @@ pub(crate) fn fractal<'py>(
         }
         return assembled(py, method, &spec, at_h, at_half);
     }
+    // One call over all the pixels, the flag looked at by each work item: every thread stays
+    // busy to the end (slices would each wait for their slowest pixel). The library counts
+    // each pixel twice (at dt and dt/2); progress is in pixels.
+    let ticks = std::sync::atomic::AtomicU64::new(0);
+    let tick = |n: u64| {
+        let t = ticks.fetch_add(n, Ordering::Relaxed) + n;
+        done.store(t / 2, Ordering::Relaxed);
+    };
     let times = interruptible_counted(py, false, progress.as_ref(), &done, |flag| {
         pool.install(|| -> Result<Option<FlipTimes>, Error> {
-            let (mut at_h, mut at_half) =
-                (Vec::with_capacity(pixels - first), Vec::with_capacity(pixels - first));
-            for start in (first..pixels).step_by(slice) {
-                if flag.load(Ordering::Relaxed) {
-                    return Ok(None);
-                }
-                let (a, b) = flip_times(&spec, start..(start + slice).min(pixels), &|_| ())?;
-                at_h.extend(a);
-                at_half.extend(b);
-                done.store(at_h.len() as u64, Ordering::Relaxed);
+            match flip_times_cancellable(&spec, first..pixels, &tick, Some(flag)) {
+                Ok(t) => Ok(Some(t)),
+                Err(Error::Interrupted) => Ok(None),
+                Err(e) => Err(e),
             }
-            Ok(Some((at_h, at_half)))
         })
     })?;
     let (at_h, at_half) = match times {

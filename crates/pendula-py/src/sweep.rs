@@ -47,9 +47,11 @@ fn cell_error(py: Python<'_>, e: CellError) -> PyErr {
 /// A sweep of `system` over `axes` ((name, lo, hi, n), the first fastest) with `set` the
 /// same for every cell, `steps` steps of `dt` (or to `t_end`, s) with `method`; `until`
 /// `"flip"` stops each cell at its first flip; `records` the recorded quantities' names;
-/// shard (K, N) of the cells. Returns the rows (count, columns) and the run's description.
+/// shard (K, N) of the cells, or the cells [start, end) given as `cells` (a block of
+/// `pendula.distributed.sweep_array`). Returns the rows (count, columns) and the run's
+/// description.
 #[pyfunction]
-#[pyo3(signature = (system, set, axes, method, dt, steps, t_end, until, records, shard, threads=None, progress=None))]
+#[pyo3(signature = (system, set, axes, method, dt, steps, t_end, until, records, shard, threads=None, progress=None, cells=None))]
 #[allow(clippy::too_many_arguments)] // the sweep's description, as Python passes it
 fn sweep<'py>(
     py: Python<'py>,
@@ -65,6 +67,7 @@ fn sweep<'py>(
     shard: (usize, usize),
     threads: Option<usize>,
     progress: Option<Bound<'py, PyAny>>,
+    cells: Option<(usize, usize)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let family = pendula::model::find(system).map_err(|e| to_py(py, &e))?;
     let info = family.values(&set).map_err(|e| to_py(py, &e))?.info();
@@ -133,7 +136,16 @@ fn sweep<'py>(
     if threads == 0 {
         return Err(invalid("invalid value 0 for `threads`: at least 1".into()));
     }
-    let (start, end) = sweep.range();
+    let (start, end) = match cells {
+        None => sweep.range(),
+        Some((a, b)) if a < b && b <= sweep.cells() => (a, b),
+        Some((a, b)) => {
+            return Err(invalid(format!(
+                "invalid cells ({a}, {b}): a range start < end <= {} of the sweep's cells",
+                sweep.cells()
+            )));
+        }
+    };
     let cols = sweep.columns().len();
     let mut data: Vec<f64> = Vec::new();
     data.try_reserve_exact((end - start) * cols).map_err(|_| {
@@ -164,6 +176,7 @@ fn sweep<'py>(
     let out = PyDict::new(py);
     let rows = numpy::ndarray::Array2::from_shape_vec((end - start, cols), data).expect("whole rows");
     out.set_item("data", rows.into_pyarray(py))?;
+    out.set_item("pendula", env!("CARGO_PKG_VERSION"))?;
     out.set_item("system", sweep.info().name)?;
     out.set_item("method", s.method.name)?;
     out.set_item("dt", s.h)?;
@@ -179,6 +192,7 @@ fn sweep<'py>(
     out.set_item("count", end - start)?;
     out.set_item("fingerprint", sweep.fingerprint())?;
     out.set_item("kernel", sweep.kernel())?;
+    out.set_item("fma", pendula::ensemble::has_fma())?;
     out.set_item("threads", threads)?;
     out.set_item("wall_s", wall_s)?;
     Ok(out)

@@ -41,7 +41,7 @@ def test_the_cli_bytes_header_included(cli, tmp_path):
          "--summary", "s.json"], tmp_path)
     summary = json.loads((tmp_path / "s.json").read_text())
     mine = r.description
-    for key in ("pendula_sweep", "system", "method", "dt", "steps", "axes", "columns", "shape", "shard",
+    for key in ("pendula_sweep", "pendula", "system", "method", "dt", "steps", "axes", "columns", "shape", "shard",
                 "shards", "offset", "count", "fingerprint", "data", "kernel"):
         assert mine[key] == summary[key], key
     back = pickle.loads(pickle.dumps(r))

@@ -381,10 +381,10 @@ impl Sweep {
             self.store(state, flip_time, energy, row);
             done();
         };
-        // The lanes name a failing member by its index in the run, from `at`.
-        let lanes_error = |at: usize, e: Error| match e {
+        // The lanes name a failing member by its index in the run.
+        let lanes_error = |e: Error| match e {
             Error::NonFiniteMember { member, t } => {
-                CellError { cell: Some(start + at + member), error: Error::NonFinite { t } }
+                CellError { cell: Some(start + member), error: Error::NonFinite { t } }
             }
             other => bare(other),
         };
@@ -393,37 +393,15 @@ impl Sweep {
         match self.path() {
             EnsemblePath::DoubleKernel(method) => {
                 let spec = BatchSpec { method, h, steps, stop_at_flip: until_flip, track_flips };
-                // The kernel has no cancel flag of its own: with one, the cells go in slices
-                // of one work item per thread (the fewest that keep every thread busy), the
-                // flag read between them; a cell's result does not depend on the slicing.
-                let slice = if cancel.is_some() {
-                    rayon::current_num_threads() * crate::ensemble::CHUNK
-                } else {
-                    count
-                };
-                for (s, rows) in out.chunks_mut(slice.max(1) * cols).enumerate() {
-                    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                        return Err(bare(Error::Interrupted));
-                    }
-                    let at = s * slice;
-                    let fill = |i: usize, v: &mut [f64]| fill(at + i, v);
-                    let store = |i: usize, state: &[f64], flip: f64, row: &mut [f64]| {
-                        store_row(at + i, state, flip, row)
-                    };
-                    crate::ensemble::run_values(rows.len() / cols, &fill, &spec, rows, cols, &store)
-                        .map_err(|e| lanes_error(at, e))?;
-                }
-                Ok(())
+                crate::ensemble::run_values_cancellable(count, &fill, &spec, out, cols, &store_row, cancel)
+                    .map_err(lanes_error)
             }
             EnsemblePath::Engine(method) => {
                 let spec = LaneSpec { method, h, steps, stop_at_flip: until_flip, track_flips, cancel };
                 let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
                     store_row(i, &o.state[..info.state.len()], o.flip_time, row)
                 };
-                first
-                    .build()
-                    .ensemble(info, count, &fill, &spec, out, cols, &store)
-                    .map_err(|e| lanes_error(0, e))
+                first.build().ensemble(info, count, &fill, &spec, out, cols, &store).map_err(lanes_error)
             }
             EnsemblePath::Scalar => {
                 let spec =

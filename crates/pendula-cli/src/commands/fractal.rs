@@ -66,6 +66,25 @@ pub struct FractalArgs {
     /// chunks missing; both files are removed when the fractal is written.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
+    /// Compute only shard K of N (K = 1 … N) of the pixels (row-major, θ₁ fastest): their
+    /// flip times at dt and dt/2, shape (count, 2), into --out FILE.npy with a FILE.npy.json
+    /// description; `fractal --merge-shards` with the same flags draws the fractal from all N.
+    #[arg(long, value_name = "K/N", requires = "out", conflicts_with_all = ["checkpoint", "summary", "out_dir"])]
+    pub shard: Option<String>,
+    /// With --shard: check that --out already holds this shard of this fractal, intact (its
+    /// description's grid, method, step, t-max, parameters and pendula version; the file's
+    /// length and CRC-32), computing nothing: exit 0 if so, else 2 naming what is wrong.
+    #[arg(long, requires = "shard")]
+    #[serde(default)]
+    pub check: bool,
+    /// Draw the fractal from its N shards (`fractal --shard K/N` with the same flags) instead
+    /// of computing it: the same files, byte for byte, as the fractal computed at once.
+    #[arg(long, value_name = "SHARD.npy", num_args = 1.., conflicts_with_all = ["shard", "checkpoint"])]
+    #[serde(default)]
+    pub merge_shards: Vec<PathBuf>,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub slurm: crate::slurm::SlurmArgs,
     #[command(flatten)]
     #[serde(flatten)]
     pub large: LargeArg,
@@ -94,9 +113,163 @@ pub fn run(args: &FractalArgs) -> Result<()> {
     execute(args, None)
 }
 
-/// Draws the fractal from the start, or `resumed` from its checkpoint (`pendula resume`).
-pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result<()> {
-    // Parse and validate everything before any work.
+/// The fractal the flags describe, validated: its spec, method and parameter values.
+struct Parsed {
+    spec: FractalSpec,
+    method: &'static pendula::integrator::Method,
+    values: pendula::system::Values,
+}
+
+impl Parsed {
+    /// What identifies a shard's numbers: everything but the tolerance (which only judges
+    /// them) and the threads (which change no bit).
+    fn fingerprint(&self) -> String {
+        let s = &self.spec;
+        crate::checkpoint::fingerprint(&format!(
+            "fractal|{:?}|{:?}|{:?}|{}|{:e}|{:e}",
+            s.pendulum, s.theta1, s.theta2, self.method.name, s.h, s.t_max
+        ))
+    }
+
+    /// The shards' shape: the grid, then the flip times at dt and dt/2.
+    fn shape(&self) -> Vec<usize> {
+        vec![self.spec.theta2.n, self.spec.theta1.n, 2]
+    }
+}
+
+/// `--shard K/N`: the flip times of the shard's pixels at dt and dt/2, rows (count, 2), and
+/// the shard's description, as `sweep --shard` writes them (so that `pendula merge` also
+/// reads them).
+fn write_shard(parsed: &Parsed, (k, n): (usize, usize), out: &Path, threads: usize) -> Result<()> {
+    let spec = &parsed.spec;
+    let pixels = spec.theta1.n * spec.theta2.n;
+    // The slices `merge` expects: N contiguous ones, as equal as possible (in u128: k × pixels
+    // may overflow usize).
+    let slice = |k: usize| (k as u128 * pixels as u128 / n as u128) as usize;
+    let (start, end) = (slice(k - 1), slice(k));
+    let side_path = PathBuf::from(format!("{}.json", out.display()));
+    let out_file = AtomicFile::create(out, "--out")?;
+    let side_file = AtomicFile::create(&side_path, "--out (shard description)")?;
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
+    let begin = Instant::now();
+    let bar = crate::study::progress(2 * (end - start) as u64, "fractal");
+    let tick = |d: u64| bar.inc(d);
+    let (at_h, at_half) =
+        pool.install(|| flip_times(spec, start..end, &tick)).map_err(|e| pixel_error(spec, e))?;
+    bar.finish_and_clear();
+    let wall_s = begin.elapsed().as_secs_f64();
+    let rows: Vec<f64> = at_h.iter().zip(&at_half).flat_map(|(a, b)| [*a, *b]).collect();
+    let written = write_npy(&out_file, &[end - start, 2], &rows)?;
+    let axis = |name: &str, a: &GridAxis| json!({"name": name, "lo": a.lo, "hi": a.hi, "n": a.n});
+    let description = json!({
+        "pendula_sweep": crate::commands::sweep::SHARD_FORMAT,
+        "pendula": env!("CARGO_PKG_VERSION"),
+        "command": "fractal",
+        "system": "double",
+        "method": parsed.method.name,
+        "dt": spec.h,
+        "t_max": spec.t_max,
+        "parameters": parsed.values.parameters().map(|(n, v)| (n.to_owned(), json!(v))).collect::<serde_json::Map<_, _>>(),
+        "axes": [axis("theta1", &spec.theta1), axis("theta2", &spec.theta2)],
+        "columns": ["flip_time", "flip_time_half_step"],
+        "shape": parsed.shape(),
+        "shard": k,
+        "shards": n,
+        "offset": start,
+        "count": end - start,
+        "fingerprint": parsed.fingerprint(),
+        "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
+        "fma": pendula::ensemble::has_fma(),
+        "threads": threads,
+        "wall_s": wall_s,
+    });
+    crate::commands::sweep::write_json(&side_file, &description)?;
+    crate::study::Summary::open(None)?.write_then(&description, vec![out_file, side_file], |_| Ok(()))?;
+    eprintln!(
+        "fractal: pixels {start} to {end} (shard {k}/{n} of {pixels}) at dt = {} s and {} s on {threads} threads in {wall_s:.3} s -> {} and {}",
+        Short(spec.h),
+        Short(spec.h / 2.0),
+        out.display(),
+        side_path.display()
+    );
+    Ok(())
+}
+
+/// `--merge-shards`: the fractal from all N of its shards, which must be this fractal's.
+fn from_shards(
+    parsed: &Parsed,
+    shards: &[PathBuf],
+    allow_large: bool,
+) -> Result<pendula::analysis::fractal::FlipFractal> {
+    let (shape, data, _, fingerprint) = crate::commands::merge::gather(shards, allow_large)?;
+    if fingerprint != parsed.fingerprint() || shape != parsed.shape() {
+        bail!(
+            "{} is a shard of another fractal than these flags describe (its grid, method, dt, t-max or parameters differ)",
+            shards[0].display()
+        );
+    }
+    let (at_h, at_half) = data.chunks_exact(2).map(|v| (v[0], v[1])).unzip();
+    Ok(assemble(&parsed.spec, at_h, at_half))
+}
+
+/// `--emit-slurm N`: the Slurm script that computes this fractal in N shards and draws it
+/// from them (`--merge-shards`).
+fn emit_slurm(args: &FractalArgs, parsed: &Parsed) -> Result<()> {
+    let mut run = crate::slurm::Argv::default();
+    run.value("t-max", &args.t_max)
+        .value("method", &args.stepping.method)
+        .value("dt", &args.stepping.dt)
+        .value("tolerance", &args.tolerance)
+        .each("grid", &args.grids)
+        .each("set", &args.set.items)
+        .switch("allow-large", args.large.allow_large);
+    // The script must draw this fractal: its arguments, parsed again, give the same one.
+    let again = match run.parse_again("fractal", &[])? {
+        crate::cli::Command::Fractal(a) => parse(&a)?,
+        _ => unreachable!("`pendula fractal` parses as fractal"),
+    };
+    if again.fingerprint() != parsed.fingerprint() || again.spec.tolerance != parsed.spec.tolerance {
+        bail!("internal error: the Slurm script's arguments describe another fractal");
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("fractal.npy"));
+    let pixels = parsed.spec.theta1.n * parsed.spec.theta2.n;
+    let plan = crate::slurm::Plan {
+        command: "fractal",
+        args: run.0,
+        allow_large: args.large.allow_large,
+        out: &out,
+        cells: pixels,
+        merge_flag: Some("--merge-shards"),
+    };
+    let script = crate::slurm::emit(&args.slurm, &plan)?;
+    eprintln!(
+        "wrote {}: {pixels} pixels in {} shards as a Slurm job array, then the fractal drawn from them into {} (and its images beside it); submit with `bash {} --wait`",
+        script.display(),
+        args.slurm.emit_slurm.as_deref().unwrap_or_default().trim(),
+        out.display(),
+        script.display()
+    );
+    Ok(())
+}
+
+/// A pixel's numerical failure (exit 1), named by its place in the grid, as in sweep.
+fn pixel_error(spec: &FractalSpec, e: pendula::Error) -> anyhow::Error {
+    match e {
+        pendula::Error::NonFiniteMember { member, t } => {
+            let (i, j) = (member % spec.theta1.n, member / spec.theta1.n);
+            anyhow::Error::new(pendula::Error::NonFinite { t }).context(format!(
+                "fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {}",
+                Short(spec.theta1.centre(i)),
+                Short(spec.theta2.centre(j))
+            ))
+        }
+        other => anyhow::Error::new(other),
+    }
+}
+
+/// Parses and validates the flags that say which fractal, before any work.
+fn parse(args: &FractalArgs) -> Result<Parsed> {
     let info = pendula::model::find("double")?;
     let settings = parse_settings(info, &args.set.items)?;
     for (name, _) in &settings {
@@ -146,6 +319,15 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         );
     };
     crate::config::binding_step(method, h, "--dt")?;
+    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
+    Ok(Parsed { spec, method, values })
+}
+
+/// Draws the fractal from the start, or `resumed` from its checkpoint (`pendula resume`).
+pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result<()> {
+    let parsed = parse(args)?;
+    let (spec, method, values) = (parsed.spec, parsed.method, &parsed.values);
+    let FractalSpec { theta1, theta2, t_max, h, tolerance, .. } = spec;
     let threads = args.threads.resolve(args.large.allow_large)?;
     if args.out.as_deref() == Some(Path::new("-")) {
         bail!("invalid --out -: the fractal is written as .npy and .png files, not to stdout; give FILE.npy");
@@ -173,6 +355,22 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         && out.extension().and_then(|e| e.to_str()) != Some("npy")
     {
         bail!("invalid --out {}: the fractal is written as .npy", out.display());
+    }
+    if args.slurm.emit_slurm.is_some() {
+        return emit_slurm(args, &parsed);
+    }
+    if let Some(text) = &args.shard {
+        let out = args.out.as_deref().expect("clap requires --out with --shard");
+        let shard = crate::commands::sweep::parse_shard(text, theta1.n * theta2.n)?;
+        if args.check {
+            return crate::commands::merge::check(out, &parsed.fingerprint(), &parsed.shape(), shard);
+        }
+        return write_shard(&parsed, shard, out, threads);
+    }
+    // Shards to draw from are inputs: an output onto one of them is refused before any is read.
+    for path in &args.merge_shards {
+        crate::output::claim_input(path, "input shard")?;
+        crate::output::claim_input(Path::new(&format!("{}.json", path.display())), "shard description")?;
     }
     // An explicit --out is the user's path; otherwise the study's directory, tidied of an
     // earlier run's files like every study command's.
@@ -211,7 +409,6 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         None => None,
     };
 
-    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     let pool =
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().context("cannot start the threads")?;
     let begin = Instant::now();
@@ -224,19 +421,11 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
             bar.set_position(before + n);
         }
     };
-    // A non-finite state is a numerical failure (exit 1) at a pixel, as in sweep.
-    let pixel_error = |e| match e {
-        pendula::Error::NonFiniteMember { member, t } => {
-            let (i, j) = (member % theta1.n, member / theta1.n);
-            anyhow::Error::new(pendula::Error::NonFinite { t }).context(format!(
-                "fractal pixel ({i}, {j}) at theta1 = {}, theta2 = {}",
-                Short(theta1.centre(i)),
-                Short(theta2.centre(j))
-            ))
-        }
-        other => anyhow::Error::new(other),
-    };
+    let pixel_error = |e| pixel_error(&spec, e);
     let (fractal, chunks) = match checkpoint {
+        _ if !args.merge_shards.is_empty() => {
+            (from_shards(&parsed, &args.merge_shards, args.large.allow_large)?, None)
+        }
         None => (pool.install(|| flip_fractal_with_progress(&spec, &tick)).map_err(pixel_error)?, None),
         Some(path) => {
             let _registered = crate::output::Checkpointing::start();

@@ -31,14 +31,16 @@ pub struct MergeArgs {
 
 /// One shard, as its description states it.
 pub(crate) struct Shard {
-    path: PathBuf,
-    fingerprint: Value,
-    shape: Vec<usize>,
-    k: usize,
-    n: usize,
-    offset: usize,
-    count: usize,
-    data: Written,
+    pub path: PathBuf,
+    pub fingerprint: Value,
+    pub shape: Vec<usize>,
+    pub k: usize,
+    pub n: usize,
+    pub offset: usize,
+    pub count: usize,
+    pub data: Written,
+    /// Whether the CPU that computed it had fused multiply-adds (absent in older shards).
+    pub fma: Option<bool>,
 }
 
 /// The description's path, for messages.
@@ -87,6 +89,7 @@ pub(crate) fn describe(path: &Path) -> Result<Shard> {
         count: number("count")?,
         data: Written { bytes, crc32 },
         shape,
+        fma: d.get("fma").and_then(Value::as_bool),
     };
     // The grid's cells (all axes; the last dimension is the recorded columns).
     let cells = match shard.shape.split_last() {
@@ -116,6 +119,34 @@ pub(crate) fn describe(path: &Path) -> Result<Shard> {
     Ok(shard)
 }
 
+/// Checks that the shard's file is the one its description was written with: its length,
+/// then its CRC-32 (`shards`, the sweep's count, for the message).
+pub(crate) fn verify_data(s: &Shard, shards: usize) -> Result<()> {
+    let file = std::fs::File::open(&s.path).with_context(|| format!("cannot read {}", s.path.display()))?;
+    let len = file.metadata().with_context(|| format!("cannot read {}", s.path.display()))?.len();
+    if len != s.data.bytes {
+        bail!(
+            "{} is {len} bytes, but its description {} says {}: the file is truncated or not the shard described",
+            s.path.display(),
+            json_of(&s.path),
+            s.data.bytes
+        );
+    }
+    let found = checksum(std::io::BufReader::new(file))
+        .with_context(|| format!("cannot read {}", s.path.display()))?;
+    if found != s.data {
+        bail!(
+            "{}: its CRC-32 is {:08x}, but its description {} says {:08x}: the file is corrupted or not the shard described (shard {}/{shards})",
+            s.path.display(),
+            found.crc32,
+            json_of(&s.path),
+            s.data.crc32,
+            s.k
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: &MergeArgs) -> Result<()> {
     if args.out == Path::new("-") {
         bail!("invalid --out -: merge writes a .npy file, not stdout; give FILE.npy");
@@ -129,8 +160,17 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         claim_input(Path::new(&json_of(path)), "shard description")?;
     }
     let out = AtomicFile::create(&args.out, "--out")?;
+    let (shape, data, parts, _) = gather(&args.shards, args.large.allow_large)?;
+    crate::commands::sweep::write_npy(&out, &shape, &data)?;
+    out.commit()?;
+    eprintln!("merged {parts} shards into {} {:?}", args.out.display(), shape);
+    Ok(())
+}
 
-    let parts = args.shards.iter().map(|p| describe(p)).collect::<Result<Vec<_>>>()?;
+/// The whole array of the shards at `paths` (claimed as inputs by the caller), checked as
+/// `merge` checks them: its shape, its values, the number of shards and their fingerprint.
+pub(crate) fn gather(paths: &[PathBuf], allow_large: bool) -> Result<(Vec<usize>, Vec<f64>, usize, Value)> {
+    let parts = paths.iter().map(|p| describe(p)).collect::<Result<Vec<_>>>()?;
     let first = &parts[0];
     for s in &parts {
         if s.fingerprint != first.fingerprint || s.shape != first.shape || s.n != first.n {
@@ -140,6 +180,17 @@ pub fn run(args: &MergeArgs) -> Result<()> {
                 first.path.display()
             );
         }
+    }
+    // Shards from CPUs that round differently (with and without FMA) are each right, and
+    // together not bitwise what one machine computes: said, not refused (nothing is lost).
+    if let (Some(a), Some(b)) =
+        (parts.iter().find(|s| s.fma == Some(true)), parts.iter().find(|s| s.fma == Some(false)))
+    {
+        eprintln!(
+            "warning: {} was computed on a CPU with fused multiply-adds and {} on one without: they round differently, so the merged array is not bitwise what one machine computes",
+            a.path.display(),
+            b.path.display()
+        );
     }
     let shards = first.n;
     // More shards than files: some are missing, found without a table of `shards` entries
@@ -192,7 +243,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let how = format!("{} values of shape {shape:?}", crate::limits::round(total as f64));
     crate::limits::check(
         "merge",
-        args.large.allow_large,
+        allow_large,
         &[
             crate::limits::Estimate::new(crate::limits::Cost::Memory, bytes, how.clone()),
             crate::limits::Estimate::new(crate::limits::Cost::Output, bytes, how),
@@ -201,29 +252,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     // Each file is the one its description was written with: its length, then its checksum,
     // before its contents are believed.
     for s in &parts {
-        let file =
-            std::fs::File::open(&s.path).with_context(|| format!("cannot read {}", s.path.display()))?;
-        let len = file.metadata().with_context(|| format!("cannot read {}", s.path.display()))?.len();
-        if len != s.data.bytes {
-            bail!(
-                "{} is {len} bytes, but its description {} says {}: the file is truncated or not the shard described",
-                s.path.display(),
-                json_of(&s.path),
-                s.data.bytes
-            );
-        }
-        let found = checksum(std::io::BufReader::new(file))
-            .with_context(|| format!("cannot read {}", s.path.display()))?;
-        if found != s.data {
-            bail!(
-                "{}: its CRC-32 is {:08x}, but its description {} says {:08x}: the file is corrupted or not the shard described (shard {}/{shards})",
-                s.path.display(),
-                found.crc32,
-                json_of(&s.path),
-                s.data.crc32,
-                s.k
-            );
-        }
+        verify_data(s, shards)?;
     }
     for s in &parts {
         // The shard's header must hold what its description says, before it is read.
@@ -260,8 +289,45 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         data[s.offset * columns..(s.offset + s.count) * columns]
             .copy_from_slice(values.as_slice().expect("standard layout"));
     }
-    crate::commands::sweep::write_npy(&out, &shape, &data)?;
-    out.commit()?;
-    eprintln!("merged {} shards into {} {:?}", parts.len(), args.out.display(), shape);
+    Ok((shape, data, parts.len(), parts[0].fingerprint.clone()))
+}
+
+/// `--check` (sweep's, fractal's): whether `out` holds shard `(k, n)` of the run of this
+/// `fingerprint` and `shape`, written by this pendula, intact.
+pub(crate) fn check(out: &Path, fingerprint: &str, shape: &[usize], (k, n): (usize, usize)) -> Result<()> {
+    let json = format!("{}.json", out.display());
+    if !out.exists() {
+        bail!("shard {k}/{n}: {} does not exist", out.display());
+    }
+    let shard = describe(out).with_context(|| format!("shard {k}/{n}"))?;
+    if shard.fingerprint != fingerprint || shard.shape != shape {
+        bail!(
+            "shard {k}/{n}: {} is a shard of another run (its grid, method or records differ)",
+            out.display()
+        );
+    }
+    if (shard.k, shard.n) != (k, n) {
+        bail!("shard {k}/{n}: {} is shard {}/{} of this sweep", out.display(), shard.k, shard.n);
+    }
+    // Another pendula may round differently in the last bits: its shard is computed again, so
+    // that the merged array is one build's.
+    let version = crate::commands::sweep::read_description(out)?
+        .get("pendula")
+        .and_then(serde_json::Value::as_str)
+        .map(str::to_owned);
+    if version.as_deref() != Some(env!("CARGO_PKG_VERSION")) {
+        bail!(
+            "shard {k}/{n}: {json} was written by pendula {}, not by this one ({})",
+            version.as_deref().unwrap_or("(unstated)"),
+            env!("CARGO_PKG_VERSION")
+        );
+    }
+    verify_data(&shard, n)?;
+    eprintln!(
+        "shard {k}/{n}: {} holds it, intact ({} bytes, CRC-32 {:08x})",
+        out.display(),
+        shard.data.bytes,
+        shard.data.crc32
+    );
     Ok(())
 }

@@ -80,6 +80,15 @@ pub struct SweepArgs {
     /// chunks missing; both files are removed when the sweep ends.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
+    /// With --shard: check that --out already holds this shard of this sweep, intact (its
+    /// description's grid, method, records and pendula version; the file's length and CRC-32),
+    /// computing nothing: exit 0 if so, else 2 naming what is wrong.
+    #[arg(long, requires = "shard", conflicts_with_all = ["checkpoint", "summary"])]
+    #[serde(default)]
+    pub check: bool,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub slurm: crate::slurm::SlurmArgs,
     #[command(flatten)]
     #[serde(flatten)]
     pub large: LargeArg,
@@ -196,23 +205,11 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         }
         records.push(record);
     }
+    let cells: usize = axes.iter().map(|a| a.n).product();
     let shard = match &args.shard {
         None => (1, 1),
-        Some(text) => {
-            let bad = || anyhow!("invalid --shard `{text}`: expected K/N with 1 <= K <= N, e.g. 3/8");
-            let (k, n) = text.split_once('/').ok_or_else(bad)?;
-            let (k, n): (usize, usize) =
-                (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
-            if !(1 <= k && k <= n) {
-                return Err(bad());
-            }
-            (k, n)
-        }
+        Some(text) => parse_shard(text, cells)?,
     };
-    let cells: usize = axes.iter().map(|a| a.n).product();
-    if shard.1 > cells {
-        bail!("invalid --shard {}/{}: more shards than the {cells} cells", shard.0, shard.1);
-    }
     // The flags' own checks above name the flags; the library's checks the rest (the
     // corners of the grid in their domains, the method's requirement) in its words.
     let sweep = SweepSpec {
@@ -292,6 +289,17 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     }
     if out_path.extension().and_then(|e| e.to_str()) != Some("npy") {
         bail!("invalid --out {}: sweep writes .npy", out_path.display());
+    }
+    if args.check {
+        return crate::commands::merge::check(
+            &out_path,
+            &sweep.fingerprint(),
+            &sweep.shape(),
+            sweep.spec().shard,
+        );
+    }
+    if args.slurm.emit_slurm.is_some() {
+        return emit_slurm(args, &sweep, &out_path);
     }
     let sharded = sweep.spec().shard != (1, 1);
     let side_path = PathBuf::from(format!("{}.json", out_path.display()));
@@ -373,6 +381,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     let written = write_npy(&out_file, &shape, &data)?;
     let description = json!({
         "pendula_sweep": SHARD_FORMAT,
+        "pendula": env!("CARGO_PKG_VERSION"),
         "system": sweep.info().name,
         "method": sweep.spec().method.name,
         "dt": sweep.spec().h,
@@ -387,6 +396,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         "fingerprint": sweep.fingerprint(),
         "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
         "kernel": sweep.kernel(),
+        "fma": ensemble::has_fma(),
         "threads": threads,
         "wall_s": wall_s,
     });
@@ -415,6 +425,60 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         if sharded { format!(" and {}", side_path.display()) } else { String::new() },
     );
     Ok(())
+}
+
+/// `--emit-slurm N`: the Slurm script that computes this sweep in N shards and merges them.
+fn emit_slurm(args: &SweepArgs, sweep: &Sweep, out: &Path) -> Result<()> {
+    let mut run = crate::slurm::Argv(args.system.system.iter().cloned().collect());
+    run.value("method", &args.stepping.method)
+        .value("dt", &args.stepping.dt)
+        .value("steps", &args.steps)
+        .value("t-end", &args.end.t_end)
+        .value("until", &args.until)
+        .value("record", &args.record)
+        .each("grid", &args.grids)
+        .each("set", &args.set.items)
+        .switch("allow-large", args.large.allow_large);
+    // The script must compute this sweep: its arguments, parsed again, give the same one.
+    let again = match run.parse_again("sweep", &["--shard", "1/1"])? {
+        crate::cli::Command::Sweep(a) => parse(&a)?,
+        _ => unreachable!("`pendula sweep` parses as sweep"),
+    };
+    if again.fingerprint() != sweep.fingerprint() {
+        bail!("internal error: the Slurm script's arguments describe another sweep");
+    }
+    let plan = crate::slurm::Plan {
+        command: "sweep",
+        args: run.0,
+        allow_large: args.large.allow_large,
+        out,
+        cells: sweep.cells(),
+        merge_flag: None,
+    };
+    let script = crate::slurm::emit(&args.slurm, &plan)?;
+    eprintln!(
+        "wrote {}: {} cells in {} shards as a Slurm job array, then their merge into {}; submit with `bash {} --wait`",
+        script.display(),
+        sweep.cells(),
+        args.slurm.emit_slurm.as_deref().unwrap_or_default().trim(),
+        out.display(),
+        script.display()
+    );
+    Ok(())
+}
+
+/// `--shard K/N` of `cells` cells (sweep's, fractal's): 1 <= K <= N <= cells.
+pub(crate) fn parse_shard(text: &str, cells: usize) -> Result<(usize, usize)> {
+    let bad = || anyhow!("invalid --shard `{}`: expected K/N with 1 <= K <= N, e.g. 3/8", clip(text));
+    let (k, n) = text.split_once('/').ok_or_else(bad)?;
+    let (k, n): (usize, usize) = (k.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+    if !(1 <= k && k <= n) {
+        return Err(bad());
+    }
+    if n > cells {
+        bail!("invalid --shard {k}/{n}: more shards than the {cells} cells");
+    }
+    Ok((k, n))
 }
 
 /// Refuses a quantity both set (`--set NAME=…`) and swept (`flag NAME=…`), naming both: the

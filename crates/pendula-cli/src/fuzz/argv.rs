@@ -243,9 +243,10 @@ fn kind(long: &str) -> Kind {
         "scenario" | "out" | "summary" | "plot" | "out-dir" | "gallery" => Kind::Path,
         "method" | "preset" | "system" | "variable" | "x" | "until" => Kind::Name,
         "steps" | "every" | "levels" | "tol-levels" | "fps" | "count" | "samples" | "steps-per-period"
-        | "threads" => Kind::Count,
+        | "threads" | "emit-slurm" | "cpus" => Kind::Count,
         "size" => Kind::Size,
         "shard" => Kind::Shard,
+        "partition" => Kind::Name,
         _ => Kind::Number,
     }
 }

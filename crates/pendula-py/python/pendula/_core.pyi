@@ -154,4 +154,5 @@ def sweep(
     shard: tuple[int, int],
     threads: Optional[int] = None,
     progress: Optional[Callable[[int], None]] = None,
+    cells: Optional[tuple[int, int]] = None,
 ) -> dict[str, Any]: ...

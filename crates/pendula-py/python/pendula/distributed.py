@@ -6,6 +6,10 @@ together into exactly the array the local call returns, byte for byte.
 >>> client = Client(LocalCluster(n_workers=2, host="127.0.0.1"))
 >>> f = pendula.distributed.fractal(client, theta1=(-3.14, 3.14, 1024), theta2=(-3.14, 3.14, 1024))
 
+For grids larger than memory, :func:`sweep_array` is the sweep as a lazy ``dask.array``
+whose blocks are computed when asked for (``da.to_npy_stack``, ``to_zarr``, a slice's
+``compute()``), on whatever scheduler is current.
+
 Any Dask client works: a LocalCluster, a scheduler you started, or dask-jobqueue's Slurm and
 PBS clusters. A part whose worker dies is computed again by Dask on another worker; a part's
 numbers depend only on its cells, so the result is the same bytes. Needs ``distributed``.
@@ -21,16 +25,20 @@ import numpy as np
 from . import _core
 from .errors import InvalidValueError
 from .study import FractalResult, _axis, _float, _fractal_result, _system, _threads
+from .sweep import DEFAULT_DT as _DEFAULT_DT
 from .sweep import SweepResult, merge
 from .sweep import sweep as _local_sweep
 
 
 def _parts(client: Any, cells: int, chunks: Optional[int]) -> int:
-    """How many parts: ``chunks``, or four per worker thread (so that a slow or lost worker
-    holds up a small share), at most one per cell."""
+    """How many parts: ``chunks``, or sixteen per worker thread, at most one per cell. Parts
+    differ in cost (a fractal's pixels that never flip run to t_max), and the run ends with
+    its slowest part: with four per thread the last part left a worker idle for up to a
+    tenth of a 1024² fractal (distributed/local 0.99 and 1.17 in two runs; BENCHMARKS.md).
+    Smaller parts leave a shorter tail, and a slow or lost worker holds up a smaller share."""
     if chunks is None:
         threads = sum(client.nthreads().values()) or 1
-        chunks = 4 * threads
+        chunks = 16 * threads
     if not (isinstance(chunks, int) and chunks >= 1):
         raise InvalidValueError(f"invalid chunks {chunks!r}: a whole number >= 1")
     return max(1, min(chunks, cells))
@@ -38,7 +46,7 @@ def _parts(client: Any, cells: int, chunks: Optional[int]) -> int:
 
 def sweep(client: Any, system: Any, grid: Any, *, chunks: Optional[int] = None, **kwargs: Any) -> SweepResult:
     """:func:`pendula.sweep` on ``client``'s workers: the grid cut into ``chunks`` shards
-    (default: four per worker thread), each computed by ``pendula.sweep(..., shard=(k,
+    (default: sixteen per worker thread), each computed by ``pendula.sweep(..., shard=(k,
     chunks))`` on a worker, and merged (:func:`pendula.merge`), which checks that they are the
     parts of one sweep. Takes ``pendula.sweep``'s arguments except ``shard``; the result equals
     the local call's byte for byte."""
@@ -49,6 +57,61 @@ def sweep(client: Any, system: Any, grid: Any, *, chunks: Optional[int] = None, 
     n = _parts(client, cells, chunks)
     futures = [client.submit(_local_sweep, system, grid, shard=(k, n), pure=False, **kwargs) for k in range(1, n + 1)]
     return merge(client.gather(futures))
+
+
+def sweep_array(system: Any, grid: Any, *, rows: Optional[int] = None, threads: Optional[int] = None, **kwargs: Any):
+    """:func:`pendula.sweep` as a lazy ``dask.array.Array`` of the sweep's shape (the last
+    grid axis first, the first axis and then the recorded columns last), in blocks of
+    ``rows`` rows along its first axis (default: blocks of about 64 MiB), each computed by
+    the package when Dask asks for it (``map_blocks``): a block is a contiguous run of cells,
+    the same bytes as in the local sweep. Write it with ``dask.array.to_npy_stack`` (one
+    ``.npy`` per block) or ``to_zarr``; take a slice and ``compute()`` it, and only its blocks
+    are computed. Takes ``pendula.sweep``'s arguments except ``shard`` and ``progress``;
+    ``threads`` per block (default: the worker's cores)."""
+    import dask.array as da
+
+    for name in ("shard", "progress"):
+        if name in kwargs:
+            raise InvalidValueError(f"invalid argument `{name}`: sweep_array computes its blocks when Dask asks")
+    from .sweep import _arguments
+
+    args = _arguments(
+        system,
+        grid,
+        kwargs.pop("set", None),
+        kwargs.pop("method", "rk4"),
+        kwargs.pop("dt", _DEFAULT_DT),
+        kwargs.pop("steps", None),
+        kwargs.pop("t_end", None),
+        kwargs.pop("until", None),
+        kwargs.pop("record", ("final",)),
+    )
+    if kwargs:
+        raise InvalidValueError(f"invalid argument `{next(iter(kwargs))}` for sweep_array")
+    threads = _threads(threads)
+    # Every check the whole sweep makes, on its first cell, here and now.
+    first = _core.sweep(*args, (1, 1), 1, None, (0, 1))
+    shape = tuple(int(n) for n in first["shape"])
+    per_row = math.prod(shape[1:])
+    if rows is None:
+        rows = max(1, (64 << 20) // (8 * per_row))
+    if not (isinstance(rows, int) and rows >= 1):
+        raise InvalidValueError(f"invalid rows {rows!r}: a whole number >= 1")
+    inner = per_row // shape[-1]
+    blocks = tuple(min(rows, shape[0] - r) for r in range(0, shape[0], rows))
+
+    def block(block_info=None):
+        (r0, r1) = block_info[None]["array-location"][0]
+        out = _core.sweep(*args, (1, 1), threads, None, (r0 * inner, r1 * inner))
+        return out["data"].reshape((r1 - r0,) + shape[1:])
+
+    return da.map_blocks(
+        block,
+        chunks=(blocks,) + tuple((n,) for n in shape[1:]),
+        dtype=np.float64,
+        meta=np.empty((0,) * len(shape)),
+        name=f"pendula-sweep-{first['fingerprint']}-{rows}",
+    )
 
 
 def _cells(grid: Any) -> int:
@@ -76,7 +139,7 @@ def fractal(
     chunks: Optional[int] = None,
 ) -> FractalResult:
     """:func:`pendula.fractal` on ``client``'s workers: the map's pixels (row-major) cut into
-    ``chunks`` runs (default: four per worker thread), each computed on a worker with
+    ``chunks`` runs (default: sixteen per worker thread), each computed on a worker with
     ``threads`` threads (default: all of the worker's cores), and put together into the same
     result as the local call, byte for byte (flip times at dt and dt/2, the converged mask,
     the count forbidden by energy)."""

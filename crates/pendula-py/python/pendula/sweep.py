@@ -268,6 +268,26 @@ def sweep(
     :func:`merge`). Bitwise the CLI's ``pendula sweep``, for any thread count.
     ``progress=True`` shows a bar of the cells done (a callable gets the count).
     """
+    args = _arguments(system, grid, set, method, dt, steps, t_end, until, record)
+    if threads is not None:
+        threads = operator.index(threads)
+        if threads < 1:
+            raise InvalidValueError(f"invalid value {threads} for `threads`: at least 1")
+    k, n = _shard(shard)
+    cells = math.prod(a[3] for a in args[2])
+    out = counted(
+        progress,
+        k * cells // n - (k - 1) * cells // n,
+        "cells",
+        lambda tick: _core.sweep(*args, (k, n), threads, tick),
+    )
+    return _result(out)
+
+
+def _arguments(system, grid, set, method, dt, steps, t_end, until, record) -> tuple:
+    """The sweep's description as ``_core.sweep`` takes it (system, set, axes, method, dt,
+    steps, t_end, until, records), from :func:`sweep`'s arguments; the library checks the
+    rest."""
     settings = []
     if not isinstance(system, str):
         # A System: its name, and its values where `set` does not say otherwise.
@@ -295,38 +315,15 @@ def sweep(
     records = [record] if isinstance(record, str) else list(record)
     # The CLI's comma-separated form too: "final,flip-time".
     records = [r.strip() for item in records for r in str(item).split(",")]
-    if threads is not None:
-        threads = operator.index(threads)
-        if threads < 1:
-            raise InvalidValueError(f"invalid value {threads} for `threads`: at least 1")
-    k, n = _shard(shard)
-    cells = math.prod(a[3] for a in axes)
-    out = counted(
-        progress,
-        k * cells // n - (k - 1) * cells // n,
-        "cells",
-        lambda tick: _core.sweep(
-            str(system),
-            settings,
-            axes,
-            str(method),
-            _value("dt", dt),
-            steps,
-            None if t_end is None else _value("t_end", t_end),
-            until,
-            records,
-            (k, n),
-            threads,
-            tick,
-        ),
-    )
-    return _result(out)
+    t_end = None if t_end is None else _value("t_end", t_end)
+    return (str(system), settings, axes, str(method), _value("dt", dt), steps, t_end, until, records)
 
 
 def _result(out: dict) -> SweepResult:
     data = out.pop("data")
     d = {
         "pendula_sweep": SHARD_FORMAT,
+        "pendula": out["pendula"],
         "system": out["system"],
         "method": out["method"],
         "dt": out["dt"],
@@ -340,6 +337,7 @@ def _result(out: dict) -> SweepResult:
         "count": out["count"],
         "fingerprint": out["fingerprint"],
         "kernel": out["kernel"],
+        "fma": out["fma"],
         "threads": out["threads"],
         "wall_s": out["wall_s"],
     }

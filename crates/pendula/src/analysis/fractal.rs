@@ -122,6 +122,24 @@ pub fn flip_times(
     pixels: std::ops::Range<usize>,
     tick: &(dyn Fn(u64) + Sync),
 ) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    flip_times_cancellable(spec, pixels, tick, None)
+}
+
+/// [`flip_times`], stopped early when `cancel` is set: the ensemble's work items look at it
+/// before they start ([`ensemble::run_into_cancellable`]), so that one call over the whole
+/// map keeps every thread busy to the end and still stops promptly.
+///
+/// # Errors
+/// As [`flip_times`], and [`Error::Interrupted`] when `cancel` was set.
+///
+/// # Panics
+/// As [`flip_times`].
+pub fn flip_times_cancellable(
+    spec: &FractalSpec,
+    pixels: std::ops::Range<usize>,
+    tick: &(dyn Fn(u64) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
     let n1 = spec.theta1.n;
     assert!(pixels.end <= n1 * spec.theta2.n, "pixels inside the grid");
@@ -147,10 +165,11 @@ pub fn flip_times(
             row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
             tick(1);
         };
-        ensemble::run_into(allowed.len(), &member, &batch, &mut times, 1, &store).map_err(|e| match e {
-            Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
-            other => other,
-        })?;
+        ensemble::run_into_cancellable(allowed.len(), &member, &batch, &mut times, 1, &store, cancel)
+            .map_err(|e| match e {
+                Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
+                other => other,
+            })?;
         let mut image = vec![f64::NAN; pixels.len()];
         for (k, t) in allowed.iter().zip(times) {
             image[*k - pixels.start] = t;

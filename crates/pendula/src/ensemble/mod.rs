@@ -149,6 +149,24 @@ pub fn run_values<T: Send>(
     row_len: usize,
     store: &StoreValues<'_, T>,
 ) -> Result<(), Error> {
+    run_values_cancellable(count, member, spec, out, row_len, store, None)
+}
+
+/// [`run_values`], stopped early when `cancel` is set: each parallel work item looks at it
+/// before it starts, so a run stops within one work item's time, and the rows not computed
+/// are left as they were.
+///
+/// # Errors
+/// As [`run_into`], and [`Error::Interrupted`] when `cancel` was set.
+pub fn run_values_cancellable<T: Send>(
+    count: usize,
+    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    spec: &BatchSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &StoreValues<'_, T>,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<(), Error> {
     use crate::system::Model;
     let info = DoublePendulum::INFO;
     let np = info.parameters.len();
@@ -161,9 +179,10 @@ pub fn run_values<T: Send>(
         };
         Member { pendulum: DoublePendulum::over(&value, &value), state: std::array::from_fn(|k| v[np + k]) }
     };
-    run_indexed(count, &of, spec, out, row_len, &|i, _, r: &MemberResult, row: &mut [T]| {
+    let store = |i: usize, _: &Member, r: &MemberResult, row: &mut [T]| {
         store(i, &r.state, r.flip_time, row);
-    })
+    };
+    run_indexed(count, &of, spec, out, row_len, &store, cancel)
 }
 
 /// Runs every member, in parallel on rayon's current pool, writing `out[i]` for `members[i]`.
@@ -193,7 +212,23 @@ pub fn run_into<T: Send>(
     row_len: usize,
     store: &(dyn Fn(&Member, &MemberResult, &mut [T]) + Sync),
 ) -> Result<(), Error> {
-    run_indexed(count, member, spec, out, row_len, &|_, m, r, row| store(m, r, row))
+    run_into_cancellable(count, member, spec, out, row_len, store, None)
+}
+
+/// [`run_into`], stopped early when `cancel` is set (as [`run_values_cancellable`]).
+///
+/// # Errors
+/// As [`run_into`], and [`Error::Interrupted`] when `cancel` was set.
+pub fn run_into_cancellable<T: Send>(
+    count: usize,
+    member: &(dyn Fn(usize) -> Member + Sync),
+    spec: &BatchSpec,
+    out: &mut [T],
+    row_len: usize,
+    store: &(dyn Fn(&Member, &MemberResult, &mut [T]) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<(), Error> {
+    run_indexed(count, member, spec, out, row_len, &|_, m, r, row| store(m, r, row), cancel)
 }
 
 /// [`run_into`], the store told each member's index.
@@ -204,10 +239,11 @@ fn run_indexed<T: Send>(
     out: &mut [T],
     row_len: usize,
     store: &StoreIndexed<'_, T>,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<(), Error> {
     assert_eq!(out.len(), count * row_len, "one row per member");
     let scheme = match spec.method {
-        BatchMethod::Rk4 => return run_rk4_on_engine(count, member, spec, out, row_len, store),
+        BatchMethod::Rk4 => return run_rk4_on_engine(count, member, spec, out, row_len, store, cancel),
         BatchMethod::Tao(scheme) => scheme,
     };
     if let Some(member) = (0..count).find(|&i| member(i).pendulum.is_forced()) {
@@ -218,22 +254,29 @@ fn run_indexed<T: Send>(
             suggestion: "rk4 on lanes, or one run per member (pendula::solve)",
         });
     }
-    let failures: Vec<(usize, f64)> = out
+    let failures: Vec<(usize, Error)> = out
         .par_chunks_mut(CHUNK * row_len)
         .enumerate()
         .filter_map(|(c, rows)| {
             let start = c * CHUNK;
+            if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                return Some((start, Error::Interrupted));
+            }
             let members: Vec<Member> = (start..start + rows.len() / row_len).map(member).collect();
             let mut results = vec![MemberResult { state: [0.0; 4], flip_time: f64::NAN }; members.len()];
             let failed = run_chunk(&members, scheme, spec, &mut results);
             for (j, ((m, r), row)) in members.iter().zip(&results).zip(rows.chunks_mut(row_len)).enumerate() {
                 store(start + j, m, r, row);
             }
-            failed.map(|(i, t)| (start + i, t))
+            failed.map(|(i, t)| (start + i, Error::NonFiniteMember { member: start + i, t }))
         })
         .collect();
-    match failures.into_iter().min_by_key(|&(m, _)| m) {
-        Some((member, t)) => Err(Error::NonFiniteMember { member, t }),
+    // An interruption wins over a member's failure: the run did not finish.
+    if failures.iter().any(|(_, e)| matches!(e, Error::Interrupted)) {
+        return Err(Error::Interrupted);
+    }
+    match failures.into_iter().min_by_key(|(m, _)| *m) {
+        Some((_, e)) => Err(e),
         None => Ok(()),
     }
 }
@@ -246,6 +289,7 @@ fn run_rk4_on_engine<T: Send>(
     out: &mut [T],
     row_len: usize,
     store: &StoreIndexed<'_, T>,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<(), Error> {
     use crate::system::Model;
     let crate::integrator::Scheme::ExplicitRk(tableau) = crate::integrator::explicit_rk::RK4.scheme else {
@@ -257,7 +301,7 @@ fn run_rk4_on_engine<T: Send>(
         steps: spec.steps,
         stop_at_flip: spec.stop_at_flip,
         track_flips: spec.track_flips,
-        cancel: None,
+        cancel,
     };
     let values = |i: usize, v: &mut [f64]| {
         let Member { pendulum: d, state } = member(i);
