@@ -23,3 +23,29 @@ def test_the_readme_python_example_runs(tmp_path, monkeypatch):
     assert (tmp_path / "part1.npy").exists() and (tmp_path / "part1.npy.json").exists()
     assert s.data.shape == (64 * 64 // 4, 1)
     assert os.environ["MPLBACKEND"] == "Agg"
+
+
+def test_the_readme_dask_example_runs_and_is_the_local_result(tmp_path, monkeypatch):
+    """The Python block of "Beyond one machine", as printed: a LocalCluster on loopback, the
+    fractal, the sweep and the lazy sweep array, each equal to the local call's bytes."""
+    import pytest
+
+    pytest.importorskip("distributed")
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Beyond one machine: Slurm and Dask", 1)[1].split("\n## ", 1)[0]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    assert "LocalCluster" in code and 'host="127.0.0.1"' in code
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    import pendula
+
+    turn = scope["turn"]
+    f = pendula.fractal(theta1=turn, theta2=turn, t_max=20)
+    assert scope["f"].flip_time.tobytes() == f.flip_time.tobytes()
+    s = pendula.sweep("double", {"theta1": turn, "theta2": turn}, steps=500)
+    assert scope["s"].data.tobytes() == s.data.tobytes()
+    stack = sorted(p.name for p in (tmp_path / "grid-stack").iterdir())
+    assert stack == [f"{k}.npy" for k in range(8)] + ["info"]
+    whole = np.concatenate([np.load(tmp_path / "grid-stack" / f"{k}.npy") for k in range(8)])
+    assert whole.tobytes() == s.data.tobytes()
