@@ -141,10 +141,35 @@ pub fn flip_times_cancellable(
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<(Vec<f64>, Vec<f64>), Error> {
     assert!(spec.h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
+    Ok((
+        flip_times_at(spec, spec.h, pixels.clone(), tick, cancel)?,
+        flip_times_at(spec, spec.h / 2.0, pixels, tick, cancel)?,
+    ))
+}
+
+/// The flip times of the pixels in `pixels` at the one step size `h` (half of
+/// [`flip_times_cancellable`]'s work: `pendula serve` draws its coarse previews from this
+/// alone, and the convergence check only for the finished map), NaN where none happens
+/// before `t_max` or the energy forbids it. Progress as [`flip_times`] counts it, one tick
+/// per pixel.
+///
+/// # Errors
+/// As [`flip_times_cancellable`].
+///
+/// # Panics
+/// If `h` or `t_max` is not finite and positive, or the range is outside the grid.
+pub fn flip_times_at(
+    spec: &FractalSpec,
+    h: f64,
+    pixels: std::ops::Range<usize>,
+    tick: &(dyn Fn(u64) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<Vec<f64>, Error> {
+    assert!(h > 0.0 && spec.t_max > 0.0 && spec.t_max.is_finite(), "validated step and end");
     let n1 = spec.theta1.n;
     assert!(pixels.end <= n1 * spec.theta2.n, "pixels inside the grid");
     let start = |i: usize| (spec.theta1.centre(i % n1), spec.theta2.centre(i / n1));
-    // Only pixels that can flip are integrated; the others are NaN at both step sizes.
+    // Only pixels that can flip are integrated; the others are NaN.
     let allowed: Vec<usize> = pixels
         .clone()
         .filter(|&i| {
@@ -152,31 +177,29 @@ pub fn flip_times_cancellable(
             !cannot_flip(&spec.pendulum, a, b)
         })
         .collect();
-    tick(2 * (pixels.len() - allowed.len()) as u64);
-    let run = |h: f64| -> Result<Vec<f64>, Error> {
-        let steps = (spec.t_max / h).ceil() as u64;
-        let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
-        let member = |k: usize| {
-            let (a, b) = start(allowed[k]);
-            Member { pendulum: spec.pendulum, state: [a, b, 0.0, 0.0] }
-        };
-        let mut times = vec![f64::NAN; allowed.len()];
-        let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
-            row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
-            tick(1);
-        };
-        ensemble::run_into_cancellable(allowed.len(), &member, &batch, &mut times, 1, &store, cancel)
-            .map_err(|e| match e {
-                Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
-                other => other,
-            })?;
-        let mut image = vec![f64::NAN; pixels.len()];
-        for (k, t) in allowed.iter().zip(times) {
-            image[*k - pixels.start] = t;
-        }
-        Ok(image)
+    tick((pixels.len() - allowed.len()) as u64);
+    let steps = (spec.t_max / h).ceil() as u64;
+    let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
+    let member = |k: usize| {
+        let (a, b) = start(allowed[k]);
+        Member { pendulum: spec.pendulum, state: [a, b, 0.0, 0.0] }
     };
-    Ok((run(spec.h)?, run(spec.h / 2.0)?))
+    let mut times = vec![f64::NAN; allowed.len()];
+    let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
+        row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
+        tick(1);
+    };
+    ensemble::run_into_cancellable(allowed.len(), &member, &batch, &mut times, 1, &store, cancel).map_err(
+        |e| match e {
+            Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
+            other => other,
+        },
+    )?;
+    let mut image = vec![f64::NAN; pixels.len()];
+    for (k, t) in allowed.iter().zip(times) {
+        image[*k - pixels.start] = t;
+    }
+    Ok(image)
 }
 
 /// The fractal of the flip times of every pixel at h and at h/2 ([`flip_times`]): the
