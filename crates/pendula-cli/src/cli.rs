@@ -89,6 +89,10 @@ pub enum Command {
     /// Plot a pendula CSV or .npy file: time series, a phase portrait, the energy error, or
     /// a heat map of a sweep or fractal grid.
     Plot(Box<crate::commands::plot::PlotArgs>),
+    /// The pendulum lab in the browser: live simulation, energy, integrator race, butterfly
+    /// mode, graphs and the flip-fractal explorer, computed by this program on this machine
+    /// (prints the page's URL, with its access token).
+    Serve(Box<crate::commands::serve::ServeArgs>),
     /// The paper's whole numerical study as one self-contained HTML page.
     Report(Box<crate::commands::report::ReportArgs>),
     /// List the systems, the methods or the presets, with parameters, units, defaults,

@@ -77,6 +77,7 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Merge(args) => commands::merge::run(args),
         Command::Resume(args) => commands::resume::run(args),
         Command::Plot(args) => commands::plot::run(args),
+        Command::Serve(args) => commands::serve::run(args),
         Command::List { what } => list::run(*what),
         Command::Completions { shell } => generate::completions(*shell),
         Command::Man { out_dir } => generate::man(out_dir.as_deref()),

@@ -175,7 +175,9 @@ pub fn on_interrupt() -> Result<()> {
                     let _ = std::fs::remove_dir(dir);
                 }
                 let name = signal_name(signal);
-                let _ = writeln!(std::io::stderr(), "{clear}interrupted by {name}: unfinished files removed");
+                // Only when there were any: `pendula serve` writes none.
+                let removed = if live.temps.is_empty() { "" } else { ": unfinished files removed" };
+                let _ = writeln!(std::io::stderr(), "{clear}interrupted by {name}{removed}");
                 std::process::exit(128 + signal);
             }
         })

@@ -1014,3 +1014,50 @@ fn plot_bad_input_exits_2_and_writes_nothing() {
     rejects(&["plot", "missing.csv"], &["missing.csv"]);
     rejects_with(&["plot", "t.txt"], &["t.txt", ".csv and .npy"], 2, &[("t.txt", csv)]);
 }
+
+/// `pendula serve`: prints the lab's URL (loopback, with a token), serves the page and its
+/// script, and refuses a bad address or a busy port with exit code 2, naming them.
+#[test]
+fn serve_prints_its_url_and_serves_the_page() {
+    use std::io::{BufRead, Read, Write};
+    let dir = TempDir::new().unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("pendula"))
+        .args(["serve", "--port", "0"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let url = line
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_owned();
+    let rest = url.strip_prefix("http://127.0.0.1:").unwrap_or_else(|| panic!("loopback by default: {url}"));
+    let (port, token) = rest.split_once("/?token=").unwrap();
+    assert_eq!(token.len(), 32, "a 128-bit token in hex: {token}");
+    let get = |path: &str| {
+        let mut s = std::net::TcpStream::connect(format!("127.0.0.1:{port}")).unwrap();
+        write!(s, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n").unwrap();
+        let mut body = String::new();
+        s.read_to_string(&mut body).unwrap();
+        body
+    };
+    let page = get("/");
+    assert!(page.starts_with("HTTP/1.1 200") && page.contains("<canvas"), "{}", &page[..page.len().min(300)]);
+    assert!(get("/app.js").contains("WebSocket"));
+    assert!(get("/etc/passwd").starts_with("HTTP/1.1 404"), "no files served");
+    // A busy port and a bad address: exit 2, named.
+    pendula(dir.path()).args(["serve", "--port", port]).assert().code(2).stderr(
+        predicate::str::contains(format!("127.0.0.1:{port}")).and(predicate::str::contains("--port")),
+    );
+    pendula(dir.path())
+        .args(["serve", "--host", "localhost:80"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("\"localhost:80\" for --host"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(files(dir.path()).is_empty(), "serving writes nothing");
+}

@@ -14,6 +14,7 @@ pub mod poincare;
 pub mod regimes;
 pub mod report;
 pub mod resume;
+pub mod serve;
 pub mod stability;
 pub mod sweep;
 pub mod work_precision;

@@ -243,10 +243,10 @@ fn kind(long: &str) -> Kind {
         "scenario" | "out" | "summary" | "plot" | "out-dir" | "gallery" => Kind::Path,
         "method" | "preset" | "system" | "variable" | "x" | "until" => Kind::Name,
         "steps" | "every" | "levels" | "tol-levels" | "fps" | "count" | "samples" | "steps-per-period"
-        | "threads" | "emit-slurm" | "cpus" => Kind::Count,
+        | "threads" | "emit-slurm" | "cpus" | "port" | "max-sessions" => Kind::Count,
         "size" => Kind::Size,
         "shard" => Kind::Shard,
-        "partition" => Kind::Name,
+        "partition" | "host" => Kind::Name,
         _ => Kind::Number,
     }
 }
@@ -725,6 +725,19 @@ fn check(env: &Env, cli: &mut clap::Command, argv: &[String], outcomes: &mut Out
         Command::Report(r) if r.gallery_list => {
             outcomes.accepted += 1;
             return Ok(());
+        }
+        // A server has no output to stop at, and never ends: its validation is a function.
+        Command::Serve(args) => {
+            return match crate::commands::serve::options(args) {
+                Ok(_) => {
+                    outcomes.accepted += 1;
+                    Ok(())
+                }
+                Err(e) => {
+                    outcomes.refused += 1;
+                    ordinary(&e)
+                }
+            };
         }
         // `simulate --every 0` has no output to stop at: its validation is a function.
         Command::Simulate(args) => {

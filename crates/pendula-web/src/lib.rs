@@ -1,0 +1,398 @@
+//! `pendula serve`: an interactive pendulum lab in the browser, the physics in Rust.
+//!
+//! A small axum server: the page (HTML, script and styles, embedded in the binary) and one
+//! WebSocket per page, over which the server streams the simulation as binary frames and the
+//! page sends JSON commands (the protocol: `crates/pendula-web/PROTOCOL.md`). Each session
+//! runs its pendulums on a thread of its own with the library's integrators, paced to the wall
+//! clock (`src/session.rs`); the fractal explorer runs the ensemble engine on every core
+//! (`src/fractal.rs`).
+//!
+//! Safe by default: it binds 127.0.0.1; the WebSocket needs the random token printed in the
+//! URL and refuses other origins (and, on loopback, host names that are not loopback ones, so
+//! that a DNS-rebinding page cannot reach it); every request's work is bounded ([`Limits`]);
+//! no request touches the file system.
+
+use std::net::{IpAddr, SocketAddr};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+use axum::Router;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::{Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use serde_json::{Value, json};
+
+mod config;
+mod fractal;
+mod session;
+
+pub use config::Mode;
+
+/// What one session may ask of the server.
+#[derive(Debug, Clone)]
+pub struct Limits {
+    /// Sessions at once (pages open); more are refused with 503.
+    pub max_sessions: usize,
+    /// Simulation frames per second sent to a page.
+    pub max_fps: f64,
+    /// Simulated seconds per wall second.
+    pub max_speed: f64,
+    /// Pendulums in butterfly mode.
+    pub max_tracks: usize,
+    /// Methods in a race.
+    pub max_race: usize,
+    /// Integration steps per frame, all of a session's pendulums together: a speed the
+    /// server cannot keep up with makes the simulation fall behind the clock, not the server.
+    pub max_steps_per_frame: u64,
+    /// Pixels per side of a fractal map.
+    pub max_fractal_size: usize,
+    /// Longest fractal horizon, s.
+    pub max_t_max: f64,
+    /// Largest command accepted, bytes.
+    pub max_message_bytes: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_sessions: 32,
+            max_fps: 60.0,
+            max_speed: 1000.0,
+            max_tracks: 16,
+            max_race: 4,
+            max_steps_per_frame: 50_000,
+            max_fractal_size: 1024,
+            max_t_max: 1000.0,
+            max_message_bytes: 64 * 1024,
+        }
+    }
+}
+
+/// The server's options.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Address to bind (127.0.0.1 unless told otherwise).
+    pub host: IpAddr,
+    /// Port (0: any free one).
+    pub port: u16,
+    /// The token the WebSocket asks for (a random one when `None`).
+    pub token: Option<String>,
+    /// Limits on each session's work.
+    pub limits: Limits,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { host: IpAddr::from([127, 0, 0, 1]), port: 8787, token: None, limits: Limits::default() }
+    }
+}
+
+/// The state every handler shares.
+struct App {
+    token: String,
+    limits: Limits,
+    sessions: AtomicUsize,
+    loopback: bool,
+}
+
+/// What a session's thread and its WebSocket writer share.
+pub(crate) struct Shared {
+    pub(crate) outbox: Mutex<session::Outbox>,
+    pub(crate) notify: tokio::sync::Notify,
+}
+
+/// A bound server, not yet serving.
+pub struct Server {
+    listener: tokio::net::TcpListener,
+    app: Arc<App>,
+}
+
+/// Binds the server's socket (it must be called inside a tokio runtime).
+///
+/// # Errors
+/// When the address cannot be bound (in use, not permitted), naming it.
+pub async fn bind(options: Options) -> std::io::Result<Server> {
+    let addr = SocketAddr::new(options.host, options.port);
+    let listener = tokio::net::TcpListener::bind(addr)
+        .await
+        .map_err(|e| std::io::Error::new(e.kind(), format!("cannot listen on {addr}: {e}")))?;
+    let token = options.token.unwrap_or_else(random_token);
+    let app = Arc::new(App {
+        token,
+        limits: options.limits,
+        sessions: AtomicUsize::new(0),
+        loopback: options.host.is_loopback(),
+    });
+    Ok(Server { listener, app })
+}
+
+impl Server {
+    /// The address bound.
+    pub fn addr(&self) -> SocketAddr {
+        self.listener.local_addr().expect("a bound socket has an address")
+    }
+
+    /// The token the WebSocket asks for.
+    pub fn token(&self) -> &str {
+        &self.app.token
+    }
+
+    /// The page's URL, token included.
+    pub fn url(&self) -> String {
+        let addr = self.addr();
+        let host = match addr.ip() {
+            IpAddr::V6(ip) => format!("[{ip}]"),
+            IpAddr::V4(ip) if ip.is_unspecified() => "127.0.0.1".into(),
+            ip => ip.to_string(),
+        };
+        format!("http://{host}:{}/?token={}", addr.port(), self.app.token)
+    }
+
+    /// Serves until `shutdown` completes.
+    ///
+    /// # Errors
+    /// As axum's server.
+    pub async fn run(
+        self,
+        shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+    ) -> std::io::Result<()> {
+        let router = Router::new()
+            .route("/", get(page))
+            .route("/app.js", get(script))
+            .route("/style.css", get(styles))
+            .route("/ws", get(socket))
+            .fallback(|| async { (StatusCode::NOT_FOUND, "not found: the lab is at /") })
+            .with_state(self.app);
+        axum::serve(self.listener, router).with_graceful_shutdown(shutdown).await
+    }
+}
+
+const INDEX: &str = include_str!("../assets/index.html");
+const SCRIPT: &str = include_str!("../assets/app.js");
+const STYLES: &str = include_str!("../assets/style.css");
+
+async fn page(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
+    if let Err(refusal) = check_host(&app, &headers) {
+        return refusal.into_response();
+    }
+    ([(header::CONTENT_TYPE, "text/html; charset=utf-8"), (header::CACHE_CONTROL, "no-store")], INDEX)
+        .into_response()
+}
+
+async fn script(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
+    if let Err(refusal) = check_host(&app, &headers) {
+        return refusal.into_response();
+    }
+    ([(header::CONTENT_TYPE, "text/javascript; charset=utf-8")], SCRIPT).into_response()
+}
+
+async fn styles(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
+    if let Err(refusal) = check_host(&app, &headers) {
+        return refusal.into_response();
+    }
+    ([(header::CONTENT_TYPE, "text/css; charset=utf-8")], STYLES).into_response()
+}
+
+/// On loopback, the `Host` must name a loopback address: a page whose own name resolves to
+/// 127.0.0.1 (DNS rebinding) is refused before it can read anything.
+fn check_host(app: &App, headers: &HeaderMap) -> Result<(), (StatusCode, String)> {
+    if !app.loopback {
+        return Ok(());
+    }
+    let host = headers.get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
+    let name = match host.rsplit_once(':') {
+        Some((name, port)) if port.chars().all(|c| c.is_ascii_digit()) => name,
+        _ => host,
+    };
+    let loopback = name == "localhost"
+        || name
+            .trim_start_matches('[')
+            .trim_end_matches(']')
+            .parse::<IpAddr>()
+            .is_ok_and(|ip| ip.is_loopback());
+    if loopback {
+        Ok(())
+    } else {
+        Err((StatusCode::FORBIDDEN, format!("host {host:?} is not a loopback address: use 127.0.0.1")))
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct TokenQuery {
+    token: Option<String>,
+}
+
+/// The WebSocket: the token, the origin and the session limit are checked before the
+/// upgrade.
+async fn socket(
+    State(app): State<Arc<App>>,
+    headers: HeaderMap,
+    Query(query): Query<TokenQuery>,
+    ws: WebSocketUpgrade,
+) -> Response {
+    if let Err(refusal) = check_host(&app, &headers) {
+        return refusal.into_response();
+    }
+    let token_ok = query.token.as_deref().is_some_and(|t| same(t.as_bytes(), app.token.as_bytes()));
+    if !token_ok {
+        return (StatusCode::FORBIDDEN, "a WebSocket needs the token printed by `pendula serve`")
+            .into_response();
+    }
+    // Browsers send the page's origin with every WebSocket: one from any other page (another
+    // site open in the same browser) is refused.
+    if let Some(origin) = headers.get(header::ORIGIN) {
+        let host = headers.get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
+        if origin.to_str().ok() != Some(&format!("http://{host}")) {
+            return (
+                StatusCode::FORBIDDEN,
+                format!("WebSocket from origin {origin:?} refused: only this server's own page may connect"),
+            )
+                .into_response();
+        }
+    }
+    let sessions = app.sessions.fetch_add(1, Ordering::SeqCst);
+    if sessions >= app.limits.max_sessions {
+        app.sessions.fetch_sub(1, Ordering::SeqCst);
+        return (
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("{} sessions are open, the most this server takes", app.limits.max_sessions),
+        )
+            .into_response();
+    }
+    let limits = app.limits.clone();
+    ws.max_message_size(limits.max_message_bytes).on_upgrade(move |socket| async move {
+        serve_session(socket, limits).await;
+        app.sessions.fetch_sub(1, Ordering::SeqCst);
+    })
+}
+
+/// Compares without stopping at the first difference (the token is a secret).
+fn same(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+fn random_token() -> String {
+    let mut bytes = [0u8; 16];
+    getrandom::fill(&mut bytes).expect("the operating system's random numbers");
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Runs one session: a reader (commands in), the session's thread, a writer (frames out).
+async fn serve_session(socket: WebSocket, limits: Limits) {
+    use futures_util::{SinkExt, StreamExt};
+    let (mut sink, mut stream) = socket.split();
+    let shared = Arc::new(Shared {
+        outbox: Mutex::new(session::Outbox::default()),
+        notify: tokio::sync::Notify::new(),
+    });
+    let (tx, rx) = std::sync::mpsc::channel();
+    let thread_shared = shared.clone();
+    let sim = std::thread::Builder::new()
+        .name("pendula-session".into())
+        .spawn(move || session::run(rx, thread_shared, limits))
+        .expect("a thread for the session");
+    let writer_shared = shared.clone();
+    let writer = tokio::spawn(async move {
+        loop {
+            writer_shared.notify.notified().await;
+            loop {
+                let (fractal, texts, frame) = {
+                    let mut outbox = writer_shared.outbox.lock().expect("outbox");
+                    let frame = outbox.frame.take().map(|mut f| {
+                        f.push(outbox.poincare.len() as f64);
+                        for p in outbox.poincare.drain(..) {
+                            f.extend(p);
+                        }
+                        f
+                    });
+                    (outbox.fractal.take(), std::mem::take(&mut outbox.texts), frame)
+                };
+                if fractal.is_none() && texts.is_empty() && frame.is_none() {
+                    break;
+                }
+                // The fractal level before the texts (its `fractal_done` follows it); the texts
+                // (a `config`) before the frame computed after them.
+                let mut messages: Vec<Message> = Vec::new();
+                messages.extend(fractal.map(|f| Message::Binary(bytes(&f).into())));
+                messages.extend(texts.into_iter().map(|t| Message::Text(t.into())));
+                messages.extend(frame.map(|f| Message::Binary(bytes(&f).into())));
+                for m in messages {
+                    if sink.send(m).await.is_err() {
+                        return;
+                    }
+                }
+            }
+        }
+    });
+    while let Some(Ok(message)) = stream.next().await {
+        let inbound = match message {
+            Message::Text(text) => parse(text.as_str()),
+            Message::Binary(_) => session::Inbound::Malformed {
+                message: "binary messages are not commands: send JSON text".into(),
+                command: None,
+            },
+            Message::Close(_) => break,
+            _ => continue,
+        };
+        if tx.send(inbound).is_err() {
+            break;
+        }
+    }
+    // The page is gone: the session's thread sees its inbox closed and ends, its fractal
+    // is cancelled, and the writer stops.
+    drop(tx);
+    writer.abort();
+    let _ = tokio::task::spawn_blocking(move || sim.join()).await;
+}
+
+/// A command, or why the text is not one (naming its `cmd` when it has one).
+fn parse(text: &str) -> session::Inbound {
+    match serde_json::from_str::<session::Command>(text) {
+        Ok(c) => session::Inbound::Command(Box::new(c)),
+        Err(e) => {
+            let value: Option<Value> = serde_json::from_str(text).ok();
+            let command =
+                value.as_ref().and_then(|v| v.get("cmd")).and_then(Value::as_str).map(str::to_owned);
+            let message = match &value {
+                None => format!("not JSON: {e}"),
+                Some(v) if !v.is_object() => "a command is a JSON object with \"cmd\"".to_owned(),
+                Some(_) => format!("invalid command: {e}"),
+            };
+            session::Inbound::Malformed { message, command }
+        }
+    }
+}
+
+fn bytes(values: &[f64]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// The `hello` message: the catalogue's systems, the method registry and the limits.
+pub(crate) fn hello(limits: &Limits) -> Value {
+    let systems: Vec<Value> = pendula::model::CATALOGUE
+        .iter()
+        .map(|e| json!({"name": e.name, "description": e.description, "dimensionless": e.dimensionless}))
+        .collect();
+    let methods: Vec<Value> = pendula::integrator::METHODS
+        .iter()
+        .map(|m| json!({"name": m.name, "title": m.title, "order": m.order}))
+        .collect();
+    let fractal_methods: Vec<&str> = pendula::integrator::METHODS
+        .iter()
+        .filter(|m| pendula::ensemble::BatchMethod::of(m).is_some())
+        .map(|m| m.name)
+        .collect();
+    json!({
+        "type": "hello",
+        "version": env!("CARGO_PKG_VERSION"),
+        "systems": systems,
+        "methods": methods,
+        "fractal_methods": fractal_methods,
+        "limits": {
+            "max_speed": limits.max_speed, "max_fps": limits.max_fps, "max_tracks": limits.max_tracks,
+            "max_race": limits.max_race, "max_fractal_size": limits.max_fractal_size, "max_t_max": limits.max_t_max,
+        },
+    })
+}

@@ -1,0 +1,416 @@
+//! One page's session: its pendulums run on a thread of their own, paced to the wall clock,
+//! and publish their newest state to an [`Outbox`] that the WebSocket's writer empties as fast
+//! as the page takes it (latest wins: a slow page skips frames and costs the server nothing).
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant};
+
+use pendula::checkpoint::{Leg, Pause, RunState, Snapshot, Words};
+use pendula::events::{EventLocator, EventSpec};
+use pendula::integrator::Method;
+use pendula::model::DynModel;
+use pendula::observe::{Flow, Observer, Sample};
+use pendula::{End, RunSpec, Stepping};
+use serde::Deserialize;
+use serde_json::{Value, json};
+
+use crate::config::{Config, Configure, Refusal, check_speed};
+use crate::fractal::{self, FractalRequest};
+use crate::{Limits, Shared};
+
+/// A command from the page (see PROTOCOL.md).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "cmd", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Command {
+    Configure(Configure),
+    SetState { positions: Vec<f64> },
+    Play,
+    Pause,
+    Step,
+    Reset,
+    Speed { value: f64 },
+    Fractal(FractalRequest),
+    FractalCancel,
+}
+
+/// What the session thread receives: a parsed command, or text that was not one.
+pub enum Inbound {
+    Command(Box<Command>),
+    Malformed { message: String, command: Option<String> },
+}
+
+/// What waits to be sent: text messages in order, the newest fractal level and the newest
+/// simulation frame (each replaced by a newer one), and the Poincaré points found since the
+/// last frame sent.
+#[derive(Default)]
+pub struct Outbox {
+    pub texts: VecDeque<String>,
+    pub fractal: Option<Vec<f64>>,
+    pub frame: Option<Vec<f64>>,
+    pub poincare: Vec<[f64; 3]>,
+    /// Frames replaced before they were sent (the page was slower than the simulation).
+    pub skipped: u64,
+}
+
+/// Poincaré points kept for a page that does not read them (the oldest are dropped).
+const MAX_PENDING_POINTS: usize = 20_000;
+
+impl Shared {
+    fn text(&self, message: &Value) {
+        self.outbox.lock().expect("outbox").texts.push_back(message.to_string());
+        self.notify.notify_one();
+    }
+    fn error(&self, message: &str, command: Option<&str>) {
+        self.text(&json!({"type": "error", "message": message, "command": command}));
+    }
+}
+
+/// The time the simulation may run to: no end the page would reach (10⁶ s at the largest speed is
+/// 17 minutes), yet a finite schedule.
+const HORIZON: f64 = 1e6;
+
+/// One pendulum of the session.
+struct Track {
+    /// Its place among the session's tracks (the Poincaré points name it).
+    index: usize,
+    method: &'static Method,
+    y0: Vec<f64>,
+    run: Option<RunState>,
+    t: f64,
+    y: Vec<f64>,
+    steps: u64,
+    e0: f64,
+    scale: f64,
+    flip: f64,
+    locator: Option<Words>,
+    over: bool,
+}
+
+/// Keeps the newest state of a leg.
+struct Newest<'a> {
+    t: &'a mut f64,
+    y: &'a mut [f64],
+    steps: &'a mut u64,
+}
+
+impl Observer for Newest<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
+        *self.t = s.t;
+        *self.steps = s.step;
+        self.y.copy_from_slice(s.y);
+        Flow::Continue(())
+    }
+}
+
+impl Track {
+    fn new(index: usize, model: &dyn DynModel, method: &'static Method, y0: Vec<f64>) -> Track {
+        let e0 = model.energy(0.0, &y0);
+        let scale = model.energy_scale(&y0);
+        Track {
+            index,
+            method,
+            y: y0.clone(),
+            y0,
+            run: None,
+            t: 0.0,
+            steps: 0,
+            e0,
+            scale,
+            flip: f64::NAN,
+            locator: None,
+            over: false,
+        }
+    }
+
+    /// Runs this track on to `target` (or at most `max_steps` steps), continuing the run
+    /// where the last leg paused: the same steps, in the same bits, as one uninterrupted run.
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        h: f64,
+        target: f64,
+        max_steps: u64,
+        specs: &[EventSpec],
+        points: &mut Vec<[f64; 3]>,
+    ) -> Result<(), pendula::Error> {
+        let target = target.min(self.t + max_steps as f64 * h);
+        if self.over || target <= self.t {
+            return Ok(());
+        }
+        let stepping = Stepping::Fixed(RunSpec { t0: 0.0, h, end: End::Time(HORIZON) });
+        let mut locator = EventLocator::new(model, specs.to_vec());
+        if let Some(words) = &self.locator {
+            locator.restore_all(words, "the event locator")?;
+        }
+        let pause = Pause { at: target, flag: None };
+        let leg = {
+            let mut newest = Newest { t: &mut self.t, y: &mut self.y, steps: &mut self.steps };
+            model.solve_fastest(
+                self.method,
+                &self.y0,
+                &stepping,
+                &mut (&mut newest, &mut locator),
+                self.run.as_ref(),
+                &pause,
+            )?
+        };
+        match leg {
+            Leg::Paused(state) => self.run = Some(state),
+            Leg::Done(_) => self.over = true,
+        }
+        for event in locator.found.drain(..) {
+            if event.name == "flip" {
+                if self.flip.is_nan() {
+                    self.flip = event.t;
+                }
+            } else if event.state.len() == 4 {
+                points.push([self.index as f64, event.state[1], event.state[3]]);
+            }
+        }
+        self.locator = Some(locator.snapshot());
+        Ok(())
+    }
+}
+
+/// The running simulation of a configuration.
+struct Sim {
+    config: Config,
+    model: Box<dyn DynModel>,
+    tracks: Vec<Track>,
+    specs: Vec<EventSpec>,
+    paused: bool,
+    failed: bool,
+}
+
+impl Sim {
+    fn new(config: Config, paused: bool) -> Sim {
+        let model = config.values.build();
+        let tracks = config
+            .tracks()
+            .into_iter()
+            .enumerate()
+            .map(|(i, (_, m, y0))| Track::new(i, &*model, m, y0))
+            .collect();
+        let mut specs = Vec::new();
+        if config.info().state.iter().any(|q| q.is_angle()) {
+            specs.push(EventSpec::parse("flip", &*model, false).expect("a system with angles has flips"));
+        }
+        if config.poincare {
+            // The section θ₁ = 0 crossed upwards, plotted in (θ₂, ω₂): `pendula poincare`'s.
+            let name = format!("section:{}=0+", config.info().state[0].name);
+            specs.push(EventSpec::parse(&name, &*model, false).expect("a 2-DOF system's first position"));
+        }
+        Sim { config, model, tracks, specs, paused, failed: false }
+    }
+
+    fn restart(&mut self) {
+        let paused = self.paused;
+        *self = Sim::new(self.config.clone(), paused);
+    }
+
+    fn t(&self) -> f64 {
+        self.tracks[0].t
+    }
+
+    /// Advances every track to `target`, at most `budget` steps in all.
+    fn advance(
+        &mut self,
+        target: f64,
+        budget: u64,
+        points: &mut Vec<[f64; 3]>,
+    ) -> Result<(), pendula::Error> {
+        let per_track = (budget / self.tracks.len() as u64).max(1);
+        for track in &mut self.tracks {
+            track.advance(&*self.model, self.config.dt, target, per_track, &self.specs, points)?;
+        }
+        Ok(())
+    }
+
+    /// The binary frame (see PROTOCOL.md), without its Poincaré points (added when sent).
+    fn frame(&self, seq: u64) -> Vec<f64> {
+        let d = self.tracks[0].y.len();
+        let k = d / 2;
+        let mut out = Vec::with_capacity(7 + self.tracks.len() * (d + 4));
+        out.extend([1.0, seq as f64, self.t(), self.tracks.len() as f64, d as f64, f64::from(self.paused)]);
+        out.push(self.tracks[0].steps as f64);
+        let mut rest = vec![0.0; d];
+        for track in &self.tracks {
+            let energy = self.model.energy(track.t, &track.y);
+            rest[..k].copy_from_slice(&track.y[..k]);
+            let potential = self.model.energy(track.t, &rest);
+            out.extend_from_slice(&track.y);
+            out.extend([energy - potential, potential, (energy - track.e0).abs() / track.scale, track.flip]);
+        }
+        out
+    }
+}
+
+/// Runs one session until the page goes away (the sender of `inbox` is dropped).
+pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
+    let mut sim = Sim::new(Config::initial(), false);
+    let hello = crate::hello(&limits);
+    shared.text(&hello);
+    shared.text(&sim.config.message(sim.paused, None));
+    let interval = Duration::from_secs_f64(1.0 / limits.max_fps);
+    let mut clock = Instant::now();
+    let mut seq = 0u64;
+    let mut fractal_cancel: Option<Arc<AtomicBool>> = None;
+    let mut job = 0u64;
+    let mut next = Instant::now();
+    loop {
+        // Commands first: wait for one until the next frame is due (or, paused, a while).
+        let wait = if sim.paused || sim.failed {
+            Duration::from_millis(250)
+        } else {
+            next.saturating_duration_since(Instant::now())
+        };
+        let mut first = match inbox.recv_timeout(wait) {
+            Ok(m) => Some(m),
+            Err(RecvTimeoutError::Timeout) => None,
+            Err(RecvTimeoutError::Disconnected) => break,
+        };
+        let mut changed = false;
+        while let Some(message) = first.take().or_else(|| inbox.try_recv().ok()) {
+            let cmd = match message {
+                Inbound::Malformed { message, command } => {
+                    shared.error(&message, command.as_deref());
+                    continue;
+                }
+                Inbound::Command(c) => *c,
+            };
+            let name = command_name(&cmd);
+            let publish = |sim: &mut Sim, config: Config, notice: Option<String>| {
+                sim.config = config;
+                sim.restart();
+                shared.text(&sim.config.message(sim.paused, notice.as_deref()));
+            };
+            let result: Result<(), Refusal> = match cmd {
+                Command::Configure(c) => sim.config.apply(&c, &limits).map(|(config, notice)| {
+                    publish(&mut sim, config, notice);
+                    changed = true;
+                }),
+                Command::SetState { positions } => sim.config.with_positions(&positions).map(|config| {
+                    publish(&mut sim, config, None);
+                    changed = true;
+                }),
+                Command::Play => {
+                    sim.paused = false;
+                    Ok(())
+                }
+                Command::Pause => {
+                    sim.paused = true;
+                    changed = true;
+                    Ok(())
+                }
+                Command::Reset => {
+                    sim.restart();
+                    changed = true;
+                    Ok(())
+                }
+                Command::Step => {
+                    if sim.paused && !sim.failed {
+                        // Half a step ahead: the run pauses after exactly one step.
+                        let target = sim.t() + 0.5 * sim.config.dt;
+                        let mut points = Vec::new();
+                        if let Err(e) = sim.advance(target, u64::MAX, &mut points) {
+                            fail(&shared, &mut sim, &e);
+                        }
+                        queue_points(&shared, points);
+                        changed = true;
+                    }
+                    Ok(())
+                }
+                Command::Speed { value } => check_speed(value, &limits).map(|()| sim.config.speed = value),
+                Command::Fractal(request) => match request.validate(&limits, &sim.config) {
+                    Ok(spec) => {
+                        if let Some(flag) = fractal_cancel.take() {
+                            flag.store(true, Ordering::Relaxed);
+                        }
+                        job += 1;
+                        let flag = Arc::new(AtomicBool::new(false));
+                        fractal_cancel = Some(flag.clone());
+                        fractal::start(spec, job, flag, shared.clone(), limits.clone());
+                        Ok(())
+                    }
+                    Err(r) => Err(r),
+                },
+                Command::FractalCancel => {
+                    if let Some(flag) = fractal_cancel.take() {
+                        flag.store(true, Ordering::Relaxed);
+                    }
+                    Ok(())
+                }
+            };
+            if let Err(Refusal(message)) = result {
+                shared.error(&message, Some(name));
+            }
+        }
+        let now = Instant::now();
+        if !sim.paused && !sim.failed && now >= next {
+            // The simulated time the wall clock asks for; a run that cannot keep up falls
+            // behind (its work per frame is bounded) rather than stalling the session.
+            let elapsed = now.duration_since(clock).as_secs_f64().min(0.25);
+            let target = sim.t() + sim.config.speed * elapsed;
+            let mut points = Vec::new();
+            if let Err(e) = sim.advance(target, limits.max_steps_per_frame, &mut points) {
+                fail(&shared, &mut sim, &e);
+            }
+            queue_points(&shared, points);
+            changed = true;
+            next = now + interval;
+            clock = now;
+        } else if sim.paused || sim.failed {
+            // Time spent paused is not simulated when the clock starts again.
+            clock = now;
+        }
+        if changed {
+            seq += 1;
+            let frame = sim.frame(seq);
+            let mut outbox = shared.outbox.lock().expect("outbox");
+            if outbox.frame.replace(frame).is_some() {
+                outbox.skipped += 1;
+            }
+            drop(outbox);
+            shared.notify.notify_one();
+        }
+    }
+    if let Some(flag) = fractal_cancel {
+        flag.store(true, Ordering::Relaxed);
+    }
+}
+
+fn queue_points(shared: &Shared, points: Vec<[f64; 3]>) {
+    if points.is_empty() {
+        return;
+    }
+    let mut outbox = shared.outbox.lock().expect("outbox");
+    outbox.poincare.extend(points);
+    let excess = outbox.poincare.len().saturating_sub(MAX_PENDING_POINTS);
+    outbox.poincare.drain(..excess);
+}
+
+/// A failed run stops the clock and says when it failed.
+fn fail(shared: &Shared, sim: &mut Sim, e: &pendula::Error) {
+    sim.failed = true;
+    sim.paused = true;
+    let t = sim.t();
+    shared
+        .text(&json!({"type": "run_failed", "message": format!("the run failed near t = {t}: {e}"), "t": t}));
+}
+
+fn command_name(cmd: &Command) -> &'static str {
+    match cmd {
+        Command::Configure(_) => "configure",
+        Command::SetState { .. } => "set_state",
+        Command::Play => "play",
+        Command::Pause => "pause",
+        Command::Step => "step",
+        Command::Reset => "reset",
+        Command::Speed { .. } => "speed",
+        Command::Fractal(_) => "fractal",
+        Command::FractalCancel => "fractal_cancel",
+    }
+}
