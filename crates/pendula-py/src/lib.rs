@@ -23,6 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 mod animate;
+mod serve;
 mod study;
 mod sweep;
 
@@ -854,6 +855,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     study::register(m)?;
     sweep::register(m)?;
+    serve::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

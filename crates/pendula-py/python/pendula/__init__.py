@@ -52,6 +52,7 @@ from .study import (
 
 from .sweep import SweepResult, merge, sweep
 from . import distributed  # noqa: E402  (after the names it uses)
+from .view import View, view  # noqa: E402
 
 __version__ = _core.__version__
 
@@ -82,6 +83,8 @@ __all__ = [
     "MethodWork",
     "divergence",
     "DivergenceResult",
+    "view",
+    "View",
     "PendulaError",
     "UnknownNameError",
     "InvalidValueError",
