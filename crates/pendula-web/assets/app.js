@@ -852,7 +852,11 @@ function updateNumbers() {
   if (f) {
     const state = f.paused ? 'paused' : 'running';
     const flip = t0 && isNum(t0.flipTime) ? ` · first flip at t = ${fmt(t0.flipTime, 4)}${tu ? ' ' + tu : ''}` : '';
-    $('sim-info').textContent = `t = ${f.t.toFixed(3)}${tu ? ' ' + tu : ''} · ${Math.round(f.steps).toLocaleString('en')} steps · ${state}${flip}`;
+    // A pendulum opened from the fractal: what the map said, beside what this run finds.
+    const c = lab.config, m = st.mapPixel;
+    const fromMap = m && c && c.system === 'double' && c.state[0].value === m.theta1 && c.state[1].value === m.theta2
+      ? ` · the map: ${isNum(m.t) ? 'first flip at ' + fmt(m.t, 4) + ' s' : 'no flip before ' + fmt(m.tMax) + ' s'}` : '';
+    $('sim-info').textContent = `t = ${f.t.toFixed(3)}${tu ? ' ' + tu : ''} · ${Math.round(f.steps).toLocaleString('en')} steps · ${state}${flip}${fromMap}`;
     $('play').classList.toggle('active', !f.paused);
     $('pause').classList.toggle('active', f.paused);
   }
@@ -1231,9 +1235,9 @@ function requestFractal(theta1, theta2) {
   const tmax = Math.max(1e-3, Math.min(Number($('fractal-tmax').max) || 1000, parseFloat($('fractal-tmax').value) || 100));
   $('fractal-size').value = size;
   $('fractal-tmax').value = tmax;
-  st.fractalReq = { size, t_max: tmax, theta1, theta2 };
   const msg = { cmd: 'fractal', size, t_max: tmax, theta1, theta2 };
   if ($('fractal-method').value) msg.method = $('fractal-method').value;
+  st.fractalReq = { size, t_max: tmax, theta1, theta2, method: msg.method };
   if (send(msg)) $('fractal-info').textContent = `Computing up to ${size}²…`;
 }
 
@@ -1290,7 +1294,11 @@ function pickFractalPixel(p, g) {
   const t = f.times[j * f.n1 + i];
   $('fractal-info').textContent = `Pixel (${i}, ${j}): θ₁ = ${fmt(theta1, 5)} rad (${fmt(theta1 * DEG, 4)}°), ` +
     `θ₂ = ${fmt(theta2, 5)} rad (${fmt(theta2 * DEG, 4)}°), first flip ${Number.isFinite(t) ? 'at ' + fmt(t, 4) + ' s' : 'none before ' + fmt(f.tMax) + ' s'}. Opened in the simulation.`;
-  if (configure({ system: 'double', mode: 'single', state: { theta1, theta2, omega1: 0, omega2: 0 } })) send({ cmd: 'play' });
+  st.mapPixel = { theta1, theta2, t, tMax: f.tMax };
+  // The map's own method and step, so that the run shows the flip the map computed.
+  const req = st.fractalReq || {};
+  const method = req.method || 'rk4';
+  if (configure({ system: 'double', mode: 'single', method, dt: 0.01, state: { theta1, theta2, omega1: 0, omega2: 0 } })) send({ cmd: 'play' });
   showView('view-sim');
 }
 

@@ -109,7 +109,7 @@ impl FractalRequest {
 static ENGINE: Mutex<()> = Mutex::new(());
 
 /// Starts computing `job` on a thread of its own; `cancel` stops it between work items.
-pub fn start(job: Job, id: u64, cancel: Arc<AtomicBool>, shared: Arc<Shared>, _limits: Limits) {
+pub fn start(job: Job, id: u64, cancel: Arc<AtomicBool>, shared: Arc<Shared>) -> std::thread::JoinHandle<()> {
     std::thread::spawn(move || {
         let _engine = ENGINE.lock().unwrap_or_else(|e| e.into_inner());
         let begin = Instant::now();
@@ -172,7 +172,7 @@ pub fn start(job: Job, id: u64, cancel: Arc<AtomicBool>, shared: Arc<Shared>, _l
             }
             n = (2 * n).min(finest);
         }
-    });
+    })
 }
 
 fn failed(shared: &Shared, e: &pendula::Error, cancel: &AtomicBool) {

@@ -58,9 +58,18 @@ pub struct Outbox {
 /// Poincaré points kept for a page that does not read them (the oldest are dropped).
 const MAX_PENDING_POINTS: usize = 20_000;
 
+/// Text messages kept for a page that does not read them (the oldest are dropped): a page
+/// that sends commands and never reads the answers must not grow the server's memory.
+const MAX_PENDING_TEXTS: usize = 256;
+
 impl Shared {
     fn text(&self, message: &Value) {
-        self.outbox.lock().expect("outbox").texts.push_back(message.to_string());
+        let mut outbox = self.outbox.lock().expect("outbox");
+        if outbox.texts.len() >= MAX_PENDING_TEXTS {
+            outbox.texts.pop_front();
+        }
+        outbox.texts.push_back(message.to_string());
+        drop(outbox);
         self.notify.notify_one();
     }
     fn error(&self, message: &str, command: Option<&str>) {
@@ -259,10 +268,18 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
     let mut seq = 0u64;
     let mut fractal_cancel: Option<Arc<AtomicBool>> = None;
     let mut job = 0u64;
+    // One fractal thread per session at a time: a newer request cancels the running one and
+    // waits here until that thread has ended (however many requests come meanwhile, only
+    // the newest is kept).
+    let mut fractal_thread: Option<std::thread::JoinHandle<()>> = None;
+    let mut fractal_next: Option<(fractal::Job, u64, Arc<AtomicBool>)> = None;
     let mut next = Instant::now();
     loop {
-        // Commands first: wait for one until the next frame is due (or, paused, a while).
-        let wait = if sim.paused || sim.failed {
+        // Commands first: wait for one until the next frame is due (or, paused, a while; a
+        // fractal waiting for the previous one's thread to end is looked at often).
+        let wait = if fractal_next.is_some() {
+            Duration::from_millis(10)
+        } else if sim.paused || sim.failed {
             Duration::from_millis(250)
         } else {
             next.saturating_duration_since(Instant::now())
@@ -332,7 +349,7 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                         job += 1;
                         let flag = Arc::new(AtomicBool::new(false));
                         fractal_cancel = Some(flag.clone());
-                        fractal::start(spec, job, flag, shared.clone(), limits.clone());
+                        fractal_next = Some((spec, job, flag));
                         Ok(())
                     }
                     Err(r) => Err(r),
@@ -341,12 +358,18 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                     if let Some(flag) = fractal_cancel.take() {
                         flag.store(true, Ordering::Relaxed);
                     }
+                    fractal_next = None;
                     Ok(())
                 }
             };
             if let Err(Refusal(message)) = result {
                 shared.error(&message, Some(name));
             }
+        }
+        if fractal_next.is_some() && fractal_thread.as_ref().is_none_or(std::thread::JoinHandle::is_finished)
+        {
+            let (spec, id, flag) = fractal_next.take().expect("checked");
+            fractal_thread = Some(fractal::start(spec, id, flag, shared.clone()));
         }
         let now = Instant::now();
         if !sim.paused && !sim.failed && now >= next {

@@ -361,3 +361,33 @@ async fn twenty_sessions_at_once_stay_responsive() {
     eprintln!("frames per session in 1 s: {counts:?}");
     assert!(counts.iter().all(|&n| n >= 10), "every session gets at least 10 frames a second: {counts:?}");
 }
+
+/// Threads of this process (the server runs in it).
+fn threads() -> usize {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    status.lines().find_map(|l| l.strip_prefix("Threads:")).unwrap().trim().parse().unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_flood_of_fractal_requests_computes_only_the_newest_on_one_thread() {
+    let (addr, token) = server(Default::default()).await;
+    let mut ws = connect(&addr, &token).await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    let before = threads();
+    for k in 0..200 {
+        send(&mut ws, json!({"cmd": "fractal", "size": 64, "t_max": 10.0 + k as f64})).await;
+    }
+    let during = threads();
+    assert!(during <= before + 2, "one fractal thread per session: {before} threads, then {during}");
+    // The session still answers at once, and the map that arrives whole is the last one asked.
+    send(&mut ws, json!({"cmd": "configure", "state": {"theta1": 0.25}})).await;
+    next_text(&mut ws, "config", 2 * SEC).await;
+    loop {
+        let f = next_frame(&mut ws, 2.0, 60 * SEC).await;
+        if f[10] == 1.0 {
+            assert_eq!((f[1], f[4]), (200.0, 209.0), "job 200, t_max 209 s");
+            break;
+        }
+        assert!(f[1] == 200.0 || f[1] == 1.0, "levels of the first or the last job only: job {}", f[1]);
+    }
+}

@@ -123,15 +123,32 @@ def test_clicking_a_fractal_pixel_starts_that_pendulum(lab, shots):
     lab.check("#fractal-overlay")
     lab.wait_for_timeout(300)
     lab.screenshot(path=str(shots / "fractal.png"))
-    i, j = 90, 70
+    # A pixel that flips early (before chaos could amplify the rounding differences between
+    # the map's lanes and the single run) and whose flip time converged at dt/2.
+    i, j, t_map = lab.evaluate("""(() => {
+        const f = lab.fractal;
+        for (let j = 0; j < f.n2; j++) for (let i = 0; i < f.n1; i++) {
+            const k = j * f.n1 + i, t = f.times[k];
+            if (i > 80 && t > 2 && t < 6 && f.flags[k] === 1) return [i, j, t];
+        }
+        return null;
+    })()""")
     p = lab.evaluate(f"lab.fractalPixelClient({i}, {j})")
     lab.mouse.click(p["x"], p["y"])
     theta1 = f["t1"][0] + (i + 0.5) * (f["t1"][1] - f["t1"][0]) / f["n1"]
     theta2 = f["t2"][0] + (j + 0.5) * (f["t2"][1] - f["t2"][0]) / f["n2"]
     c = wait_config(lab, f"Math.abs(c.state[0].value - {theta1}) < 1e-12 && Math.abs(c.state[1].value - {theta2}) < 1e-12")
     assert [s["value"] for s in c["state"][2:]] == [0.0, 0.0]
-    assert c["mode"] == "single"
-    lab.wait_for_function("lab.frame.t > 0.2 && document.getElementById('view-sim').offsetParent !== null")
+    assert c["mode"] == "single" and c["method"] == "rk4" and c["dt"] == 0.01, "the map's method and step"
+    assert lab.is_visible("#view-sim")
+    # The pendulum, run on: its first flip is the one the map shows for that pixel.
+    lab.evaluate("lab.send({cmd: 'speed', value: 20})")
+    lab.wait_for_function("Number.isFinite(lab.frame.tracks[0].flipTime)", timeout=20000)
+    t_run = lab.evaluate("lab.frame.tracks[0].flipTime")
+    print(f"pixel ({i}, {j}): the map's flip at {t_map:.9f} s, the run's at {t_run:.9f} s")
+    assert abs(t_run - t_map) < 1e-6
+    assert "the map: first flip at" in lab.inner_text("#sim-info")
+    lab.screenshot(path=str(shots / "fractal-pixel.png"))
 
 
 def test_the_share_url_reopens_the_same_view(browser, server, lab):
