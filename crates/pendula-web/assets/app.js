@@ -771,7 +771,9 @@ const tLabel = () => withUnit('t', timeUnit());
 function drawEnergyPlot() {
   const K = lab.energyHistory.length;
   drawPlot($('energy-plot'), {
-    title: 'Relative energy error (log scale)',
+    // Damping and a drive change the energy for real: then |E − E₀| is no integration error.
+    title: lab.config && lab.config.conserves_energy === false
+      ? 'Relative energy change (log scale)' : 'Relative energy error (log scale)',
     xLabel: tLabel(), yLabel: '|E − E₀| / scale', logY: true, xFrom0: true,
     empty: 'no energy error above zero yet',
     series: lab.energyHistory.map((data, k) => ({
@@ -881,6 +883,9 @@ function showView(id) {
 function configure(fields) { return send(Object.assign({ cmd: 'configure' }, fields)); }
 
 function applyConfig(cfg) {
+  $('energy-err-label').textContent = cfg.conserves_energy
+    ? 'Relative error |E − E₀| / scale'
+    : 'Relative change |E − E₀| / scale (damping or drive: not conserved)';
   // The numbers are the first pendulum's: name it (a race's first method, a butterfly's k = 0).
   const first = cfg.mode === 'butterfly' ? 'k=0' : (cfg.tracks[0] ? cfg.tracks[0].label : '');
   $('energy-track').textContent = cfg.mode === 'single' ? '' : `(${first})`;

@@ -228,3 +228,27 @@ def test_python_view_opens_a_system_in_the_lab(browser):
     assert pendula.view().url.split("#")[0] == v.url.split("#")[0], "one lab per process"
     with pytest.raises(ValueError, match="cannot view int"):
         pendula.view(3)
+
+
+def test_every_catalogued_system_runs_and_is_drawn(lab, shots):
+    bodies = {"oscillator": 1, "pendulum": 1, "double": 2, "chain": 3, "driven-pendulum": 1}
+    systems = [s["name"] for s in lab.evaluate("lab.hello.systems")]
+    assert sorted(systems) == sorted(bodies)
+    for name in systems:
+        lab.select_option("#system", name)
+        c = wait_config(lab, f"c.system === '{name}'")
+        lab.wait_for_function("lab.frame && lab.frame.t > 0.3 && lab.frame.tracks[0].state.length === "
+                              f"{len(c['state'])}", timeout=10000)
+        assert len(lab.evaluate("lab.bobClientPositions()")) == bodies[name], name
+        # Dimensionless systems show no units; the others their SI units.
+        assert (c["time_unit"] == "") == (name == "driven-pendulum"), name
+        lab.screenshot(path=str(shots / f"system-{name}.png"))
+
+
+def test_a_damped_system_shows_an_energy_change_not_an_error(lab):
+    lab.evaluate("lab.send({cmd: 'configure', system: 'pendulum', params: {damping: 0.3}})")
+    wait_config(lab, "c.system === 'pendulum' && c.conserves_energy === false")
+    assert "not conserved" in lab.inner_text("#energy-err-label")
+    lab.evaluate("lab.send({cmd: 'configure', params: {damping: 0}})")
+    wait_config(lab, "c.conserves_energy === true")
+    assert "not conserved" not in lab.inner_text("#energy-err-label")
