@@ -274,6 +274,11 @@ function onConfig(cfg) {
 // A refused command changes nothing on the server: put the controls back to what it runs.
 function onRefused(msg) {
   if (msg.command === 'set_state') st.drag = null;
+  if (msg.command === 'speed' && lab.config && isNum(st.speedBefore)) {
+    lab.config.speed = st.speedBefore;
+    if (lab.config.share) lab.config.share.speed = st.speedBefore;
+    $('speed').value = st.speedBefore;
+  }
   if (msg.command === 'fractal') $('fractal-info').textContent = 'The fractal was refused: see the message above.';
   if (lab.config && (msg.command === 'configure' || msg.command === 'set_state' || msg.command === null)) applyConfig(lab.config);
 }
@@ -395,7 +400,12 @@ function fitGrowth() {
     n++; sx += t; sy += y; sxx += t * t; sxy += t * y;
   }
   const den = n * sxx - sx * sx;
-  if (n < 5 || !(den > 0)) { lab.growthRate = null; st.growthFit = null; return; }
+  // Not before the separation has grown a hundredfold inside the window: over a shorter
+  // stretch the fit measures the start's transient, not the exponential growth (early on
+  // it even came out negative).
+  let yMin = Infinity, yMax = -Infinity;
+  for (const [t, s2] of lab.separation) if (t >= a && t <= b) { const y = Math.log(s2); yMin = Math.min(yMin, y); yMax = Math.max(yMax, y); }
+  if (n < 5 || !(den > 0) || !(yMax - yMin >= Math.log(100))) { lab.growthRate = null; st.growthFit = null; return; }
   const slope = (n * sxy - sx * sy) / den;
   lab.growthRate = slope;
   st.growthFit = { slope, intercept: (sy - slope * sx) / n, a, b, n };
@@ -802,7 +812,7 @@ function drawSeparationPlot() {
   const tu = timeUnit();
   $('growth-rate').textContent = fit
     ? `λ ≈ ${fmt(fit.slope, 3)} ${tu ? '1/' + tu : '(per unit time)'} (fit over t = ${fmt(fit.a, 3)}…${fmt(fit.b, 3)}${tu ? ' ' + tu : ''}; dashed line)`
-    : 'λ: not enough points yet (the fit uses separations between 100 δ and 0.1)';
+    : 'λ: not yet measured (the fit waits for the separation to grow a hundredfold between 100 δ and 0.1)';
 }
 
 function stateAxis(i) { const s = lab.config.state[i]; return s ? withUnit(s.name, s.unit) : `s${i}`; }
@@ -828,7 +838,7 @@ function drawGraphs() {
     series: [{ data: lab.stateHistory, x: (p) => p[1 + ix], y: (p) => p[1 + iy], colour: trackColour(0, 1), width: 1 }],
   });
   const cfg = lab.config;
-  const axes = cfg.poincare_axes || ['x', 'y'];
+  const axes = cfg.poincare_axes && cfg.poincare_axes.length === 2 ? cfg.poincare_axes : ['x', 'y'];
   const unitFor = (name) => { const s = cfg.state.find((q) => q.name === name); return s ? s.unit : ''; };
   const K = lab.energyHistory.length || 1;
   const byTrack = Array.from({ length: K }, () => []);
@@ -1016,7 +1026,10 @@ function buildState(cfg) {
 
 function buildGraphSelects(cfg) {
   const names = cfg.state.map((s, i) => [String(i), withUnit(s.name, s.unit), s.description]);
-  const keep = [$('ts-var').value, $('phase-x').value, $('phase-y').value].map((v) => cfg.state[Number(v)] && v);
+  // Choices are kept only within one system: index 1 is theta2 on one and omega on another.
+  const same = st.graphSystem === cfg.system && st.graphDim === cfg.state.length;
+  st.graphSystem = cfg.system; st.graphDim = cfg.state.length;
+  const keep = same ? [$('ts-var').value, $('phase-x').value, $('phase-y').value] : [];
   fillOptions($('ts-var'), [...names, ['energy', 'energy error |E − E₀| / scale', 'relative energy error']]);
   fillOptions($('phase-x'), names);
   fillOptions($('phase-y'), names);
@@ -1061,6 +1074,7 @@ function initControls() {
     const v = parseFloat($('speed').value);
     if (!Number.isFinite(v)) return;
     if (send({ cmd: 'speed', value: v }) && lab.config) {
+      st.speedBefore = lab.config.speed;  // put back if the server refuses it
       lab.config.speed = v;
       if (lab.config.share) {
         lab.config.share.speed = v;
@@ -1300,9 +1314,10 @@ function pickFractalPixel(p, g) {
   $('fractal-info').textContent = `Pixel (${i}, ${j}): θ₁ = ${fmt(theta1, 5)} rad (${fmt(theta1 * DEG, 4)}°), ` +
     `θ₂ = ${fmt(theta2, 5)} rad (${fmt(theta2 * DEG, 4)}°), first flip ${Number.isFinite(t) ? 'at ' + fmt(t, 4) + ' s' : 'none before ' + fmt(f.tMax) + ' s'}. Opened in the simulation.`;
   st.mapPixel = { theta1, theta2, t, tMax: f.tMax };
-  // The map's own method and step, so that the run shows the flip the map computed.
+  // The map's own method and step, so that the run shows the flip the map computed; Tao's
+  // maps open with rk4 (a single Tao run at dt = 0.01 s exceeds its binding limit w·h ≤ 1).
   const req = st.fractalReq || {};
-  const method = req.method || 'rk4';
+  const method = !req.method || req.method.startsWith('tao') ? 'rk4' : req.method;
   if (configure({ system: 'double', mode: 'single', method, dt: 0.01, state: { theta1, theta2, omega1: 0, omega2: 0 } })) send({ cmd: 'play' });
   showView('view-sim');
 }

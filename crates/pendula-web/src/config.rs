@@ -197,6 +197,13 @@ impl Config {
             return refuse(format!("no Poincaré section for {}: {why}", family.name));
         }
         let config = Config { values, settings, method, dt, mode, methods, count, delta, speed, poincare };
+        // One step of every track's method: what depends on the step as well as on the system
+        // (Tao's binding constant times dt must stay at most 1) is refused now, with the
+        // library's reason, rather than failing at t = 0 once running.
+        for (_, m, y0) in config.tracks().iter().take(if mode == Mode::Butterfly { 1 } else { usize::MAX }) {
+            let one = pendula::RunSpec { t0: 0.0, h: dt, end: pendula::End::Steps(1) };
+            built.solve(m, y0, &one, &mut pendula::observe::Ignore)?;
+        }
         Ok((config, notice))
     }
 
@@ -338,13 +345,19 @@ impl Config {
         out
     }
 
-    /// The equivalent `pendula simulate` command (single mode's run; a race or butterfly is
-    /// one such command per track).
+    /// The first track's method: what the page's exports (its time series) hold.
+    fn first_method(&self) -> &'static Method {
+        self.tracks()[0].1
+    }
+
+    /// The equivalent `pendula simulate` command of the first track (in a race, the first
+    /// method's run; in a butterfly, the unshifted start), the run the page's time-series
+    /// exports hold.
     pub fn command(&self) -> String {
         let mut cmd = format!(
             "pendula simulate {} --method {} --dt {} --t-end 10",
             family_of(self.info()).name,
-            self.method.name,
+            self.first_method().name,
             self.dt
         );
         for (n, v) in self.changed() {
@@ -353,7 +366,7 @@ impl Config {
         cmd
     }
 
-    /// The equivalent scenario file (`pendula simulate --scenario FILE`).
+    /// The equivalent scenario file (`pendula simulate --scenario FILE`), of the first track.
     pub fn scenario(&self) -> String {
         #[derive(Serialize)]
         struct Scenario {
@@ -375,7 +388,7 @@ impl Config {
             .collect();
         let s = Scenario {
             system: family_of(self.info()).name,
-            method: self.method.name,
+            method: self.first_method().name,
             dt: self.dt,
             t_end: 10.0,
             set,
@@ -510,6 +523,27 @@ mod tests {
         );
         let toml = c.scenario();
         assert!(toml.contains("system = \"double\"") && toml.contains("theta1 = 1.5"), "{toml}");
+    }
+
+    #[test]
+    fn a_step_too_large_for_taos_binding_is_refused_before_it_runs() {
+        let c = Config::initial();
+        let err = c.apply(&configure(r#"{"method":"tao-4"}"#), &Limits::default()).unwrap_err();
+        assert!(err.0.contains("w h"), "{}", err.0);
+        let err = c
+            .apply(&configure(r#"{"mode":"race","methods":["rk4","tao-4"]}"#), &Limits::default())
+            .unwrap_err();
+        assert!(err.0.contains("w h"), "{}", err.0);
+        assert!(c.apply(&configure(r#"{"method":"tao-4","dt":0.004}"#), &Limits::default()).is_ok());
+    }
+
+    #[test]
+    fn a_races_exports_are_its_first_methods_run() {
+        let c = Config::initial();
+        let race = r#"{"mode":"race","methods":["euler","rk4"],"method":"verlet"}"#;
+        let (c, _) = c.apply(&configure(race), &Limits::default()).unwrap();
+        assert!(c.command().contains("--method euler"), "{}", c.command());
+        assert!(c.scenario().contains("method = \"euler\""), "{}", c.scenario());
     }
 
     #[test]

@@ -170,13 +170,17 @@ impl Track {
             Leg::Paused(state) => self.run = Some(state),
             Leg::Done(_) => self.over = true,
         }
+        let angle = model.info().state.get(1).is_some_and(|q| q.is_angle());
         for event in locator.found.drain(..) {
             if event.name == "flip" {
                 if self.flip.is_nan() {
                     self.flip = event.t;
                 }
             } else if event.state.len() == 4 {
-                points.push([self.index as f64, event.state[1], event.state[3]]);
+                // The section's angle in [−π, π): the section is of the torus, not of the
+                // unwrapped line a rotating pendulum's angle runs along.
+                let x = if angle { pendula::system::wrap_angle(event.state[1]) } else { event.state[1] };
+                points.push([self.index as f64, x, event.state[3]]);
             }
         }
         self.locator = Some(locator.snapshot());
@@ -192,6 +196,11 @@ struct Sim {
     specs: Vec<EventSpec>,
     paused: bool,
     failed: bool,
+    /// The simulated time the wall clock has asked for so far. Kept apart from the tracks'
+    /// time, which ends on whole steps past it: rounding each frame up to a whole step
+    /// would make the simulation run fast (at 60 frames a second and dt = 0.01 s, speed 1
+    /// ran at 1.19).
+    target: f64,
 }
 
 impl Sim {
@@ -212,7 +221,7 @@ impl Sim {
             let name = format!("section:{}=0+", config.info().state[0].name);
             specs.push(EventSpec::parse(&name, &*model, false).expect("a 2-DOF system's first position"));
         }
-        Sim { config, model, tracks, specs, paused, failed: false }
+        Sim { config, model, tracks, specs, paused, failed: false, target: 0.0 }
     }
 
     fn restart(&mut self) {
@@ -335,6 +344,7 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                         if let Err(e) = sim.advance(target, u64::MAX, &mut points) {
                             fail(&shared, &mut sim, &e);
                         }
+                        sim.target = sim.t();
                         queue_points(&shared, points);
                         changed = true;
                     }
@@ -376,11 +386,14 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
             // The simulated time the wall clock asks for; a run that cannot keep up falls
             // behind (its work per frame is bounded) rather than stalling the session.
             let elapsed = now.duration_since(clock).as_secs_f64().min(0.25);
-            let target = sim.t() + sim.config.speed * elapsed;
+            sim.target += sim.config.speed * elapsed;
             let mut points = Vec::new();
-            if let Err(e) = sim.advance(target, limits.max_steps_per_frame, &mut points) {
+            if let Err(e) = sim.advance(sim.target, limits.max_steps_per_frame, &mut points) {
                 fail(&shared, &mut sim, &e);
             }
+            // Behind by more than a quarter of a second of wall time (the step budget ran
+            // out): the simulation falls behind rather than owing the clock for ever.
+            sim.target = sim.target.min(sim.t() + 0.25 * sim.config.speed);
             queue_points(&shared, points);
             changed = true;
             next = now + interval;

@@ -391,3 +391,29 @@ async fn a_flood_of_fractal_requests_computes_only_the_newest_on_one_thread() {
         assert!(f[1] == 200.0 || f[1] == 1.0, "levels of the first or the last job only: job {}", f[1]);
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_simulation_keeps_the_speed_asked() {
+    // Simulated seconds per wall second, measured on the frames as they arrive. (Rounding each
+    // frame up to a whole step made speed 1 run at 1.19, and speeds below 0.6 all at 0.59.)
+    let (addr, token) = server(Default::default()).await;
+    let mut ws = connect(&addr, &token).await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    for speed in [1.0, 0.1, 3.0] {
+        send(&mut ws, json!({"cmd": "configure", "system": "pendulum", "dt": 0.01, "speed": speed})).await;
+        next_text(&mut ws, "config", 5 * SEC).await;
+        // Frames queued before the change are skipped: start from one with t < 0.1.
+        let mut first = next_frame(&mut ws, 1.0, 5 * SEC).await;
+        while first[2] > 0.1 {
+            first = next_frame(&mut ws, 1.0, 5 * SEC).await;
+        }
+        let begin = Instant::now();
+        let mut last = first.clone();
+        while begin.elapsed() < 3 * SEC {
+            last = next_frame(&mut ws, 1.0, 5 * SEC).await;
+        }
+        let rate = (last[2] - first[2]) / begin.elapsed().as_secs_f64();
+        eprintln!("speed {speed}: {rate:.3} simulated s per s");
+        assert!((rate / speed - 1.0).abs() < 0.08, "speed {speed} ran at {rate}");
+    }
+}

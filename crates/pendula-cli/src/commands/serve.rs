@@ -15,7 +15,7 @@ pub struct ServeArgs {
     /// lab (each still needs the token): a warning is printed.
     #[arg(long, default_value = "127.0.0.1", value_name = "ADDR")]
     pub host: String,
-    /// Open the page in the default browser (xdg-open, open or start).
+    /// Open the page in the default browser (xdg-open; open on macOS).
     #[arg(long)]
     pub open: bool,
     /// Pages open at once; more are refused.

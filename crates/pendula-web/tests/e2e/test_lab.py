@@ -252,3 +252,22 @@ def test_a_damped_system_shows_an_energy_change_not_an_error(lab):
     lab.evaluate("lab.send({cmd: 'configure', params: {damping: 0}})")
     wait_config(lab, "c.conserves_energy === true")
     assert "not conserved" not in lab.inner_text("#energy-err-label")
+
+
+def test_the_graph_menus_follow_a_change_of_system(lab):
+    lab.click("#tab-graphs")
+    lab.select_option("#phase-x", "1")
+    lab.select_option("#phase-y", "3")
+    lab.click("#tab-sim")
+    lab.select_option("#system", "pendulum")
+    wait_config(lab, "c.system === 'pendulum'")
+    assert lab.evaluate("[document.getElementById('phase-x').value, document.getElementById('phase-y').value]") \
+        == ["0", "1"], "theta against omega, not omega against omega"
+
+
+def test_a_refused_speed_puts_the_field_back(lab):
+    lab.fill("#speed", "1e9")
+    lab.dispatch_event("#speed", "change")
+    lab.wait_for_function("lab.errors.some(e => e.includes('speed = 1000000000'))")
+    assert lab.input_value("#speed") == "1"
+    assert lab.evaluate("lab.config.speed") == 1
