@@ -871,6 +871,8 @@ function updateNumbers() {
     $('sim-info').textContent = `t = ${f.t.toFixed(3)}${tu ? ' ' + tu : ''} · ${Math.round(f.steps).toLocaleString('en')} steps · ${state}${flip}${fromMap}`;
     $('play').classList.toggle('active', !f.paused);
     $('pause').classList.toggle('active', f.paused);
+    // Step advances a paused run only: while running it would do nothing.
+    $('step').disabled = !f.paused;
   }
 }
 
@@ -893,6 +895,11 @@ function showView(id) {
 function configure(fields) { return send(Object.assign({ cmd: 'configure' }, fields)); }
 
 function applyConfig(cfg) {
+  // Only systems with angles take degrees and have bobs to drag (the oscillator has a block).
+  const angles = cfg.state.some((q) => q.unit === 'rad');
+  $('state-hint').textContent = angles
+    ? 'Angles are entered in degrees and sent to the server in radians. Drag a bob on the picture to set the start angles (velocities become 0).'
+    : 'Drag the block on the picture to set the start position (the velocity becomes 0).';
   $('energy-err-label').textContent = cfg.conserves_energy
     ? 'Relative error |E − E₀| / scale'
     : 'Relative change |E − E₀| / scale (damping or drive: not conserved)';
@@ -1398,7 +1405,7 @@ function exportNpy() {
 }
 
 function exportNote(extra = '') {
-  $('export-note').textContent = `${st.exportHistory.length} rows of track 0 since t = 0 (evenly thinned to at most ${HISTORY_MAX}).${extra}`;
+  $('export-note').textContent = `${st.exportHistory.length} rows of track 0 since t = 0, one per frame received (not every step: the frames are at most 60 a second), evenly thinned to at most ${HISTORY_MAX}.${extra}`;
 }
 
 // the PNG holds every visible canvas of the last viewed tab, side by side on white

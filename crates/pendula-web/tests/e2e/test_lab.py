@@ -271,3 +271,14 @@ def test_a_refused_speed_puts_the_field_back(lab):
     lab.wait_for_function("lab.errors.some(e => e.includes('speed = 1000000000'))")
     assert lab.input_value("#speed") == "1"
     assert lab.evaluate("lab.config.speed") == 1
+
+
+def test_step_is_offered_only_while_paused_and_the_oscillator_has_no_angles(lab):
+    # The controls follow the frames, drawn at the display's next refresh.
+    lab.wait_for_function("lab.frame && !lab.frame.paused && document.getElementById('step').disabled")
+    lab.click("#pause")
+    lab.wait_for_function("lab.frame.paused && !document.getElementById('step').disabled")
+    lab.select_option("#system", "oscillator")
+    wait_config(lab, "c.system === 'oscillator'")
+    hint = lab.inner_text("#state-hint")
+    assert "block" in hint and "degrees" not in hint
