@@ -108,71 +108,78 @@ impl FractalRequest {
 /// Only one map is computed at a time across all sessions: each uses every core.
 static ENGINE: Mutex<()> = Mutex::new(());
 
+/// The name of every fractal thread (`/proc/self/task/*/comm`), so that tests can count them.
+pub const THREAD_NAME: &str = "pendula-fractal";
+
 /// Starts computing `job` on a thread of its own; `cancel` stops it between work items.
 pub fn start(job: Job, id: u64, cancel: Arc<AtomicBool>, shared: Arc<Shared>) -> std::thread::JoinHandle<()> {
-    std::thread::spawn(move || {
-        let _engine = ENGINE.lock().unwrap_or_else(|e| e.into_inner());
-        let begin = Instant::now();
-        let finest = job.spec.theta1.n;
-        let mut n = FIRST_LEVEL.min(finest);
-        loop {
-            if cancel.load(Ordering::Relaxed) {
-                return;
-            }
-            let last = n == finest;
-            let spec = FractalSpec {
-                theta1: GridAxis { n, ..job.spec.theta1 },
-                theta2: GridAxis { n, ..job.spec.theta2 },
-                ..job.spec
-            };
-            let pixels = 0..n * n;
-            let times = match flip_times_at(&spec, spec.h, pixels.clone(), &|_| (), Some(&cancel)) {
-                Ok(t) => t,
-                Err(pendula::Error::Interrupted) => return,
-                Err(e) => return failed(&shared, &e, &cancel),
-            };
-            let flags = if last {
-                match flip_times_at(&spec, spec.h / 2.0, pixels, &|_| (), Some(&cancel)) {
-                    Ok(half) => Some(
-                        times
-                            .iter()
-                            .zip(&half)
-                            .map(|(a, b)| f64::from(u8::from(converged(*a, *b, TOLERANCE))))
-                            .collect::<Vec<_>>(),
-                    ),
+    let thread = std::thread::Builder::new().name(THREAD_NAME.into());
+    // Spawning fails only when the OS is out of threads; nothing can be computed then.
+    thread
+        .spawn(move || {
+            let _engine = ENGINE.lock().unwrap_or_else(|e| e.into_inner());
+            let begin = Instant::now();
+            let finest = job.spec.theta1.n;
+            let mut n = FIRST_LEVEL.min(finest);
+            loop {
+                if cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                let last = n == finest;
+                let spec = FractalSpec {
+                    theta1: GridAxis { n, ..job.spec.theta1 },
+                    theta2: GridAxis { n, ..job.spec.theta2 },
+                    ..job.spec
+                };
+                let pixels = 0..n * n;
+                let times = match flip_times_at(&spec, spec.h, pixels.clone(), &|_| (), Some(&cancel)) {
+                    Ok(t) => t,
                     Err(pendula::Error::Interrupted) => return,
                     Err(e) => return failed(&shared, &e, &cancel),
+                };
+                let flags = if last {
+                    match flip_times_at(&spec, spec.h / 2.0, pixels, &|_| (), Some(&cancel)) {
+                        Ok(half) => Some(
+                            times
+                                .iter()
+                                .zip(&half)
+                                .map(|(a, b)| f64::from(u8::from(converged(*a, *b, TOLERANCE))))
+                                .collect::<Vec<_>>(),
+                        ),
+                        Err(pendula::Error::Interrupted) => return,
+                        Err(e) => return failed(&shared, &e, &cancel),
+                    }
+                } else {
+                    None
+                };
+                let seconds = begin.elapsed().as_secs_f64();
+                let mut frame = Vec::with_capacity(12 + 2 * n * n);
+                frame.extend([2.0, id as f64, n as f64, n as f64, spec.t_max]);
+                frame.extend([spec.theta1.lo, spec.theta1.hi, spec.theta2.lo, spec.theta2.hi]);
+                frame.extend([f64::from(u8::from(flags.is_some())), f64::from(u8::from(last)), seconds]);
+                frame.extend_from_slice(&times);
+                if let Some(f) = &flags {
+                    frame.extend_from_slice(f);
                 }
-            } else {
-                None
-            };
-            let seconds = begin.elapsed().as_secs_f64();
-            let mut frame = Vec::with_capacity(12 + 2 * n * n);
-            frame.extend([2.0, id as f64, n as f64, n as f64, spec.t_max]);
-            frame.extend([spec.theta1.lo, spec.theta1.hi, spec.theta2.lo, spec.theta2.hi]);
-            frame.extend([f64::from(u8::from(flags.is_some())), f64::from(u8::from(last)), seconds]);
-            frame.extend_from_slice(&times);
-            if let Some(f) = &flags {
-                frame.extend_from_slice(f);
-            }
-            if cancel.load(Ordering::Relaxed) {
-                return;
-            }
-            {
-                let mut outbox = shared.outbox.lock().expect("outbox");
-                outbox.fractal = Some(frame);
+                if cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                {
+                    let mut outbox = shared.outbox.lock().expect("outbox");
+                    outbox.fractal = Some(frame);
+                    if last {
+                        let done = json!({"type": "fractal_done", "job": id, "size": n, "seconds": seconds});
+                        outbox.texts.push_back(done.to_string());
+                    }
+                }
+                shared.notify.notify_one();
                 if last {
-                    let done = json!({"type": "fractal_done", "job": id, "size": n, "seconds": seconds});
-                    outbox.texts.push_back(done.to_string());
+                    return;
                 }
+                n = (2 * n).min(finest);
             }
-            shared.notify.notify_one();
-            if last {
-                return;
-            }
-            n = (2 * n).min(finest);
-        }
-    })
+        })
+        .expect("the OS gives a thread for the fractal")
 }
 
 fn failed(shared: &Shared, e: &pendula::Error, cancel: &AtomicBool) {

@@ -29,6 +29,7 @@ mod fractal;
 mod session;
 
 pub use config::Mode;
+pub use fractal::THREAD_NAME as FRACTAL_THREAD_NAME;
 
 /// What one session may ask of the server.
 #[derive(Debug, Clone)]
