@@ -72,7 +72,7 @@ pub enum Error {
         /// Why the system lacks it, in words.
         reason: String,
         /// Methods that do apply.
-        suggestion: &'static str,
+        suggestion: String,
     },
     /// The state stopped being finite: the method is unstable at this step size, or the
     /// motion is singular.
@@ -216,6 +216,15 @@ pub fn did_you_mean(suggestions: &[String]) -> String {
         None => String::new(),
         Some((last, [])) => format!(" (did you mean {last}?)"),
         Some((last, rest)) => format!(" (did you mean {} or {last}?)", rest.join(", ")),
+    }
+}
+
+/// What the user typed, quoted in a message: at most `max` characters, the rest elided with
+/// `…`, so that a 300-digit number or a pasted paragraph cannot drown the message.
+pub fn clip(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max.saturating_sub(1)) {
+        Some((end, _)) if text.chars().count() > max => format!("{}…", &text[..end]),
+        _ => text.to_owned(),
     }
 }
 

@@ -116,10 +116,26 @@ impl EventSpec {
                 valid: "flip, zero:NAME[+|-], section:NAME=VALUE[+|-]".into(),
                 suggestions: Vec::new(),
             })?;
-            let value: f64 = value.trim().parse().map_err(|_| Error::InvalidValue {
-                name: text.to_owned(),
-                value: f64::NAN,
-                allowed: "the section value must be a number",
+            let value: f64 = value.trim().parse().map_err(|_| {
+                // `section:theta1=0++`: a direction written twice, or junk after the number;
+                // the spec with one direction is the likely intent.
+                let number = value.trim().trim_end_matches(['+', '-']);
+                let suggestions = match number.parse::<f64>() {
+                    Ok(_) if !number.is_empty() => {
+                        let sign = if full.ends_with('-') { "-" } else { "+" };
+                        vec![format!("section:{name}={number}{sign}")]
+                    }
+                    _ => Vec::new(),
+                };
+                Error::UnknownName {
+                    system: model.info().name,
+                    name: full.to_owned(),
+                    valid: format!(
+                        "section:NAME=VALUE with VALUE a number, then at most one + or - (`{}` is not a number)",
+                        crate::error::clip(value.trim(), 20)
+                    ),
+                    suggestions,
+                }
             })?;
             if !value.is_finite() {
                 return Err(Error::InvalidValue { name: text.to_owned(), value, allowed: "must be finite" });

@@ -90,6 +90,30 @@ impl Values {
         let entry = CATALOGUE.iter().find(|e| e.name == name);
         (entry.unwrap_or_else(|| panic!("{name} is not in the catalogue")).build)(self)
     }
+
+    /// Checks that the initial state's energy and the system's energy scale are finite: each
+    /// value may lie in its domain while together they overflow (`omega1 = 1e300` squares to
+    /// infinity), and a study that measures energy errors against an infinite scale, or a run
+    /// started at an infinite energy, measures nothing.
+    ///
+    /// # Errors
+    /// [`Error::InvalidValue`] naming the initial energy (or the energy scale) and its value.
+    pub fn check_energy(&self) -> Result<(), Error> {
+        let model = self.build();
+        let state = self.initial_state();
+        let energy = model.energy(0.0, state);
+        let scale = model.energy_scale(state);
+        let (name, value) =
+            if !energy.is_finite() { ("initial energy", energy) } else { ("energy scale", scale) };
+        if value.is_finite() {
+            return Ok(());
+        }
+        Err(Error::InvalidValue {
+            name: name.into(),
+            value,
+            allowed: "must be finite: a velocity, angle or parameter so large that the energy overflows (make it smaller)",
+        })
+    }
 }
 
 /// How the ensemble engine runs `method` on `model`'s system, or `None` when it does not

@@ -176,7 +176,7 @@ impl SweepSpec {
                 method: self.method.name,
                 needs: "adaptive steps",
                 reason: "a sweep takes fixed steps".into(),
-                suggestion: "a fixed-step method (rk4, gauss-legendre-4)",
+                suggestion: "a fixed-step method (rk4, gauss-legendre-4)".into(),
             });
         }
         RunSpec { t0: 0.0, h: self.h, end: End::Steps(self.steps) }.schedule()?;

@@ -109,6 +109,16 @@ fn event_names_are_checked() {
     let model = v.build();
     assert!(matches!(EventSpec::parse("zero:y", &*model, false), Err(Error::UnknownName { .. })));
     assert!(matches!(EventSpec::parse("flip", &*model, false), Err(Error::UnknownName { .. })));
-    assert!(matches!(EventSpec::parse("section:x=abc", &*model, false), Err(Error::InvalidValue { .. })));
+    // A value that is no number is an error in the spec, named whole with what is allowed
+    // (it was an `InvalidValue` that printed "invalid value NaN").
+    let e = EventSpec::parse("section:x=abc", &*model, false).unwrap_err();
+    assert!(matches!(e, Error::UnknownName { .. }), "{e:?}");
+    let text = e.to_string();
+    assert!(
+        text.contains("`section:x=abc`") && text.contains("`abc` is not a number") && !text.contains("NaN"),
+        "{text}"
+    );
+    let e = EventSpec::parse("section:x=0.5++", &*model, false).unwrap_err().to_string();
+    assert!(e.contains("did you mean `section:x=0.5+`"), "{e}");
     assert!(EventSpec::parse("section:x=0.5", &*model, false).is_ok());
 }

@@ -128,7 +128,7 @@ pub fn lyapunov(
             method: "lyapunov",
             needs: "the system's Jacobian",
             reason: "this system provides none".into(),
-            suggestion: "pendula divergence",
+            suggestion: "pendula divergence".into(),
         });
     }
     let tangent = Tangent { model, n, k: spec.count };
@@ -138,7 +138,7 @@ pub fn lyapunov(
         method: method.name,
         needs: "a Hamiltonian form",
         reason: "the variational equations are integrated as one ODE, which has none".into(),
-        suggestion: "rk4, dop853 or gauss-legendre-4",
+        suggestion: "rk4, dop853 or gauss-legendre-4".into(),
     };
     let mut stepper: Box<dyn Stepper<Tangent<'_>>> = match method.scheme {
         Scheme::ExplicitRk(t) => Box::new(ExplicitRk::new(t, dim)),

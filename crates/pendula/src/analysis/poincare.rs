@@ -94,8 +94,20 @@ pub fn check_system(model: &dyn DynModel) -> Result<(), Error> {
         method: "poincare",
         needs: "a conservative system with two degrees of freedom",
         reason: reasons.join("; "),
-        suggestion: "the double pendulum, or the chain with links=2",
+        suggestion: "the double pendulum, or the chain with links=2".into(),
     })
+}
+
+/// How far above the energy at rest a section's energy may lie, in energy scales: beyond
+/// about 1/ε ≈ 4.5e15 scales the potential energy is lost in the round-off of the kinetic, and
+/// the motion is free rotation whatever the system; 10¹² keeps three digits of the potential.
+pub const MAX_ENERGY_SCALES: f64 = 1e12;
+
+/// The highest energy [`energy_surface_states`] accepts, in the system's energy unit: the
+/// energy at rest plus [`MAX_ENERGY_SCALES`] energy scales.
+pub fn max_energy(model: &dyn DynModel) -> f64 {
+    let rest = vec![0.0; model.info().state.len()];
+    model.energy(0.0, &rest) + MAX_ENERGY_SCALES * model.energy_scale(&rest)
 }
 
 /// `count` initial states (positions, velocities) with energy `energy`, on the section
@@ -107,9 +119,17 @@ pub fn check_system(model: &dyn DynModel) -> Result<(), Error> {
 ///
 /// # Errors
 /// [`Error::UnmetRequirement`] unless the system has two degrees of freedom and conserves
-/// energy; [`Error::InvalidValue`] when no point of the section has V < E.
+/// energy; [`Error::InvalidValue`] when no point of the section has V < E, or E is above
+/// [`max_energy`] or not finite.
 pub fn energy_surface_states(model: &dyn DynModel, spec: &PoincareSpec) -> Result<Vec<Vec<f64>>, Error> {
     check_system(model)?;
+    if !spec.energy.is_finite() || spec.energy > max_energy(model) {
+        return Err(Error::InvalidValue {
+            name: "energy".into(),
+            value: spec.energy,
+            allowed: "must be finite and at most 1e12 energy scales above the energy at rest",
+        });
+    }
     let (s, o) = (spec.section, 1 - spec.section);
     let mut states = Vec::with_capacity(spec.count);
     let mut k = 0;
@@ -192,7 +212,7 @@ pub fn poincare(
                         method: method.name,
                         needs: "a step size",
                         reason: "it takes fixed steps".into(),
-                        suggestion: "dop853 (adaptive) or a step size",
+                        suggestion: "dop853 (adaptive) or a step size".into(),
                     });
                 }
             }

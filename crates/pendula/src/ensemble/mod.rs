@@ -251,7 +251,7 @@ fn run_indexed<T: Send>(
             method: "tao on lanes",
             needs: "a free double pendulum",
             reason: format!("member {member} is damped or driven"),
-            suggestion: "rk4 on lanes, or one run per member (pendula::solve)",
+            suggestion: "rk4 on lanes, or one run per member (pendula::solve)".into(),
         });
     }
     let failures: Vec<(usize, Error)> = out

@@ -60,7 +60,7 @@ pub fn rk4_trajectory_resumable(
                 "this one has damping = {} and drive_amplitude = {}",
                 pendulum.damping, pendulum.drive_amplitude
             ),
-            suggestion: "pendula::solve with RK4",
+            suggestion: "pendula::solve with RK4".into(),
         });
     }
     let schedule = spec.schedule()?;

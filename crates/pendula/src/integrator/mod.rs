@@ -45,16 +45,6 @@ impl Requirement {
             Requirement::HamiltonianExplicit => "a Hamiltonian system (separable or not; explicit)",
         }
     }
-
-    /// Methods to try instead when the requirement is not met.
-    pub fn suggestion(self) -> &'static str {
-        match self {
-            Requirement::Any | Requirement::Hamiltonian | Requirement::HamiltonianExplicit => "rk4",
-            Requirement::Separable => {
-                "gauss-legendre-4 (implicit) or tao-4 (explicit, extended phase space), or verlet or symplectic-euler (implicit there): they stay symplectic on non-separable systems"
-            }
-        }
-    }
 }
 
 /// How a method steps: the data its stepper is built from.

@@ -67,7 +67,7 @@ pub(crate) fn run<M: Model>(
             method: method.name,
             needs: "fixed steps (a step size h)",
             reason: "tolerances apply to methods with an error estimate".into(),
-            suggestion: "dopri5 or dop853 for adaptive steps",
+            suggestion: "dopri5 or dop853 for adaptive steps".into(),
         });
     };
     tol.validate()?;

@@ -308,23 +308,49 @@ pub fn check<M: Model>(method: &Method, model: &M) -> Result<(), Error> {
         method: method.name,
         needs: method.requirement.describe(),
         reason,
-        suggestion: method.requirement.suggestion(),
+        suggestion: alternatives(method, model),
     };
-    match method.requirement {
+    meets(method.requirement, model).map_err(unmet)
+}
+
+/// Whether `model` has the structure `requirement` names; else why not, in words.
+fn meets<M: Model>(requirement: Requirement, model: &M) -> Result<(), String> {
+    match requirement {
         Requirement::Any => Ok(()),
-        Requirement::Hamiltonian | Requirement::HamiltonianExplicit => {
-            model.hamiltonian_form().map(|_| ()).map_err(unmet)
-        }
+        Requirement::Hamiltonian | Requirement::HamiltonianExplicit => model.hamiltonian_form().map(|_| ()),
         Requirement::Separable => {
-            if model.hamiltonian_form().map_err(unmet)?.separable() {
+            if model.hamiltonian_form()?.separable() {
                 Ok(())
             } else {
-                Err(unmet(format!(
+                Err(format!(
                     "the `{}` system's Hamiltonian is not separable (its kinetic energy depends on the positions)",
                     M::INFO.name
-                )))
+                ))
             }
         }
+    }
+}
+
+/// The methods to try instead of `method` on `model`: only those that apply to it, as it is
+/// set (a damped pendulum has no Hamiltonian, so no method is symplectic there); for a
+/// symplectic method on a system with a Hamiltonian, the symplectic ones that apply. First-order
+/// methods are offered only when nothing better applies.
+fn alternatives<M: Model>(method: &Method, model: &M) -> String {
+    let all: Vec<&Method> = crate::integrator::METHODS
+        .iter()
+        .copied()
+        .filter(|m| m.name != method.name && meets(m.requirement, model).is_ok())
+        .collect();
+    let better: Vec<&Method> = all.iter().copied().filter(|m| m.order >= 2).collect();
+    let applies = if better.is_empty() { all } else { better };
+    let names = |ms: &[&Method]| ms.iter().map(|m| m.name).collect::<Vec<_>>().join(", ");
+    let symplectic: Vec<&Method> = applies.iter().copied().filter(|m| m.symplectic).collect();
+    if method.symplectic && model.hamiltonian_form().is_ok() && !symplectic.is_empty() {
+        format!("{} (they apply here and stay symplectic)", names(&symplectic))
+    } else if applies.is_empty() {
+        "no method applies to this system".to_owned()
+    } else {
+        format!("{} (the methods that apply to this system as set)", names(&applies))
     }
 }
 
