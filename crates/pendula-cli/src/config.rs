@@ -456,7 +456,10 @@ fn warn_radians(name: &str, text: &str, value: f64) {
     }
     warned.push(key);
     let turns = value / std::f64::consts::TAU;
-    eprintln!("warning: {name}={text} is {} rad ({turns:.1} turns); did you mean {text}deg?", Short(value));
+    // Every value quoted in at most 20 characters: `theta1=1e300` must not print 300 digits.
+    let turns = if turns.abs() < 1e6 { format!("{turns:.1}") } else { Short(turns).to_string() };
+    let text = pendula::error::clip(text, 20);
+    eprintln!("warning: {name}={text} is {} rad ({turns} turns); did you mean {text}deg?", Short(value));
 }
 
 fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -> Result<f64> {

@@ -57,7 +57,7 @@ pub const CSV_BYTES_PER_VALUE: f64 = 25.0;
 /// The flag that lifts the limits, as help texts and messages name it.
 pub const ALLOW_LARGE_HELP: &str = "Run even when the estimate exceeds the limits (10^13 \
 pendulum-steps on the ensemble engine, 10^11 on the scalar integrators, 1 GiB of output, \
-2 GiB of memory, as many threads as cores).";
+2 GiB of memory, four threads per core).";
 
 /// What an estimate counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -151,15 +151,22 @@ pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-/// `--threads`: a whole number from 1 to the machine's cores (to [`MAX_THREADS`] with
-/// `--allow-large`), or every core when not given.
+/// Threads allowed per core without `--allow-large`: a few, so that a 2-core machine can show
+/// that results do not depend on the thread count (1, 2, 3 ... 8), and no more, since threads
+/// beyond the cores only take turns.
+pub const THREADS_PER_CORE: usize = 4;
+
+/// `--threads`: a whole number from 1 to [`THREADS_PER_CORE`] times the machine's cores (to
+/// [`MAX_THREADS`] with `--allow-large`), or every core when not given. More threads than
+/// cores is allowed with a warning: the results are the same bit for bit, only not faster.
 pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
     let cores = cores();
     let Some(text) = text else { return Ok(cores) };
     let n = crate::config::parse_count("--threads", text, 1, u64::MAX, "threads")?;
-    if n > cores as u64 && !allow_large {
+    let most = THREADS_PER_CORE * cores;
+    if n > most as u64 && !allow_large {
         bail!(
-            "invalid --threads {}: this machine has {cores} cores, and more threads than cores only take turns; give 1 to {cores}, or --allow-large to insist (up to {MAX_THREADS})",
+            "invalid --threads {}: this machine has {cores} cores, and more threads than cores only take turns; give 1 to {most}, or --allow-large to insist (up to {MAX_THREADS})",
             round(n as f64)
         );
     }
@@ -167,6 +174,11 @@ pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
         bail!(
             "invalid --threads {}: at most {MAX_THREADS}, even with --allow-large (this machine has {cores} cores)",
             round(n as f64)
+        );
+    }
+    if n > cores as u64 && !crate::config::quiet() {
+        eprintln!(
+            "warning: --threads {n} is more than this machine's {cores} cores: the threads take turns (the results are the same, bit for bit, only not faster)"
         );
     }
     Ok(n as usize)

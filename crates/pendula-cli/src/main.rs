@@ -132,14 +132,20 @@ fn elide(text: String) -> String {
     format!("{} … ({} bytes elided) … {}", &text[..head], tail - head, &text[tail..])
 }
 
-/// A reader that went away (`pendula simulate --out - | head`) is not an error.
+/// A reader that went away (`pendula simulate --out - | head`) is not an error: the command
+/// ends quietly with exit 0, as ripgrep does (temporary files are removed as for any run that
+/// ends early). The pipe's error may come bare, inside a CSV error, inside the writer's
+/// `WriteError` (which names the option and path, and holds the OS error as data), or as the
+/// cause of a trajectory row that could not be written (which ended the run).
 fn is_broken_pipe(err: &anyhow::Error) -> bool {
-    err.chain().any(|e| {
-        e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
-            || e.downcast_ref::<csv::Error>().is_some_and(
-                |e| matches!(e.kind(), csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::BrokenPipe),
-            )
-    })
+    let broken = |e: &std::io::Error| e.kind() == std::io::ErrorKind::BrokenPipe;
+    output::WriteError::find(err).is_some_and(|w| broken(w.os_error()))
+        || err.chain().any(|e| {
+            e.downcast_ref::<std::io::Error>().is_some_and(broken)
+                || e.downcast_ref::<csv::Error>()
+                    .is_some_and(|e| matches!(e.kind(), csv::ErrorKind::Io(io) if broken(io)))
+                || e.downcast_ref::<watch::RowFailure>().is_some_and(|row| is_broken_pipe(&row.0))
+        })
 }
 
 #[cfg(test)]

@@ -268,6 +268,11 @@ impl WriteError {
         })
     }
 
+    /// The operating system's error.
+    pub fn os_error(&self) -> &io::Error {
+        &self.source
+    }
+
     fn into_io(self) -> io::Error {
         io::Error::new(self.source.kind(), self)
     }

@@ -178,7 +178,9 @@ pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) 
 /// Validated system values from a name and `--set` items.
 pub fn values(system: &str, set: &[String]) -> Result<Values> {
     let info = pendula::model::find(system)?;
-    Ok(info.values(&parse_settings(info, set)?)?)
+    let values = info.values(&parse_settings(info, set)?)?;
+    values.check_energy()?;
+    Ok(values)
 }
 
 /// Validated values from an optional system name, an optional `--preset` (which picks the
@@ -191,7 +193,9 @@ pub fn preset_values(
     default: &str,
 ) -> Result<Values> {
     let (info, settings) = preset_settings(system, preset, set, default)?;
-    Ok(info.values(&settings)?)
+    let values = info.values(&settings)?;
+    values.check_energy()?;
+    Ok(values)
 }
 
 /// The system and the (name, value) settings of [`preset_values`], not yet validated as a
@@ -612,9 +616,17 @@ fn print_json(text: Option<Vec<u8>>) -> Result<()> {
     Ok(())
 }
 
-/// A progress bar on stderr for `n` units of work; invisible when stderr is not a terminal.
+/// A progress bar on stderr for `n` units of work. On a terminal it is redrawn in place; when
+/// stderr is a pipe or a file (`pendula compare 2>&1 | tee log`) it becomes a line now and
+/// then ([`ProgressLines`]), so that a long run shows signs of life there too.
 pub fn progress(n: u64, what: &str) -> ProgressBar {
-    let bar = ProgressBar::new(n);
+    use std::io::IsTerminal;
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new(n)
+    } else {
+        let lines = ProgressLines { start: std::time::Instant::now(), last: std::sync::Mutex::new(None) };
+        ProgressBar::with_draw_target(Some(n), indicatif::ProgressDrawTarget::term_like(Box::new(lines)))
+    };
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}")
             .expect("valid template")
@@ -624,17 +636,91 @@ pub fn progress(n: u64, what: &str) -> ProgressBar {
     bar
 }
 
-/// A plain-text table with aligned columns.
+/// Progress as plain lines on stderr, for a stderr that is no terminal: none in the first
+/// [`ProgressLines::QUIET`] (short runs, and the tests' runs, print nothing), then at most one
+/// every [`ProgressLines::EVERY`].
+#[derive(Debug)]
+struct ProgressLines {
+    start: std::time::Instant,
+    /// When the last line was written.
+    last: std::sync::Mutex<Option<std::time::Instant>>,
+}
+
+impl ProgressLines {
+    const QUIET: std::time::Duration = std::time::Duration::from_secs(2);
+    const EVERY: std::time::Duration = std::time::Duration::from_secs(5);
+
+    fn line(&self, text: &str) -> std::io::Result<()> {
+        let now = std::time::Instant::now();
+        let mut last = self.last.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let due = match *last {
+            None => now.duration_since(self.start) >= Self::QUIET,
+            Some(t) => now.duration_since(t) >= Self::EVERY,
+        };
+        if due && !text.trim().is_empty() && !crate::config::quiet() {
+            *last = Some(now);
+            use std::io::Write;
+            writeln!(std::io::stderr(), "{}", text.trim_end())?;
+        }
+        Ok(())
+    }
+}
+
+/// Only what is written counts; the cursor's moves, which redraw a bar in place, do not.
+impl indicatif::TermLike for ProgressLines {
+    fn width(&self) -> u16 {
+        100
+    }
+    fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn write_line(&self, text: &str) -> std::io::Result<()> {
+        self.line(text)
+    }
+    fn write_str(&self, text: &str) -> std::io::Result<()> {
+        self.line(text)
+    }
+    fn clear_line(&self) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn flush(&self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A plain-text table with aligned columns: numbers right-aligned, so that their digits line
+/// up; text (names, notes) left-aligned and, in the last column, never padded, so that one
+/// long note does not widen every row.
 pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut widths: Vec<usize> = header.iter().map(|h| h.len()).collect();
+    let mut widths: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
     for row in rows {
         for (w, cell) in widths.iter_mut().zip(row) {
-            *w = (*w).max(cell.len());
+            *w = (*w).max(cell.chars().count());
         }
     }
+    // A column is numeric when every cell is a number, a bound on one (`< 0.001`, `>= 1`) or
+    // empty (`-`, ``).
+    let numeric = |c: &str| {
+        let c = c.trim_start_matches(['<', '>', '=', ' ']);
+        c.is_empty() || c == "-" || c.parse::<f64>().is_ok()
+    };
+    let right: Vec<bool> =
+        (0..widths.len()).map(|i| rows.iter().all(|r| r.get(i).is_none_or(|c| numeric(c)))).collect();
     let mut out = String::new();
     let line = |out: &mut String, cells: &mut dyn Iterator<Item = &str>| {
-        let parts: Vec<String> = cells.zip(&widths).map(|(c, w)| format!("{c:>w$}")).collect();
+        let parts: Vec<String> = cells
+            .zip(widths.iter().zip(&right))
+            .map(|(c, (w, right))| if *right { format!("{c:>w$}") } else { format!("{c:<w$}") })
+            .collect();
         let _ = writeln!(out, "{}", parts.join("  ").trim_end());
     };
     line(&mut out, &mut header.iter().copied());

@@ -1061,3 +1061,133 @@ fn serve_prints_its_url_and_serves_the_page() {
     child.wait().unwrap();
     assert!(files(dir.path()).is_empty(), "serving writes nothing");
 }
+
+/// A reader that goes away (`pendula simulate --out - | head`) ends every command that can
+/// write to stdout quietly with exit 0, as ripgrep does: no `Broken pipe` error, no exit 2
+/// (which means invalid input), and no file left behind. The pipe's read end is closed before
+/// the command writes anything, so that every write to it fails, whatever its size.
+#[test]
+fn a_closed_pipe_ends_every_command_quietly() {
+    let commands: &[&[&str]] = &[
+        &["simulate", "--out", "-"],
+        &["simulate", "--every", "0", "--summary", "-"],
+        &["sweep", "--grid", "theta1=0:1:8", "--t-end", "1", "--out", "s.npy", "--summary", "-"],
+        &["fractal", "--grid", "theta1=0:1:16", "--grid", "theta2=0:1:16", "--t-max", "1", "--summary", "-"],
+        &["stability", "pendulum", "--methods", "rk4", "--t-end", "10", "--summary", "-"],
+        &["divergence", "--t-end", "5", "--summary", "-"],
+        &["list", "methods"],
+        &["completions", "bash"],
+        &["man"],
+    ];
+    for args in commands {
+        let dir = TempDir::new().unwrap();
+        let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("pendula"))
+            .args(*args)
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "pendula {}: {stderr}", args.join(" "));
+        assert!(
+            !stderr.contains("error:") && !stderr.contains("Broken pipe"),
+            "pendula {}: {stderr}",
+            args.join(" ")
+        );
+        // Outputs finished before the pipe closed may stay (the sweep's .npy); no temporary.
+        let left = files(dir.path());
+        let temporary =
+            left.iter().filter(|f| f.starts_with('.') || f.contains("tmp") || f.contains("partial"));
+        assert_eq!(temporary.count(), 0, "pendula {} left temporary files: {left:?}", args.join(" "));
+    }
+}
+
+/// `--threads` takes any count up to a few per core, so that even a 2-core machine can show
+/// that results do not depend on it: more threads than cores warn (they only take turns) and
+/// give the same bytes; beyond four per core without `--allow-large` is refused.
+#[test]
+fn more_threads_than_cores_warn_and_give_the_same_bytes() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let dir = TempDir::new().unwrap();
+    let mut outputs = Vec::new();
+    for threads in [1, 2, cores + 1] {
+        let out = format!("s{threads}.npy");
+        let run = pendula(dir.path())
+            .args(["sweep", "--grid", "theta1=0:3:24", "--grid", "theta2=0:3:16", "--t-end", "3"])
+            .args(["--threads", &threads.to_string(), "--out", &out])
+            .assert()
+            .success();
+        let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+        let warned =
+            stderr.contains(&format!("--threads {threads} is more than this machine's {cores} cores"));
+        assert_eq!(warned, threads > cores, "threads {threads} on {cores} cores: {stderr}");
+        outputs.push(std::fs::read(dir.path().join(out)).unwrap());
+    }
+    assert!(outputs.windows(2).all(|w| w[0] == w[1]), "the same bytes on 1, 2 and {} threads", cores + 1);
+    let most = 4 * cores;
+    pendula(dir.path())
+        .args(["sweep", "--grid", "theta1=0:3:4", "--threads", &(most + 1).to_string()])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(format!("give 1 to {most}")));
+}
+
+/// A warning quotes each value in at most 20 characters: `theta1=1e300` (radians, where
+/// degrees were likely meant) must not print a 300-digit count of turns.
+#[test]
+fn warnings_quote_values_briefly() {
+    let dir = TempDir::new().unwrap();
+    let long = "1".repeat(60);
+    for value in ["1e300", long.as_str()] {
+        let run = pendula(dir.path())
+            .args(["simulate", "pendulum", "--steps", "1", "--every", "0", "--out", "t.csv"])
+            .args(["--set", &format!("theta={value}")])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        let warning =
+            stderr.lines().find(|l| l.starts_with("warning:")).unwrap_or_else(|| panic!("{stderr}"));
+        assert!(warning.contains("did you mean"), "{warning}");
+        let longest = warning.split(|c: char| c.is_whitespace() || c == '(' || c == ')').map(str::len).max();
+        assert!(longest.unwrap() <= 30, "a value quoted in more than 20 characters: {warning}");
+    }
+}
+
+/// A refused method's message suggests only methods that accept that system as set, and
+/// each of them runs: on the damped pendulum (no Hamiltonian) no symplectic method applies,
+/// so none is offered "to stay symplectic"; on the double pendulum (not separable) the
+/// symplectic methods that apply are.
+#[test]
+fn a_refusal_suggests_only_methods_that_run() {
+    let dir = TempDir::new().unwrap();
+    for (system, set, refused) in [
+        ("pendulum", "damping=0.1", "yoshida-4"),
+        ("double", "m2=1", "yoshida-4"),
+        ("pendulum", "damping=0.1", "tao-4"),
+    ] {
+        let out = pendula(dir.path())
+            .args(["simulate", system, "--method", refused, "--set", set, "--steps", "10", "--every", "0"])
+            .assert()
+            .code(2);
+        let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();
+        let tried = stderr.split("; try ").nth(1).unwrap_or_else(|| panic!("no suggestion: {stderr}"));
+        let names: Vec<&str> = tried.split(" (").next().unwrap().split(", ").map(str::trim).collect();
+        assert!(names.len() >= 2, "{stderr}");
+        for name in &names {
+            pendula(dir.path())
+                .args(["simulate", system, "--method", name, "--set", set, "--t-end", "0.05", "--every", "0"])
+                .assert()
+                .success();
+        }
+        if system == "pendulum" {
+            for never in ["tao-4", "verlet", "symplectic-euler", "stay symplectic"] {
+                assert!(!tried.contains(never), "{never} offered for the damped pendulum: {stderr}");
+            }
+        } else {
+            assert!(tried.contains("stay symplectic") && names.contains(&"gauss-legendre-4"), "{stderr}");
+        }
+    }
+}

@@ -75,3 +75,29 @@ fn work_precision_on_defaults_finishes_for_every_system() {
         }
     }
 }
+
+/// `compare` at its default cost runs every method made for each system — for the double
+/// pendulum Tao's explicit maps among them, which at 700 evaluations per second were refused
+/// (their steps above 1/w) — and refuses none. The horizon is shortened: whether a method is
+/// refused depends on its step, which the cost alone fixes.
+#[test]
+fn compare_at_its_default_cost_refuses_no_method() {
+    for info in CATALOGUE {
+        let dir = TempDir::new().unwrap();
+        Command::cargo_bin("pendula")
+            .unwrap()
+            .current_dir(dir.path())
+            .args(["compare", info.name, "--t-end", "5", "--out-dir", "c", "--summary", "s.json"])
+            .assert()
+            .success();
+        let s = json(&dir.path().join("s.json"));
+        assert_eq!(s["steps"]["evals_per_second"], 3000.0, "the default cost");
+        let methods = s["methods"].as_object().unwrap();
+        if info.name == "double" {
+            assert!(methods.contains_key("tao-2") && methods.contains_key("tao-4"), "{methods:?}");
+        }
+        for (method, m) in methods {
+            assert_eq!(m["status"], "completed", "{} {method}: {m}", info.name);
+        }
+    }
+}

@@ -105,7 +105,9 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     let drive = |i: usize| {
         let mut s = base.clone();
         s.push((axis.name.clone(), axis.centre(i)));
-        info.values(&s).map(|v| v.get("drive_frequency"))
+        // A start whose energy overflows is refused here, before its cost is estimated.
+        let values = info.values(&s)?;
+        values.check_energy().map(|()| values.get("drive_frequency"))
     };
     let w = drive(0)?.max(drive(axis.n - 1)?);
     let periods = (transient * w / (2.0 * std::f64::consts::PI)).ceil() + samples as f64;

@@ -37,14 +37,16 @@ pub struct CompareArgs {
     pub methods: Option<String>,
     /// The cost given to every method: right-hand-side evaluations per simulated second
     /// (a Jacobian counts as one evaluation per state variable); each method's step is
-    /// chosen to spend it [default: 700, i.e. RK4 at h = 1/175 s].
+    /// chosen to spend it [default: 3000, i.e. RK4 at h = 1/750 s, where tao-4's step stays
+    /// below 1/(its binding constant)].
     #[arg(long, value_name = "N", conflicts_with = "dt", allow_hyphen_values = true)]
     pub evals_per_second: Option<String>,
     /// One step size for every method instead of equal cost, s.
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt: Option<String>,
-    /// End time, s [default: 100000 for the double pendulum (where, at the default cost, RK4's
-    /// drift passes the symplectic methods' bounded errors), 500 otherwise].
+    /// End time, s [default: 2000 for the double pendulum (where, at the default cost, RK4's
+    /// drift passes the bounded errors of gauss-legendre-4 and -6; those of the low-order
+    /// methods only far beyond, extrapolated), 500 otherwise].
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<String>,
     #[command(flatten)]
@@ -104,22 +106,24 @@ const SAMPLES: u64 = 2000;
 /// motion has nothing to do with the system's (explicit Euler within seconds at coarse steps).
 const GIVE_UP: f64 = 1.0;
 
-/// The default cost, evaluations per simulated second (RK4 at h = 1/175 s). At this cost
-/// gauss-legendre-4's step is about 0.016 s (some 12 evaluations a step), where its energy
-/// error stays bounded on the chaotic default double pendulum; at 0.0177 s it stayed bounded
-/// on every neighbouring start tried (θ₁ from 119.7° to 120.6°, max error 5–8·10⁻⁵ over
-/// 10⁵ s), while at 600 (step 0.0204 s) it creeps upwards on a quarter of them, the fast
-/// flips being too fast for that step, and at 400 (0.035 s) it wanders up to 0.15 of the
-/// scale.
-pub const DEFAULT_EVALS_PER_SECOND: f64 = 700.0;
+/// The default cost, evaluations per simulated second (RK4 at h = 1/750 s): the least round
+/// cost at which every method made for the double pendulum runs, Tao's explicit maps
+/// included. tao-4 spends 12 evaluations a step, so its step is 4 ms and its binding constant
+/// times its step, w h = 0.8 at the default w = 200 1/s, stays below 1, where the maps are
+/// stable; at 700 (its step 17 ms, w h = 3.4) tao-4 and tao-2 (5.7 ms) were refused. At
+/// this cost the Gauss–Legendre methods' steps are 1.4–3.6 ms, well below the 16 ms at which
+/// gauss-legendre-4 still kept a bounded error on the default chaotic orbit.
+pub const DEFAULT_EVALS_PER_SECOND: f64 = 3000.0;
 
 /// The default end time, s: on the double pendulum long enough, at the default cost, for
-/// RK4's secular drift to pass the bounded errors of the Gauss–Legendre methods (within
-/// thousands of seconds) and of Verlet (at about 83 000 s from the default state); symplectic
-/// Euler's, a first-order method's, it would pass only after some 3·10⁵ s, which is printed as
-/// an extrapolation from RK4's fitted drift.
+/// RK4's secular drift to pass the bounded errors of gauss-legendre-4 (at about 140 s) and -6
+/// (within seconds), and short enough that every method's run, 6·10⁶ evaluations, takes a few
+/// seconds (all eleven about 10 s on 2 cores). The low-order symplectic methods' bounded
+/// errors are larger than RK4's at this cost; when RK4 would pass them is printed as an
+/// extrapolation from its fitted drift (10⁶ s and more): a run of 100 000 s at 700
+/// evaluations per second shows RK4 passing Verlet at about 83 000 s (the report's Figure 7).
 pub fn default_t_end(system: &str) -> f64 {
-    if system == "double" { 100_000.0 } else { 500.0 }
+    if system == "double" { 2000.0 } else { 500.0 }
 }
 
 /// What compare runs on without a system named (its methods and steps are its own).

@@ -75,6 +75,15 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     // which section.
     pendula::analysis::poincare::check_system(&*model)?;
     let energy = f64_arg("--energy", args.energy.as_deref(), -15.0, "an energy in J")?;
+    // The energy's domain before the work it implies: a huge energy is no question of cost.
+    let most = pendula::analysis::poincare::max_energy(&*model);
+    if energy > most {
+        bail!(
+            "invalid --energy {}: at most {} here, 10^12 energy scales above the energy at rest (beyond it the potential energy is lost in the kinetic energy's round-off)",
+            clip(args.energy.as_deref().unwrap_or_default()),
+            with_unit(number(most), info.energy_unit())
+        );
+    }
     let count = match &args.count {
         Some(t) => parse_count("--count", t, 1, limits::MAX_ORBITS, "orbits")? as usize,
         None => 30,

@@ -173,6 +173,45 @@ pub fn cases() -> Vec<Case> {
         Case::new("a plot of an endless file", "plot z.csv")
             .setup(|d| std::os::unix::fs::symlink("/dev/zero", d.join("z.csv")).unwrap())
             .says("z.csv: it is not a regular file"),
+        // Issue 29's held-out battery. A direction written twice is a spec error naming the
+        // spec and what is allowed, not "invalid value NaN".
+        Case::new("a section with two directions", "simulate --steps 1 --event section:theta1=0++")
+            .says("`section:theta1=0++`")
+            .says("VALUE a number, then at most one + or -")
+            .says("did you mean `section:theta1=0+`"),
+        Case::new("a section value that is no number", "simulate --steps 1 --event section:theta1=zero")
+            .says("`section:theta1=zero`")
+            .says("`zero` is not a number"),
+        // The energy's domain before the work estimate (which would call it too much work).
+        Case::new("a Poincaré energy of 1e308", "poincare --energy 1e308")
+            .says("invalid --energy 1e308: at most")
+            .says("energy scales above the energy at rest"),
+        // Each value in its domain, the energy together infinite: refused by every study.
+        Case::new("a non-finite initial energy in stability", "stability double --set omega1=1e300")
+            .says("initial energy")
+            .says("must be finite"),
+        Case::new("a non-finite initial energy in stability's pendulum", "stability --set omega=1e300")
+            .says("initial energy"),
+        Case::new("a non-finite initial energy in compare", "compare --set omega2=1e300")
+            .says("initial energy"),
+        Case::new("a non-finite initial energy in convergence", "convergence double --set omega1=-1e300")
+            .says("initial energy"),
+        Case::new("a non-finite initial energy in divergence", "divergence --set omega1=1e300")
+            .says("initial energy"),
+        Case::new("a non-finite initial energy in lyapunov", "lyapunov --set omega1=1e300")
+            .says("initial energy"),
+        Case::new(
+            "a non-finite initial energy in work-precision",
+            "work-precision double --set omega1=1e300",
+        )
+        .says("initial energy"),
+        Case::new("a non-finite initial energy in animate", "animate --set omega1=1e300")
+            .says("initial energy"),
+        Case::new(
+            "a non-finite initial energy in bifurcation",
+            "bifurcation --set omega=1e300 --param drive_amplitude=1:1.5:4",
+        )
+        .says("initial energy"),
     ]
 }
 
