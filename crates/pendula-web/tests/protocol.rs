@@ -299,6 +299,21 @@ async fn a_socket_without_the_token_or_from_another_origin_is_refused() {
     );
 }
 
+/// Without an explicit port the server walks from the default to the next free port.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_default_port_moves_on_when_busy_and_an_explicit_one_does_not() {
+    let first = pendula_web::DEFAULT_PORT;
+    // Held here, or by another program already: busy either way.
+    let _holder = std::net::TcpListener::bind(("127.0.0.1", first));
+    let (server, busy) = pendula_web::bind_default(Default::default()).await.unwrap();
+    let port = server.addr().port();
+    assert!(busy.first() == Some(&first) && busy.last() == Some(&(port - 1)), "{busy:?} then {port}");
+    assert!(port < first + pendula_web::DEFAULT_PORT_TRIES);
+    let explicit = pendula_web::bind(pendula_web::Options { port: first, ..Default::default() }).await;
+    let err = explicit.err().expect("an explicit busy port is an error");
+    assert!(err.to_string().contains(&format!("127.0.0.1:{first}")), "{err}");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sessions_beyond_the_limit_are_refused_and_a_closed_one_frees_its_place() {
     let limits = pendula_web::Limits { max_sessions: 2, ..Default::default() };
