@@ -268,12 +268,15 @@ struct TokenQuery {
 }
 
 /// The WebSocket: the token, the origin and the session limit are checked before the
-/// upgrade.
+/// upgrade. A plain GET (no upgrade) gets the same refusals, or 426 when all is well: a
+/// browser hides a refused upgrade's status from the page, so the page asks again this way to
+/// tell a wrong token (403: retrying cannot help) from a full server (503: it may) or a
+/// stopped one (no answer).
 async fn socket(
     State(app): State<Arc<App>>,
     headers: HeaderMap,
     Query(query): Query<TokenQuery>,
-    ws: WebSocketUpgrade,
+    ws: Result<WebSocketUpgrade, axum::extract::ws::rejection::WebSocketUpgradeRejection>,
 ) -> Response {
     if let Err(refusal) = check_host(&app, &headers) {
         return refusal.into_response();
@@ -295,6 +298,18 @@ async fn socket(
                 .into_response();
         }
     }
+    let Ok(ws) = ws else {
+        // A question, not a session: nothing is counted.
+        if app.sessions.load(Ordering::SeqCst) >= app.limits.max_sessions {
+            return (
+                StatusCode::SERVICE_UNAVAILABLE,
+                format!("{} sessions are open, the most this server takes", app.limits.max_sessions),
+            )
+                .into_response();
+        }
+        return (StatusCode::UPGRADE_REQUIRED, "the token is right: this address takes a WebSocket")
+            .into_response();
+    };
     let sessions = app.sessions.fetch_add(1, Ordering::SeqCst);
     if sessions >= app.limits.max_sessions {
         app.sessions.fetch_sub(1, Ordering::SeqCst);
