@@ -1191,3 +1191,50 @@ fn a_refusal_suggests_only_methods_that_run() {
         }
     }
 }
+
+/// `pendula serve` without `--port` listens on 8485; when another program holds it, it takes
+/// the next free port and says so on stderr (as Jupyter does), while `--port 8485` given
+/// explicitly stays an error (exit 2, naming the address).
+#[test]
+fn serve_takes_the_next_port_when_the_default_is_busy() {
+    use std::io::{BufRead, Read};
+    const DEFAULT: u16 = 8485;
+    let dir = TempDir::new().unwrap();
+    // Held for the whole test. Where another program holds it already, it is busy all the same.
+    let _holder = match std::net::TcpListener::bind(("127.0.0.1", DEFAULT)) {
+        Ok(l) => Some(l),
+        Err(e) if e.kind() == std::io::ErrorKind::AddrInUse => None,
+        Err(e) => panic!("cannot bind 127.0.0.1:{DEFAULT}: {e}"),
+    };
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("pendula"))
+        .arg("serve")
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let mut stderr = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+    let url = line
+        .split_whitespace()
+        .find(|w| w.starts_with("http://"))
+        .unwrap_or_else(|| panic!("{line} {stderr}"));
+    let port: u16 = url
+        .strip_prefix("http://127.0.0.1:")
+        .and_then(|r| r.split_once('/'))
+        .and_then(|(p, _)| p.parse().ok())
+        .unwrap_or_else(|| panic!("{url}"));
+    assert!((DEFAULT + 1..DEFAULT + 10).contains(&port), "a successor of {DEFAULT}, not {port}");
+    assert!(
+        stderr.contains(&format!("{DEFAULT} "))
+            && stderr.contains(&format!("serving on port {port} instead")),
+        "the move is said: {stderr:?}"
+    );
+    pendula(dir.path()).args(["serve", "--port", &DEFAULT.to_string()]).assert().code(2).stderr(
+        predicate::str::contains(format!("127.0.0.1:{DEFAULT}")).and(predicate::str::contains("--port")),
+    );
+}

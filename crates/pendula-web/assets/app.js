@@ -9,7 +9,14 @@
 const $ = (id) => document.getElementById(id);
 const DEG = 180 / Math.PI;
 const HISTORY_MAX = 4000;   // per track; halved (every other point dropped) when reached
-const TRAIL_LEN = 240;      // frames of the last bob's path
+// The last bob's trail: the frames of the last TRAIL_TIME of simulated time (s, or the
+// system's own time unit), at most TRAIL_MAX of them. Two frames further apart than TRAIL_GAP
+// are not joined: at high speed a frame comes every speed/60 s, and a straight chord across
+// a whole swing is no path the bob took (at speed 50 they scribbled over the picture); those
+// frames are drawn as dots, each a state the bob really passed through.
+const TRAIL_TIME = 3;
+const TRAIL_MAX = 240;
+const TRAIL_GAP = 0.1;
 const POINCARE_MAX = 50000;
 const FONT = '12px system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", sans-serif';
 const FONT_B = '600 13px system-ui, -apple-system, "Segoe UI", Roboto, "DejaVu Sans", sans-serif';
@@ -80,10 +87,19 @@ const lab = window.lab = {
   fractal: null,
   fractalFrames: 0,
   errors: [],
+  notices: [],
+  socketAttempts: 0,
+  gaveUp: false,
   send,
   bobClientPositions,
   fractalPixelClient,
   shareUrl,
+  exportFigure,
+  geometry: (id) => st.geometry[id] || null,
+  get trail() {
+    const spans = st.trails.map((tr) => (tr.length ? tr[tr.length - 1].t - tr[0].t : 0));
+    return { spans, points: st.trails.map((tr) => tr.length), ...st.trailDrawn, gap: frameGap() };
+  },
   // Every Poincaré point received since the last config: [track, x, y].
   get poincarePoints() { return st.poincarePts; },
 };
@@ -105,7 +121,11 @@ const st = {
   exportHistory: [],            // track 0: [t, ...state, K, V, energyError]
   sepTracks: [],                // butterfly: per track k ≥ 1, [t, |s_k − s_0|]
   growthFit: null,
-  trails: [],
+  trails: [],                   // per track: [{x, y, t}], the last bob's positions
+  trailDrawn: { segments: 0, dots: 0 },
+  frameGaps: [],                // simulated time between the last frames
+  geometry: {},                 // per canvas id: where its legend and its data were drawn
+  exporting: false,             // drawing for the PNG: legends always, a scale and the time
   poincarePts: [],
   springRange: 0,
   drag: null,
@@ -146,8 +166,11 @@ function connect() {
   const ws = new WebSocket(`${proto}://${location.host}/ws?token=${encodeURIComponent(st.token)}`);
   ws.binaryType = 'arraybuffer';
   st.ws = ws;
+  lab.socketAttempts++;
   setStatus('connecting…');
+  let opened = false;
   ws.onopen = () => {
+    opened = true;
     st.everOpened = true;
     st.retries = 0;
     lab.connected = true;
@@ -164,16 +187,42 @@ function connect() {
       handleBinary(new Float64Array(buf));
     }
   };
-  ws.onclose = () => {
+  ws.onclose = async () => {
     lab.connected = false;
     st.ws = null;
-    // The browser hides the HTTP status of a refused upgrade (403 token, 503 session limit),
-    // so name the likely causes when the very first attempt fails.
+    let why = 'disconnected';
+    if (!opened) {
+      // The browser hides the HTTP status of a refused upgrade: ask the same address plainly.
+      const refusal = await whyRefused();
+      if (refusal.fatal) {
+        lab.gaveUp = true;
+        const token = /token/.test(refusal.message);
+        setStatus(token ? 'refused: wrong access token' : 'refused by the server', 'bad');
+        showError(`The server refused this page: ${refusal.message}. ` +
+          (token ? 'Open the URL that `pendula serve` printed in its terminal, token included (…/?token=…); each start of the server makes a new token. ' : '') +
+          'This page does not retry.');
+        return;
+      }
+      why = refusal.message;
+    }
     const delay = Math.min(10, 1 + st.retries++ * 2);
-    const why = st.everOpened ? 'disconnected' : 'could not connect (wrong token, session limit reached, or server stopped)';
     setStatus(`${why}: retrying in ${delay} s`, 'bad');
     setTimeout(connect, delay * 1000);
   };
+}
+
+// Why the WebSocket did not open, from a plain GET of its address (PROTOCOL.md): a wrong
+// token (403) is fatal, as no retry can mend it; a full server (503) or no answer may pass.
+async function whyRefused() {
+  try {
+    const r = await fetch(`/ws?token=${encodeURIComponent(st.token)}`, { cache: 'no-store' });
+    const text = (await r.text()).trim().slice(0, 200);
+    if (r.status === 403) return { fatal: true, message: text || 'HTTP 403' };
+    if (r.status === 503) return { fatal: false, message: `the server is full: ${text}; close another lab page` };
+    return { fatal: false, message: 'could not connect' };
+  } catch (_) {
+    return { fatal: false, message: 'the server does not answer (stopped?)' };
+  }
 }
 
 function handleMessage(msg) {
@@ -202,17 +251,31 @@ function handleBinary(a) {
 // The fragment holds the last accepted `share`; replaying it after hello reopens a shared or
 // reloaded page where it was. Only configure's own fields go out: anything else is refused.
 const CONFIGURE_FIELDS = ['system', 'params', 'state', 'method', 'dt', 'mode', 'methods', 'count', 'delta', 'speed', 'poincare'];
+// Returns {share, problem}: the fields to send (or null), and what could not be read of a
+// fragment that is there (or null), for the page to say rather than open the defaults silently.
 function shareFromHash() {
-  if (location.hash.length < 2) return null;
+  if (location.hash.length < 2) return { share: null, problem: null };
+  let text, obj;
   try {
-    const obj = JSON.parse(decodeURIComponent(location.hash.slice(1)));
-    if (!obj || typeof obj !== 'object' || Array.isArray(obj)) return null;
-    const out = {};
-    for (const k of CONFIGURE_FIELDS) if (k in obj) out[k] = obj[k];
-    return Object.keys(out).length ? out : null;
+    text = decodeURIComponent(location.hash.slice(1));
   } catch (_) {
-    return null;
+    return { share: null, problem: 'it is not URL-encoded text' };
   }
+  try {
+    obj = JSON.parse(text);
+  } catch (err) {
+    return { share: null, problem: `it is not JSON (${err.message})` };
+  }
+  if (!obj || typeof obj !== 'object' || Array.isArray(obj)) {
+    return { share: null, problem: 'it is not a JSON object of settings' };
+  }
+  const out = {};
+  for (const k of CONFIGURE_FIELDS) if (k in obj) out[k] = obj[k];
+  const unknown = Object.keys(obj).filter((k) => !CONFIGURE_FIELDS.includes(k));
+  const problem = unknown.length
+    ? `unknown ${unknown.length > 1 ? 'fields' : 'field'} ${unknown.slice(0, 5).map((k) => JSON.stringify(k).slice(0, 40)).join(', ')}${unknown.length > 5 ? ', …' : ''} (known: ${CONFIGURE_FIELDS.join(', ')})`
+    : null;
+  return { share: Object.keys(out).length ? out : null, problem };
 }
 
 function onHello(msg) {
@@ -237,7 +300,12 @@ function onHello(msg) {
   if (isNum(lim.max_tracks)) $('count').max = Math.min(16, lim.max_tracks);
   if (isNum(lim.max_fractal_size)) $('fractal-size').max = lim.max_fractal_size;
   if (isNum(lim.max_t_max)) $('fractal-tmax').max = lim.max_t_max;
-  const share = shareFromHash();
+  const { share, problem } = shareFromHash();
+  if (problem) {
+    showNotice(share
+      ? `Some of this link's settings (the part of the address after #) were ignored: ${problem}. The others were applied.`
+      : `This link's settings (the part of the address after #) could not be read: ${problem}. The lab opened with its defaults.`);
+  }
   if (share) {
     // the connect-time config (defaults) arrives before the answer to this: keep the hash
     st.skipHashUpdates = 1;
@@ -265,7 +333,7 @@ function onConfig(cfg) {
   applyConfig(cfg);
   // the server accepted the change but had to alter something (e.g. a method the new system
   // refuses): say so where refusals appear
-  if (cfg.notice) showError(`Note: ${cfg.notice}`, undefined, false);
+  if (cfg.notice) showNotice(cfg.notice);
   if (st.skipHashUpdates > 0) st.skipHashUpdates--;
   else history.replaceState(null, '', '#' + encodeURIComponent(JSON.stringify(cfg.share)));
   $('share-link').value = shareUrl();
@@ -299,6 +367,7 @@ function resetHistories(K) {
   st.histStride = 1;
   st.histCounter = 0;
   st.lastT = -Infinity;
+  st.frameGaps = [];
   st.springRange = 0;
   st.growthFit = null;
   st.plotsDirty = true;
@@ -339,15 +408,21 @@ function record(f) {
   if (st.poincarePts.length > POINCARE_MAX) st.poincarePts.splice(0, st.poincarePts.length - POINCARE_MAX);
   if (f.poincare.length) st.plotsDirty = true;
   if (f.t === st.lastT) return;  // paused: the same instant again
+  if (Number.isFinite(st.lastT)) {
+    st.frameGaps.push(f.t - st.lastT);
+    if (st.frameGaps.length > 9) st.frameGaps.shift();
+  }
   st.lastT = f.t;
 
   const rods = lab.config && lab.config.drawing && lab.config.drawing.kind === 'rods' ? lab.config.drawing.rods : null;
   for (let k = 0; k < K; k++) {
     const s = f.tracks[k].state;
     if (rods) {
-      const pts = rodPoints(s, rods);
-      st.trails[k].push(pts[pts.length - 1]);
-      if (st.trails[k].length > TRAIL_LEN) st.trails[k].shift();
+      const pts = rodPoints(s, rods), tr = st.trails[k];
+      tr.push({ ...pts[pts.length - 1], t: f.t });
+      let drop = 0;
+      while (drop < tr.length - 1 && (f.t - tr[drop].t > TRAIL_TIME || tr.length - drop > TRAIL_MAX)) drop++;
+      if (drop) tr.splice(0, drop);
     } else if (lab.config && lab.config.drawing) {
       st.springRange = Math.max(st.springRange, Math.abs(s[lab.config.drawing.x] || 0));
     }
@@ -466,21 +541,23 @@ function displayStates() {
 // geometry of the picture (CSS pixels), computed the same way for drawing and for hit tests
 function simLayout(w, h) {
   const dr = lab.config.drawing;
+  const legend = simLegend(w);
+  const band = legend ? legend.box.y + legend.box.h + 4 : 0;
   if (dr.kind === 'rods') {
     const total = dr.rods.reduce((s, r) => s + r.length, 0) || 1;
     const masses = dr.rods.map((r) => r.mass);
     const mref = Math.max(...masses) || 1;
-    return {
-      kind: 'rods', cx: w / 2, cy: h / 2, scale: (0.46 * Math.min(w, h)) / total,
-      radii: masses.map((m) => Math.max(4, Math.min(22, 16 * Math.cbrt(m / mref)))),
-    };
+    const radii = masses.map((m) => Math.max(4, Math.min(22, 16 * Math.cbrt(m / mref))));
+    // The rods fully stretched, bob included, stay inside the square below the legend.
+    const side = Math.min(w, h - band), reach = Math.max(10, side / 2 - Math.max(...radii) - 6);
+    return { kind: 'rods', cx: w / 2, cy: band + (h - band) / 2, scale: reach / total, radii, legend, reach: reach + Math.max(...radii) };
   }
   const x0 = Math.abs((lab.config.state[dr.x] || {}).value || 0);
   const range = Math.max(st.springRange, x0, 0.1) * 1.15;
   const side = Math.max(16, Math.min(70, 34 * Math.cbrt(dr.mass || 1)));
   const K = lab.frame ? lab.frame.tracks.length : 1;
-  const lane = Math.min(120, (h - 40) / Math.max(1, K));
-  return { kind: 'spring', cx: w / 2, scale: (w / 2 - side - 40) / range, side: Math.min(side, lane * 0.8), lane, top: 30 };
+  const lane = Math.min(120, (h - 40 - band) / Math.max(1, K));
+  return { kind: 'spring', cx: w / 2, scale: (w / 2 - side - 40) / range, side: Math.min(side, lane * 0.8), lane, top: 30 + band, legend };
 }
 
 function toScreen(L, p) { return { x: L.cx + p.x * L.scale, y: L.cy - p.y * L.scale }; }
@@ -501,9 +578,29 @@ function drawSim() {
   const L = simLayout(w, h);
   if (L.kind === 'rods') drawRods(ctx, L, states);
   else drawSpring(ctx, L, states, w);
-  if (states.length > 1 || lab.config.mode !== 'single') {
-    drawLegend(ctx, states.map((_, k) => [trackLabel(k), trackColour(k, states.length)]), 10, 10, 'left');
-  }
+  if (L.legend) drawLegend(ctx, L.legend);
+  // Where the pendulum can be (every angle, bobs included) and the legend: kept apart.
+  const data = L.kind === 'rods'
+    ? { x: L.cx - L.reach, y: L.cy - L.reach, w: 2 * L.reach, h: 2 * L.reach }
+    : { x: 0, y: L.top - 24, w, h: h - L.top + 24 };
+  st.geometry['sim-canvas'] = { legend: L.legend && L.legend.box, legendTexts: L.legend ? L.legend.items.map((i) => i.text) : [], area: data };
+  if (st.exporting) drawSimScale(ctx, L, w, h);
+}
+
+// For the PNG, which has no page around it: the time, and for rods a scale bar.
+function drawSimScale(ctx, L, w, h) {
+  ctx.font = FONT; ctx.fillStyle = '#1d2330'; ctx.textAlign = 'left';
+  const tu = unitOf(timeUnit());
+  if (lab.frame) ctx.fillText(`t = ${lab.frame.t.toFixed(3)}${tu ? ' ' + tu : ''}`, 10, h - 10);
+  if (L.kind !== 'rods') return;
+  const rods = lab.config.drawing.rods;
+  const unit = lab.config.dimensionless ? 'length unit' : 'm';
+  const len = niceStep(rods.reduce((s, r) => s + r.length, 0), 3);
+  const px = len * L.scale;
+  ctx.strokeStyle = '#1d2330'; ctx.lineWidth = 2;
+  ctx.beginPath(); ctx.moveTo(w - 14 - px, h - 14); ctx.lineTo(w - 14, h - 14); ctx.stroke();
+  ctx.textAlign = 'right';
+  ctx.fillText(`${fmt(len, 3)} ${unit}`, w - 14, h - 20);
 }
 
 function drawRods(ctx, L, states) {
@@ -512,23 +609,7 @@ function drawRods(ctx, L, states) {
   // ceiling and pivot
   ctx.strokeStyle = '#8b93a1'; ctx.lineWidth = 2;
   ctx.beginPath(); ctx.moveTo(L.cx - 40, L.cy); ctx.lineTo(L.cx + 40, L.cy); ctx.stroke();
-  // trails, faded from old to new
-  for (let k = 0; k < K; k++) {
-    const tr = st.trails[k];
-    if (!tr || tr.length < 2 || st.drag) continue;
-    ctx.strokeStyle = trackColour(k, K);
-    ctx.lineWidth = 1.5;
-    // one path per chunk of 16 segments, each chunk a shade fainter: 16 tracks stay cheap
-    for (let i0 = 1; i0 < tr.length; i0 += 16) {
-      ctx.globalAlpha = 0.6 * (i0 / tr.length);
-      ctx.beginPath();
-      const p = toScreen(L, tr[i0 - 1]);
-      ctx.moveTo(p.x, p.y);
-      for (let i = i0; i < Math.min(tr.length, i0 + 16); i++) { const q = toScreen(L, tr[i]); ctx.lineTo(q.x, q.y); }
-      ctx.stroke();
-    }
-  }
-  ctx.globalAlpha = 1;
+  drawTrails(ctx, L, K);
   // track 0 last, so it lies on top
   for (let k = K - 1; k >= 0; k--) {
     const pts = rodPoints(states[k], rods).map((p) => toScreen(L, p));
@@ -547,6 +628,51 @@ function drawRods(ctx, L, states) {
   ctx.globalAlpha = 1;
   ctx.fillStyle = '#1d2330';
   ctx.beginPath(); ctx.arc(L.cx, L.cy, 4, 0, 2 * Math.PI); ctx.fill();
+}
+
+// Each track's trail, fading with its age in simulated time: frames at most TRAIL_GAP apart
+// joined by lines (one path per chunk of 16 segments, each chunk one shade: 16 tracks stay
+// cheap), a frame with no such neighbour drawn as a dot.
+function drawTrails(ctx, L, K) {
+  let segments = 0, dots = 0;
+  const now = lab.frame ? lab.frame.t : 0;
+  const alpha = (t) => 0.6 * Math.max(0, 1 - (now - t) / TRAIL_TIME);
+  for (let k = 0; k < K; k++) {
+    const tr = st.trails[k];
+    if (!tr || !tr.length || st.drag) continue;
+    ctx.strokeStyle = ctx.fillStyle = trackColour(k, K);
+    ctx.lineWidth = 1.5;
+    const joined = (i) => i > 0 && i < tr.length && tr[i].t - tr[i - 1].t <= TRAIL_GAP;
+    // the newest frame is the bob itself: no dot under it
+    for (let i = 0; i < tr.length - 1; i++) {
+      if (joined(i) || joined(i + 1)) continue;
+      ctx.globalAlpha = alpha(tr[i].t);
+      const p = toScreen(L, tr[i]);
+      ctx.beginPath(); ctx.arc(p.x, p.y, 2, 0, 2 * Math.PI); ctx.fill();
+      dots++;
+    }
+    for (let i0 = 1; i0 < tr.length; i0 += 16) {
+      ctx.globalAlpha = alpha(tr[i0 - 1].t);
+      ctx.beginPath();
+      for (let i = i0; i < Math.min(tr.length, i0 + 16); i++) {
+        if (!joined(i)) continue;
+        const p = toScreen(L, tr[i - 1]), q = toScreen(L, tr[i]);
+        ctx.moveTo(p.x, p.y); ctx.lineTo(q.x, q.y);
+        segments++;
+      }
+      ctx.stroke();
+    }
+  }
+  ctx.globalAlpha = 1;
+  st.trailDrawn = { segments, dots };
+}
+
+// How far apart in simulated time the last frames came (the median of the newest gaps),
+// or null before there are any.
+function frameGap() {
+  if (st.frameGaps.length < 3) return null;
+  const gaps = st.frameGaps.slice().sort((a, b) => a - b);
+  return gaps[gaps.length >> 1];
 }
 
 function drawSpring(ctx, L, states, w) {
@@ -579,21 +705,42 @@ function drawSpring(ctx, L, states, w) {
   });
 }
 
-function drawLegend(ctx, entries, x, y, align) {
-  if (!entries.length) return;
+// A legend's entries ([text, colour]) flowed left to right in rows no wider than `width`,
+// from (x, y): laid out, not drawn, so that a picture can keep its data clear of the box (a
+// legend inside a plot covered the newest data, at its right end).
+function legendLayout(ctx, entries, x, y, width) {
   ctx.font = FONT;
-  const wmax = Math.max(...entries.map(([t]) => ctx.measureText(t).width)) + 28;
-  const bx = align === 'right' ? x - wmax : x;
-  ctx.fillStyle = 'rgba(255,255,255,0.85)';
-  ctx.fillRect(bx, y, wmax, entries.length * 15 + 6);
-  ctx.textAlign = 'left';
-  entries.forEach(([text, colour], i) => {
-    const yy = y + 11 + i * 15;
-    ctx.strokeStyle = colour; ctx.lineWidth = 3;
-    ctx.beginPath(); ctx.moveTo(bx + 4, yy - 4); ctx.lineTo(bx + 20, yy - 4); ctx.stroke();
+  const items = [];
+  let cx = x, row = 0, right = x;
+  for (const [text, colour] of entries) {
+    const w = ctx.measureText(text).width + 22;
+    if (cx > x && cx + w > x + width) { cx = x; row++; }
+    items.push({ text, colour, x: cx, y: y + row * 15 });
+    right = Math.max(right, cx + w);
+    cx += w + 12;
+  }
+  return { items, box: { x, y, w: right - x, h: items.length ? (row + 1) * 15 + 3 : 0 } };
+}
+
+function drawLegend(ctx, lay) {
+  ctx.font = FONT; ctx.textAlign = 'left';
+  for (const it of lay.items) {
+    const yy = it.y + 11;
+    ctx.strokeStyle = it.colour; ctx.lineWidth = 3;
+    ctx.beginPath(); ctx.moveTo(it.x + 1, yy - 4); ctx.lineTo(it.x + 17, yy - 4); ctx.stroke();
     ctx.fillStyle = '#1d2330';
-    ctx.fillText(text, bx + 24, yy);
-  });
+    ctx.fillText(it.text, it.x + 22, yy);
+  }
+}
+
+// The pendulum picture's legend (one entry per track; in a single run only in the PNG), in a
+// band along the top that the pendulum is kept out of.
+function simLegend(w) {
+  const cfg = lab.config;
+  const K = displayStates().length;
+  if (!(K > 1 || cfg.mode !== 'single' || st.exporting)) return null;
+  const entries = Array.from({ length: K }, (_, k) => [trackLabel(k), trackColour(k, K)]);
+  return legendLayout($('sim-canvas').getContext('2d'), entries, 10, 8, w - 20);
 }
 
 // client coordinates of track 0's bobs (or block) as drawn now
@@ -696,6 +843,12 @@ function drawPlot(canvas, o) {
     ctx.fillStyle = '#1d2330'; ctx.font = FONT_B; ctx.textAlign = 'left';
     ctx.fillText(o.title, 8, 16);
   }
+  // The legend in a band above the plot area, never over the data; one series gets none
+  // (the page says whose it is), except in the PNG, which stands alone.
+  const entries = o.series.filter((s) => s.label).map((s) => [s.label, s.colour]);
+  const legend = entries.length > 1 || ((o.legendAlways || st.exporting) && entries.length)
+    ? legendLayout(ctx, entries, m.l, m.t - 2, w - m.l - m.r) : null;
+  if (legend) m.t += legend.box.h + 2;
   let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
   for (const s of o.series) {
     for (const p of s.data) {
@@ -706,6 +859,11 @@ function drawPlot(canvas, o) {
     }
   }
   const pw = w - m.l - m.r, ph = h - m.t - m.b;
+  if (legend) drawLegend(ctx, legend);
+  const geometry = st.geometry[canvas.id] = {
+    legend: legend && legend.box, legendTexts: entries.map((e) => e[0]), area: { x: m.l, y: m.t, w: pw, h: ph },
+    title: o.title || '', xLabel: o.xLabel, yLabel: o.yLabel, newest: [],
+  };
   ctx.strokeStyle = '#8b93a1'; ctx.lineWidth = 1;
   ctx.strokeRect(m.l + 0.5, m.t + 0.5, pw, ph);
   ctx.font = FONT;
@@ -770,8 +928,13 @@ function drawPlot(canvas, o) {
   const tf = { X, Y, x0, x1, y0, y1 };
   if (o.after) o.after(ctx, tf);
   ctx.restore();
-  const legend = o.series.filter((s) => s.label).map((s) => [s.label, s.colour]);
-  if (legend.length > 1 || o.legendAlways) drawLegend(ctx, legend, m.l + pw - 4, m.t + 4, 'right');
+  // each series' newest point as drawn, for the tests: it must be clear of the legend
+  for (const s of o.series) {
+    for (let i = s.data.length - 1; i >= 0; i--) {
+      const x = s.x(s.data[i]), y = s.y(s.data[i]);
+      if (Number.isFinite(x) && Number.isFinite(y)) { geometry.newest.push({ x: X(x), y: Y(y) }); break; }
+    }
+  }
   return tf;
 }
 
@@ -868,7 +1031,11 @@ function updateNumbers() {
     const c = lab.config, m = st.mapPixel;
     const fromMap = m && c && c.system === 'double' && c.state[0].value === m.theta1 && c.state[1].value === m.theta2
       ? ` · the map: ${isNum(m.t) ? 'first flip at ' + fmt(m.t, 4) + ' s' : 'no flip before ' + fmt(m.tMax) + ' s'}` : '';
-    $('sim-info').textContent = `t = ${f.t.toFixed(3)}${tu ? ' ' + tu : ''} · ${Math.round(f.steps).toLocaleString('en')} steps · ${state}${flip}${fromMap}`;
+    // At high speed the trail shows the frames as dots: say why, with the frames' spacing.
+    const gap = frameGap();
+    const dots = cfg.drawing && cfg.drawing.kind === 'rods' && !f.paused && gap > TRAIL_GAP
+      ? ` · trail as dots: frames ${fmt(gap, 2)}${tu ? ' ' + tu : ''} apart` : '';
+    $('sim-info').textContent = `t = ${f.t.toFixed(3)}${tu ? ' ' + tu : ''} · ${Math.round(f.steps).toLocaleString('en')} steps · ${state}${flip}${fromMap}${dots}`;
     $('play').classList.toggle('active', !f.paused);
     $('pause').classList.toggle('active', f.paused);
     // Step advances a paused run only: while running it would do nothing.
@@ -921,6 +1088,14 @@ function applyConfig(cfg) {
   $('race-hint').textContent = '';
   $('race-box').classList.toggle('inactive', cfg.mode !== 'race');
   $('butterfly-box').classList.toggle('inactive', cfg.mode !== 'butterfly');
+  // A control the server ignores in this mode is disabled, not left to do nothing: a race
+  // runs the methods ticked in its list, not the Integrator menu's (a butterfly's pendulums
+  // all run the menu's method: it stays on there); the list, N and δ only act in their modes.
+  const race = cfg.mode === 'race';
+  $('method').disabled = race;
+  $('method-hint').hidden = !race;
+  for (const cb of $('race-methods').querySelectorAll('input')) cb.disabled = !race;
+  $('count').disabled = $('delta').disabled = cfg.mode !== 'butterfly';
   $('poincare').checked = !!cfg.poincare;
   $('poincare').disabled = !cfg.poincare_available;
   const axes = cfg.poincare_axes ? cfg.poincare_axes.join(', ') : '';
@@ -1204,6 +1379,10 @@ function drawFractal() {
     ctx.fillText(tickLabel(v, s1), x, g.y + g.S + 17);
   }
   ctx.fillText('θ₁ (rad), upper arm', g.x + g.S / 2, g.y + g.S + 36);
+  st.geometry['fractal-canvas'] = {
+    xLabel: 'θ₁ (rad), upper arm', yLabel: 'θ₂ (rad), lower arm',
+    legendTexts: img ? ['first flip time (log scale)', 'no flip'] : [], area: { x: g.x, y: g.y, w: g.S, h: g.S },
+  };
   ctx.textAlign = 'right';
   for (let v = Math.ceil(theta2[0] / s2) * s2; v <= theta2[1] + 1e-12; v += s2) {
     const y = g.y + g.S - ((v - theta2[0]) / (theta2[1] - theta2[0])) * g.S;
@@ -1334,7 +1513,7 @@ function pickFractalPixel(p, g) {
 // ======================================================================================
 
 function shareUrl() {
-  const share = lab.config ? lab.config.share : shareFromHash();
+  const share = lab.config ? lab.config.share : shareFromHash().share;
   const hash = share ? '#' + encodeURIComponent(JSON.stringify(share)) : '';
   return location.origin + location.pathname + location.search + hash;
 }
@@ -1408,21 +1587,92 @@ function exportNote(extra = '') {
   $('export-note').textContent = `${st.exportHistory.length} rows of track 0 since t = 0, one per frame received (not every step: the frames are at most 60 a second), evenly thinned to at most ${HISTORY_MAX}.${extra}`;
 }
 
-// the PNG holds every visible canvas of the last viewed tab, side by side on white
-function exportPng() {
+// What each picture is, for its caption in the PNG.
+function captionOf(canvas) {
+  const cfg = lab.config;
+  const opt = (id) => { const s = $(id); return s.selectedOptions[0] ? s.selectedOptions[0].textContent : ''; };
+  switch (canvas.id) {
+    case 'sim-canvas': return cfg && cfg.tracks.length > 1 ? 'The pendulums at the newest frame' : 'The pendulum at the newest frame';
+    case 'energy-plot': return cfg && cfg.tracks.length > 1 ? 'Energy of each pendulum' : 'Energy';
+    case 'separation-plot': {
+      const tu = unitOf(timeUnit());
+      return 'Separation from k=0' + (st.growthFit ? `: λ ≈ ${fmt(st.growthFit.slope, 3)} ${tu ? '1/' + tu : 'per unit time'} (dashed)` : '');
+    }
+    case 'ts-plot': return `Time series of ${opt('ts-var')} (${trackLabel(0)})`;
+    case 'phase-plot': return `Phase portrait: ${opt('phase-y')} against ${opt('phase-x')}`;
+    case 'poincare-plot': return 'Poincaré section';
+    case 'fractal-canvas': return 'Flip fractal: time to the first flip of the double pendulum from rest';
+    default: return canvas.getAttribute('aria-label') || '';
+  }
+}
+
+function modeWords(cfg) {
+  const tu = unitOf(cfg.time_unit);
+  const dt = `dt = ${fmt(cfg.dt)}${tu ? ' ' + tu : ''}`;
+  if (cfg.mode === 'race') return `race of ${cfg.tracks.map((t) => t.label).join(', ')}, ${dt}`;
+  if (cfg.mode === 'butterfly') return `butterfly of ${cfg.count} pendulums ${fmt(cfg.delta)} rad apart, ${cfg.method}, ${dt}`;
+  return `${cfg.method}, ${dt}`;
+}
+
+// The PNG: the last viewed tab's pictures side by side on white, redrawn for a page of their
+// own (every plot's legend, the pendulum's time and scale), each under its caption, below a
+// title that says what ran. Axis labels are the plots' own. lab.lastExport describes it.
+function exportFigure() {
   const view = st.lastPictureView;
   const wasHidden = $(view).hidden;
-  if (wasHidden) { for (const s of document.querySelectorAll('.view')) s.hidden = s.id !== view; redrawView(view); }
+  if (wasHidden) for (const s of document.querySelectorAll('.view')) s.hidden = s.id !== view;
+  st.exporting = true;
+  try {
+    redrawView(view);
+  } finally {
+    st.exporting = false;
+  }
   const canvases = [...$(view).querySelectorAll('canvas')].filter((c) => c.width && c.height && c.offsetParent !== null);
-  const W = canvases.reduce((s, c) => s + c.width, 0), H = Math.max(1, ...canvases.map((c) => c.height));
+  const dpr = window.devicePixelRatio || 1;
+  const gap = Math.round(12 * dpr), titleH = Math.round(30 * dpr), capH = Math.round(22 * dpr);
+  const W = canvases.reduce((s, c) => s + c.width, 0) + gap * (canvases.length + 1);
+  const H = titleH + capH + Math.max(1, ...canvases.map((c) => c.height)) + gap;
   const out = document.createElement('canvas');
   out.width = Math.max(1, W); out.height = H;
   const ctx = out.getContext('2d');
   ctx.fillStyle = '#fff'; ctx.fillRect(0, 0, out.width, out.height);
-  let x = 0;
-  for (const c of canvases) { ctx.drawImage(c, x, 0); x += c.width; }
+  ctx.scale(dpr, dpr);
+  const cfg = lab.config;
+  const tu = cfg ? unitOf(cfg.time_unit) : '';
+  const title = view === 'view-fractal' || !cfg
+    ? 'pendula lab: flip fractal'
+    : `pendula lab: ${cfg.system}, ${modeWords(cfg)}${lab.frame ? `, t = ${lab.frame.t.toFixed(3)}${tu ? ' ' + tu : ''}` : ''}`;
+  ctx.fillStyle = '#1d2330'; ctx.textAlign = 'left'; ctx.font = FONT_B;
+  ctx.fillText(title, 12, 20);
+  const panels = [];
+  let x = gap;
+  ctx.font = FONT;
+  for (const c of canvases) {
+    const caption = captionOf(c);
+    ctx.fillStyle = '#1d2330';
+    ctx.fillText(fitText(ctx, caption, c.width / dpr), x / dpr, (titleH + capH) / dpr - 7);
+    ctx.drawImage(c, x / dpr, (titleH + capH) / dpr, c.width / dpr, c.height / dpr);
+    const g = st.geometry[c.id] || {};
+    panels.push({ canvas: c.id, caption, xLabel: g.xLabel || null, yLabel: g.yLabel || null, legend: g.legendTexts || [] });
+    x += c.width + gap;
+  }
   if (wasHidden) showView(st.view);
-  out.toBlob((blob) => blob && download(blob, `pendula-${view.replace('view-', '')}.png`), 'image/png');
+  else redrawView(view);
+  lab.lastExport = { view, width: out.width, height: out.height, title, titleHeight: titleH, panels };
+  return out;
+}
+
+// `text`, cut to `width` pixels with an ellipsis.
+function fitText(ctx, text, width) {
+  if (ctx.measureText(text).width <= width) return text;
+  let n = text.length;
+  while (n > 1 && ctx.measureText(text.slice(0, n) + '…').width > width) n--;
+  return text.slice(0, n) + '…';
+}
+
+function exportPng() {
+  const view = st.lastPictureView;
+  exportFigure().toBlob((blob) => blob && download(blob, `pendula-${view.replace('view-', '')}.png`), 'image/png');
 }
 
 function initExports() {
@@ -1435,6 +1685,12 @@ function initExports() {
   $('copy-share').addEventListener('click', () => copyText(shareUrl(), $('copy-share')));
   $('copy-command').addEventListener('click', () => copyText(lab.config ? lab.config.command : '', $('copy-command')));
   $('share-link').addEventListener('focus', () => $('share-link').select());
+}
+
+// A note, not a refusal: shown where refusals are, kept in lab.notices.
+function showNotice(text) {
+  lab.notices.push(text);
+  showError(`Note: ${text}`, undefined, false);
 }
 
 function showError(text, raw, record = true) {

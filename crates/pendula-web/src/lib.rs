@@ -71,12 +71,25 @@ impl Default for Limits {
     }
 }
 
+/// The lab's default port, 8485. Chosen because no common tool uses it: IANA lists 8475–8499
+/// as unassigned, nmap's table of ports seen open on the Internet has none of 8485–8499, and it
+/// is none of the defaults a scientist's machine is likely to run (Jupyter 8888, Dask's
+/// dashboard and RStudio Server 8787, Django and `python -m http.server` 8000, Flask 5000,
+/// Streamlit 8501, Dash 8050, Bokeh 5006, TensorBoard 6006, Gradio 7860, Ray's dashboard 8265,
+/// Vite 5173, the usual 8080/8081/8088/8888/9000); nor are 8486–8494, the ports tried after
+/// it when it is busy ([`DEFAULT_PORT_TRIES`]).
+pub const DEFAULT_PORT: u16 = 8485;
+
+/// How many ports [`bind_default`] tries, [`DEFAULT_PORT`] and the ones after it (8485–8494),
+/// before it gives up: a bounded walk, as Jupyter's (which tries 50).
+pub const DEFAULT_PORT_TRIES: u16 = 10;
+
 /// The server's options.
 #[derive(Debug, Clone)]
 pub struct Options {
     /// Address to bind (127.0.0.1 unless told otherwise).
     pub host: IpAddr,
-    /// Port (0: any free one).
+    /// Port (0: any free one; [`DEFAULT_PORT`] by default).
     pub port: u16,
     /// The token the WebSocket asks for (a random one when `None`).
     pub token: Option<String>,
@@ -86,7 +99,12 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Options { host: IpAddr::from([127, 0, 0, 1]), port: 8787, token: None, limits: Limits::default() }
+        Options {
+            host: IpAddr::from([127, 0, 0, 1]),
+            port: DEFAULT_PORT,
+            token: None,
+            limits: Limits::default(),
+        }
     }
 }
 
@@ -127,6 +145,31 @@ pub async fn bind(options: Options) -> std::io::Result<Server> {
         loopback: options.host.is_loopback(),
     });
     Ok(Server { listener, app })
+}
+
+/// Binds [`DEFAULT_PORT`] (whatever `options.port` says), or when another program holds it the
+/// first free one of the [`DEFAULT_PORT_TRIES`] − 1 after it, as Jupyter does; returns the
+/// server and the busy ports passed over (empty when the default was free), so that the
+/// caller can say where it went instead. A port asked for explicitly is bound with [`bind`]:
+/// taking another one then would surprise the user who chose it.
+///
+/// # Errors
+/// When every port tried is in use (naming the range), or at the first error that is not
+/// "address in use" (a host that is not this machine's, say), naming the address.
+pub async fn bind_default(options: Options) -> std::io::Result<(Server, Vec<u16>)> {
+    let mut busy = Vec::new();
+    for port in DEFAULT_PORT..DEFAULT_PORT + DEFAULT_PORT_TRIES {
+        match bind(Options { port, ..options.clone() }).await {
+            Ok(server) => return Ok((server, busy)),
+            Err(e) if e.kind() == std::io::ErrorKind::AddrInUse => busy.push(port),
+            Err(e) => return Err(e),
+        }
+    }
+    let last = DEFAULT_PORT + DEFAULT_PORT_TRIES - 1;
+    Err(std::io::Error::new(
+        std::io::ErrorKind::AddrInUse,
+        format!("cannot listen on {}: ports {DEFAULT_PORT} to {last} are all in use", options.host),
+    ))
 }
 
 impl Server {
@@ -226,12 +269,15 @@ struct TokenQuery {
 }
 
 /// The WebSocket: the token, the origin and the session limit are checked before the
-/// upgrade.
+/// upgrade. A plain GET (no upgrade) gets the same refusals, or 426 when all is well: a
+/// browser hides a refused upgrade's status from the page, so the page asks again this way to
+/// tell a wrong token (403: retrying cannot help) from a full server (503: it may) or a
+/// stopped one (no answer).
 async fn socket(
     State(app): State<Arc<App>>,
     headers: HeaderMap,
     Query(query): Query<TokenQuery>,
-    ws: WebSocketUpgrade,
+    ws: Result<WebSocketUpgrade, axum::extract::ws::rejection::WebSocketUpgradeRejection>,
 ) -> Response {
     if let Err(refusal) = check_host(&app, &headers) {
         return refusal.into_response();
@@ -253,6 +299,18 @@ async fn socket(
                 .into_response();
         }
     }
+    let Ok(ws) = ws else {
+        // A question, not a session: nothing is counted.
+        if app.sessions.load(Ordering::SeqCst) >= app.limits.max_sessions {
+            return (
+                StatusCode::SERVICE_UNAVAILABLE,
+                format!("{} sessions are open, the most this server takes", app.limits.max_sessions),
+            )
+                .into_response();
+        }
+        return (StatusCode::UPGRADE_REQUIRED, "the token is right: this address takes a WebSocket")
+            .into_response();
+    };
     let sessions = app.sessions.fetch_add(1, Ordering::SeqCst);
     if sessions >= app.limits.max_sessions {
         app.sessions.fetch_sub(1, Ordering::SeqCst);

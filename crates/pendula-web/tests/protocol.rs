@@ -299,6 +299,51 @@ async fn a_socket_without_the_token_or_from_another_origin_is_refused() {
     );
 }
 
+/// The status of a plain `GET path` (no upgrade), and its body.
+async fn plain_get(addr: &str, path: &str) -> (u16, String) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut s = TcpStream::connect(addr).await.unwrap();
+    let request = format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n");
+    s.write_all(request.as_bytes()).await.unwrap();
+    let mut text = String::new();
+    s.read_to_string(&mut text).await.unwrap();
+    let status = text.split_whitespace().nth(1).and_then(|c| c.parse().ok()).unwrap_or(0);
+    (status, text)
+}
+
+/// The page's question after a refused WebSocket (the browser hides the refusal's status): a
+/// plain GET of /ws says 403 for a wrong token, 503 for a full server and 426 when a WebSocket
+/// would be accepted, and counts no session.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_plain_get_of_the_socket_says_why_a_websocket_would_be_refused() {
+    let limits = pendula_web::Limits { max_sessions: 1, ..Default::default() };
+    let (addr, token) = server(limits).await;
+    let (status, body) = plain_get(&addr, &format!("/ws?token=00{token}")).await;
+    assert_eq!(status, 403);
+    assert!(body.contains("the token printed by `pendula serve`"), "{body}");
+    assert_eq!(plain_get(&addr, "/ws").await.0, 403, "no token");
+    for _ in 0..3 {
+        assert_eq!(plain_get(&addr, &format!("/ws?token={token}")).await.0, 426, "no session is counted");
+    }
+    let _only = connect(&addr, &token).await;
+    assert_eq!(plain_get(&addr, &format!("/ws?token={token}")).await.0, 503);
+}
+
+/// Without an explicit port the server walks from the default to the next free port.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_default_port_moves_on_when_busy_and_an_explicit_one_does_not() {
+    let first = pendula_web::DEFAULT_PORT;
+    // Held here, or by another program already: busy either way.
+    let _holder = std::net::TcpListener::bind(("127.0.0.1", first));
+    let (server, busy) = pendula_web::bind_default(Default::default()).await.unwrap();
+    let port = server.addr().port();
+    assert!(busy.first() == Some(&first) && busy.last() == Some(&(port - 1)), "{busy:?} then {port}");
+    assert!(port < first + pendula_web::DEFAULT_PORT_TRIES);
+    let explicit = pendula_web::bind(pendula_web::Options { port: first, ..Default::default() }).await;
+    let err = explicit.err().expect("an explicit busy port is an error");
+    assert!(err.to_string().contains(&format!("127.0.0.1:{first}")), "{err}");
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sessions_beyond_the_limit_are_refused_and_a_closed_one_frees_its_place() {
     let limits = pendula_web::Limits { max_sessions: 2, ..Default::default() };

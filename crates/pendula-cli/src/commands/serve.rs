@@ -8,9 +8,12 @@ use clap::Args;
 
 #[derive(Debug, Clone, Args)]
 pub struct ServeArgs {
-    /// Port to listen on (0: any free port).
-    #[arg(long, default_value_t = 8787, value_name = "P")]
-    pub port: u16,
+    /// Port to listen on (0: any free port). Without it, 8485, a port no common tool uses
+    /// (unassigned by IANA; not Jupyter's 8888, Dask's 8787 or any other usual default); when
+    /// another program holds 8485, the first free one of 8486 to 8494 is taken, and said on
+    /// stderr. A port given here is used or refused, never replaced.
+    #[arg(long, value_name = "P")]
+    pub port: Option<u16>,
     /// Address to listen on. Anything but a loopback address lets other machines reach the
     /// lab (each still needs the token): a warning is printed.
     #[arg(long, default_value = "127.0.0.1", value_name = "ADDR")]
@@ -36,7 +39,8 @@ pub fn options(args: &ServeArgs) -> Result<pendula_web::Options> {
         bail!("invalid value {} for --max-sessions: from 1 to 10000", args.max_sessions);
     }
     let limits = pendula_web::Limits { max_sessions: args.max_sessions, ..Default::default() };
-    Ok(pendula_web::Options { host, port: args.port, token: None, limits })
+    let port = args.port.unwrap_or(pendula_web::DEFAULT_PORT);
+    Ok(pendula_web::Options { host, port, token: None, limits })
 }
 
 pub fn run(args: &ServeArgs) -> Result<()> {
@@ -47,7 +51,23 @@ pub fn run(args: &ServeArgs) -> Result<()> {
         .build()
         .context("cannot start the server's runtime")?;
     runtime.block_on(async {
-        let server = pendula_web::bind(options).await.map_err(|e| anyhow::Error::new(Refused(e.to_string())))?;
+        let refused = |e: std::io::Error| anyhow::Error::new(Refused(e.to_string()));
+        let server = if args.port.is_some() {
+            pendula_web::bind(options).await.map_err(refused)?
+        } else {
+            let (server, busy) = pendula_web::bind_default(options).await.map_err(refused)?;
+            if let Some(first) = busy.first() {
+                let ports = match busy.last() {
+                    Some(last) if last != first => format!("ports {first} to {last} are"),
+                    _ => format!("port {first} is"),
+                };
+                eprintln!(
+                    "note: {ports} in use by another program; serving on port {} instead",
+                    server.addr().port()
+                );
+            }
+            server
+        };
         if !host.is_loopback() {
             eprintln!(
                 "warning: listening on {host}, reachable from other machines on that network (each page still needs the token)"

@@ -50,9 +50,9 @@ def shots():
     return path
 
 
-def open_lab(browser, url):
+def open_lab(browser, url, width=1280, height=900):
     """A page on the lab, connected, with its first config and frames."""
-    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    page = browser.new_page(viewport={"width": width, "height": height})
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
     page.goto(url)

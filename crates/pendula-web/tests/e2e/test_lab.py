@@ -282,3 +282,222 @@ def test_step_is_offered_only_while_paused_and_the_oscillator_has_no_angles(lab)
     wait_config(lab, "c.system === 'oscillator'")
     hint = lab.inner_text("#state-hint")
     assert "block" in hint and "degrees" not in hint
+
+
+# ----- issue 29: the lab as a newcomer met it ------------------------------------------------
+
+def boxes_meet(a, b):
+    return a["x"] < b["x"] + b["w"] and b["x"] < a["x"] + a["w"] and a["y"] < b["y"] + b["h"] and b["y"] < a["y"] + a["h"]
+
+
+def inside(p, box):
+    return box["x"] <= p["x"] <= box["x"] + box["w"] and box["y"] <= p["y"] <= box["y"] + box["h"]
+
+
+def assert_legend_clear(page, canvas, labels):
+    g = page.evaluate(f"lab.geometry('{canvas}')")
+    assert g and g["legend"], f"{canvas} has a legend"
+    assert g["legendTexts"] == labels, (canvas, g["legendTexts"])
+    assert not boxes_meet(g["legend"], g["area"]), f"{canvas}: the legend {g['legend']} lies on the data's area {g['area']}"
+    for p in g.get("newest", []):
+        assert inside(p, g["area"]) and not inside(p, g["legend"]), (canvas, p, g)
+    return g
+
+
+def test_legends_never_cover_the_newest_data(lab, shots):
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'race', methods: ['euler', 'rk4', 'verlet', 'gauss-legendre-4'],"
+                 " dt: 0.01, speed: 20})")
+    c = wait_config(lab, "c.mode === 'race' && c.tracks.length === 4")
+    labels = [t["label"] for t in c["tracks"]]
+    lab.wait_for_function("lab.frame.t > 40 && lab.energyHistory.every(h => h.length > 50)", timeout=30000)
+    lab.wait_for_timeout(300)
+    g = assert_legend_clear(lab, "energy-plot", labels)
+    # The newest points are at the right end of the energy plot: where the legend was.
+    assert len(g["newest"]) == 4 and all(p["x"] > g["area"]["x"] + 0.9 * g["area"]["w"] for p in g["newest"]), g
+    assert_legend_clear(lab, "sim-canvas", labels)
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'butterfly', count: 16, delta: 1e-9, method: 'rk4', speed: 4})")
+    c = wait_config(lab, "c.mode === 'butterfly' && c.tracks.length === 16")
+    lab.wait_for_function("lab.frame.t > 8 && lab.separation.length > 20", timeout=30000)
+    lab.wait_for_timeout(300)
+    assert_legend_clear(lab, "sim-canvas", [f"k={k}" for k in range(16)])
+    assert_legend_clear(lab, "energy-plot", [f"k={k}" for k in range(16)])
+    g = assert_legend_clear(lab, "separation-plot", [f"k={k}" for k in range(1, 16)])
+    assert len(g["newest"]) == 15
+
+
+def test_the_lab_fits_a_1024_by_768_projector(browser, server, shots):
+    page = open_lab(browser, server, 1024, 768)
+    try:
+        fits = """(() => {
+            const p = document.querySelector('.energy-panel').getBoundingClientRect();
+            const e = document.querySelector('.energy-panel');
+            return {scroll: document.documentElement.scrollWidth, body: document.body.scrollWidth,
+                    right: p.right, inner: e.scrollWidth - e.clientWidth};
+        })()"""
+        for mode in ["single", "race", "butterfly"]:
+            page.evaluate(f"lab.send({{cmd: 'configure', mode: '{mode}'}})")
+            wait_config(page, f"c.mode === '{mode}'")
+            page.wait_for_timeout(400)
+            f = page.evaluate(fits)
+            print(mode, f)
+            assert f["scroll"] <= 1024 and f["body"] <= 1024, (mode, f)
+            assert f["right"] <= 1024 and f["inner"] <= 0, f"{mode}: the Energy panel is cut: {f}"
+            if mode == "race":
+                page.screenshot(path=str(shots / "projector-1024x768.png"))
+        for tab in ["graphs", "fractal", "export", "sim"]:
+            page.click(f"#tab-{tab}")
+            page.wait_for_timeout(200)
+            width = page.evaluate("document.documentElement.scrollWidth")
+            assert width <= 1024, (tab, width)
+        assert page.js_errors == [], page.js_errors
+    finally:
+        page.close()
+
+
+def test_the_integrator_menu_is_disabled_where_the_server_ignores_it(lab):
+    disabled = """(() => ({method: document.getElementById('method').disabled,
+        hint: !document.getElementById('method-hint').hidden,
+        race: [...document.querySelectorAll('#race-methods input')].every(i => i.disabled),
+        count: document.getElementById('count').disabled, delta: document.getElementById('delta').disabled}))()"""
+    assert lab.evaluate(disabled) == {"method": False, "hint": False, "race": True, "count": True, "delta": True}
+    lab.select_option("#mode", "race")
+    c = wait_config(lab, "c.mode === 'race'")
+    lab.wait_for_timeout(100)
+    assert lab.evaluate(disabled) == {"method": True, "hint": True, "race": False, "count": True, "delta": True}
+    # A race's tracks are the ticked methods, whatever the menu says.
+    assert [t["method"] for t in c["tracks"]] == c["methods"]
+    lab.select_option("#mode", "butterfly")
+    c = wait_config(lab, "c.mode === 'butterfly'")
+    lab.wait_for_timeout(100)
+    assert lab.evaluate(disabled) == {"method": False, "hint": False, "race": True, "count": False, "delta": False}
+    # A butterfly runs every pendulum with the menu's method: the menu stays on, and acts.
+    lab.select_option("#method", "verlet")
+    c = wait_config(lab, "c.method === 'verlet'")
+    assert {t["method"] for t in c["tracks"]} == {"verlet"}
+
+
+def test_a_malformed_share_link_gets_a_notice(browser, server):
+    import json
+    import urllib.parse
+    page = open_lab(browser, server + "#" + urllib.parse.quote('{"method": "verlet", oops'))
+    try:
+        page.wait_for_function("lab.notices.length > 0")
+        notice = page.evaluate("lab.notices[0]")
+        assert "could not be read" in notice and "not JSON" in notice and "defaults" in notice, notice
+        assert page.is_visible("#error") and "could not be read" in page.inner_text("#error")
+        assert config(page)["method"] == "rk4", "the defaults"
+    finally:
+        page.close()
+    share = {"method": "verlet", "colour": "red"}
+    page = open_lab(browser, server + "#" + urllib.parse.quote(json.dumps(share)))
+    try:
+        wait_config(page, "c.method === 'verlet'")
+        notice = page.evaluate("lab.notices[0]")
+        assert '"colour"' in notice and "ignored" in notice and "others were applied" in notice, notice
+    finally:
+        page.close()
+
+
+def test_a_wrong_token_stops_retrying_and_says_what_to_do(browser, server):
+    page = browser.new_page()
+    sockets = []
+    page.on("websocket", lambda ws: sockets.append(ws.url))
+    try:
+        bad = server.replace("token=", "token=00")
+        page.goto(bad)
+        page.wait_for_function("lab.gaveUp", timeout=10000)
+        # The old page retried after 1 s, 3 s, 5 s…: over 7 s it would have tried three times more.
+        page.wait_for_timeout(7000)
+        assert len(sockets) == 1 and page.evaluate("lab.socketAttempts") == 1, sockets
+        assert "wrong access token" in page.inner_text("#status")
+        message = page.inner_text("#error")
+        assert "pendula serve" in message and "token" in message and "does not retry" in message, message
+    finally:
+        page.close()
+
+
+def test_the_error_banner_overlays_the_page_without_moving_it(lab):
+    before = lab.evaluate("[document.querySelector('main').getBoundingClientRect().top,"
+                          " document.getElementById('method').getBoundingClientRect().top]")
+    assert not lab.is_visible("#error")
+    lab.select_option("#method", "yoshida-4")
+    lab.wait_for_function("lab.errors.length > 0")
+    assert lab.is_visible("#error")
+    after = lab.evaluate("[document.querySelector('main').getBoundingClientRect().top,"
+                         " document.getElementById('method').getBoundingClientRect().top]")
+    assert after == before, (before, after)
+    assert lab.evaluate("getComputedStyle(document.getElementById('error')).position") in ("fixed", "absolute")
+    lab.click("#error-close")
+    assert not lab.is_visible("#error")
+
+
+def png_size(data):
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+def test_the_png_export_has_a_title_axis_labels_and_legends(lab, shots):
+    import base64
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'race', methods: ['euler', 'rk4', 'verlet'], dt: 0.01, speed: 10})")
+    c = wait_config(lab, "c.mode === 'race' && c.tracks.length === 3")
+    labels = [t["label"] for t in c["tracks"]]
+    lab.wait_for_function("lab.frame.t > 10", timeout=20000)
+    lab.click("#tab-export")
+    with lab.expect_download() as d:
+        lab.click("#export-png")
+    data = open(d.value.path(), "rb").read()
+    (shots / "export-race.png").write_bytes(data)
+    e = lab.evaluate("lab.lastExport")
+    assert png_size(data) == (e["width"], e["height"]), (png_size(data), e)
+    panels = {p["canvas"]: p for p in e["panels"]}
+    assert set(panels) == {"sim-canvas", "energy-plot"}, panels
+    assert panels["sim-canvas"]["legend"] == labels
+    energy = panels["energy-plot"]
+    assert energy["xLabel"] == "t (s)" and energy["yLabel"] == "|E − E₀| / scale" and energy["legend"] == labels, energy
+    assert "race of euler, rk4, verlet" in e["title"] and "t = " in e["title"], e["title"]
+    # The title band holds text (dark pixels), which the bare canvases never had.
+    dark = lab.evaluate("""async ([b64, rows]) => {
+        const img = new Image();
+        img.src = 'data:image/png;base64,' + b64;
+        await img.decode();
+        const c = document.createElement('canvas');
+        c.width = img.width; c.height = img.height;
+        const x = c.getContext('2d');
+        x.drawImage(img, 0, 0);
+        const d = x.getImageData(0, 0, img.width, rows).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] < 90 && d[i + 1] < 90 && d[i + 2] < 90) n++;
+        return n;
+    }""", [base64.b64encode(data).decode(), e["titleHeight"]])
+    assert dark > 200, dark
+    # A single run's picture gets its legend too (the method), for the PNG only.
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'single', method: 'rk4'})")
+    wait_config(lab, "c.mode === 'single'")
+    lab.wait_for_function("lab.frame.tracks.length === 1 && lab.frame.t > 1")
+    e = lab.evaluate("(() => { lab.exportFigure(); return lab.lastExport; })()")
+    assert {p["canvas"]: p["legend"] for p in e["panels"]} == {"sim-canvas": ["rk4"], "energy-plot": ["rk4"]}
+    lab.click("#tab-sim")
+    lab.wait_for_timeout(200)
+    assert lab.evaluate("lab.geometry('sim-canvas').legend") is None, "on the page, no legend for one pendulum"
+
+
+def test_race_trails_stay_readable_at_high_speed(lab, shots):
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'race', methods: ['euler', 'rk4', 'verlet', 'gauss-legendre-4'],"
+                 " dt: 0.01, speed: 50})")
+    wait_config(lab, "c.mode === 'race' && c.tracks.length === 4")
+    lab.wait_for_function("lab.frame.t > 40", timeout=30000)
+    lab.wait_for_timeout(500)
+    trail = lab.evaluate("lab.trail")
+    print("speed 50:", trail)
+    # Frames come 50/60 s apart: no chord joins them, and the trail spans at most 3 s.
+    assert trail["gap"] > 0.5 and trail["segments"] == 0, trail
+    assert all(s <= 3 for s in trail["spans"]) and all(n <= 5 for n in trail["points"]), trail
+    assert "trail as dots" in lab.inner_text("#sim-info")
+    lab.screenshot(path=str(shots / "race-speed-50.png"))
+    lab.evaluate("lab.send({cmd: 'speed', value: 1})")
+    lab.wait_for_timeout(3500)
+    trail = lab.evaluate("lab.trail")
+    print("speed 1:", trail)
+    assert trail["gap"] < 0.05 and trail["segments"] > 4 * 30, trail
+    assert all(2 < s <= 3 for s in trail["spans"]), trail
+    assert "trail as dots" not in lab.inner_text("#sim-info")
