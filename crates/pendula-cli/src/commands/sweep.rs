@@ -414,7 +414,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
     // a finished sweep's checkpoint goes in the same step.
     summary.write_then(&description, files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
     eprintln!(
-        "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
+        "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?} and {}",
         sweep.info().name,
         end - start,
         if sharded {
@@ -427,7 +427,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         Short(sweep.spec().h),
         out_path.display(),
         shape,
-        format!(" and {}", side_path.display()),
+        side_path.display(),
     );
     Ok(())
 }
