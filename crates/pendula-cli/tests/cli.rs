@@ -994,6 +994,166 @@ fn simulate_plot_and_pendula_plot_write_pictures() {
     assert_eq!(size("f-plot.png"), (900, 760));
 }
 
+/// The texts of an SVG picture (its title, axis labels, tick labels, legend and notes), each
+/// trimmed.
+fn svg_texts(path: &Path) -> Vec<String> {
+    let svg = std::fs::read_to_string(path).unwrap();
+    svg.split("<text")
+        .skip(1)
+        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim().to_owned())
+        .collect()
+}
+
+/// `plot` draws the tables of `compare` and `stability` as one bar per method (the method
+/// column as the bar labels, a refused method's note saying so), and `convergence`'s as one
+/// line per method (the methods as the legend).
+#[test]
+fn plot_draws_the_method_tables() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let methods = ["euler", "rk4", "verlet", "tao-2"];
+    pendula(d)
+        .args([
+            "compare",
+            "pendulum",
+            "--methods",
+            "euler,rk4,verlet",
+            "--dt",
+            "0.05",
+            "--t-end",
+            "20",
+            "--out-dir",
+            "c",
+        ])
+        .assert()
+        .success();
+    pendula(d).args(["plot", "c/summary.csv", "--out", "compare.svg"]).assert().success();
+    let texts = svg_texts(&d.join("compare.svg"));
+    for m in &methods[..3] {
+        assert!(texts.iter().any(|t| t == m), "{m} is a bar label: {texts:?}");
+    }
+    assert!(texts.iter().any(|t| t == "max_rel_energy_error"), "the value axis: {texts:?}");
+    assert!(
+        texts.iter().any(|t| t.contains("growing")) && texts.iter().any(|t| t.contains("bounded")),
+        "{texts:?}"
+    );
+    // Another column on request; a text column is not one to draw.
+    pendula(d).args(["plot", "c/summary.csv", "--y", "drift_rate", "--out", "drift.svg"]).assert().success();
+    assert!(svg_texts(&d.join("drift.svg")).iter().any(|t| t == "drift_rate"));
+    pendula(d).args(["plot", "c/summary.csv", "--y", "growth"]).assert().code(2).stderr(
+        predicate::str::contains("not a numeric column `growth`").and(predicate::str::contains("drift_rate")),
+    );
+
+    pendula(d)
+        .args([
+            "stability",
+            "double",
+            "--methods",
+            "euler,rk4,verlet,tao-2",
+            "--t-end",
+            "2",
+            "--out-dir",
+            "s",
+        ])
+        .assert()
+        .success();
+    pendula(d).args(["plot", "s/stability.csv", "--out", "stability.svg"]).assert().success();
+    let texts = svg_texts(&d.join("stability.svg"));
+    for m in methods {
+        assert!(texts.iter().any(|t| t == m), "{m} is a bar label: {texts:?}");
+    }
+    assert!(texts.iter().any(|t| t.contains("refused")), "tao-2 is refused above 1/binding: {texts:?}");
+
+    pendula(d)
+        .args(["convergence", "oscillator", "--methods", "euler,rk4,verlet", "--out-dir", "v"])
+        .assert()
+        .success();
+    pendula(d).args(["plot", "v/convergence.csv", "--out", "convergence.svg"]).assert().success();
+    let texts = svg_texts(&d.join("convergence.svg"));
+    for m in &methods[..3] {
+        assert_eq!(texts.iter().filter(|t| t == m).count(), 1, "{m} once in the legend: {texts:?}");
+    }
+    assert!(texts.iter().any(|t| t == "dt") && texts.iter().any(|t| t == "error"), "{texts:?}");
+}
+
+/// `fractal` and `sweep` write a description beside their arrays (FILE.npy.json), from
+/// which `plot` names the axes and the colour bar, with units.
+#[test]
+fn plot_names_grids_from_their_descriptions() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    pendula(d)
+        .args([
+            "fractal",
+            "--grid",
+            "theta1=-3:3:12",
+            "--grid",
+            "theta2=-3:3:10",
+            "--t-max",
+            "2",
+            "--out",
+            "f.npy",
+        ])
+        .assert()
+        .success();
+    let description: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("f.npy.json")).unwrap()).unwrap();
+    assert_eq!(description["axis_units"], serde_json::json!(["rad", "rad"]));
+    assert_eq!(description["units"][0], "s");
+    pendula(d).args(["plot", "f.npy", "--out", "f.svg"]).assert().success();
+    let texts = svg_texts(&d.join("f.svg"));
+    for label in ["θ₁ (rad)", "θ₂ (rad)", "time to first flip (s)"] {
+        assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
+    }
+    assert!(!texts.iter().any(|t| t.contains("index")), "{texts:?}");
+    pendula(d).args(["plot", "f-converged.npy", "--out", "c.svg"]).assert().success();
+    let texts = svg_texts(&d.join("c.svg"));
+    for label in ["θ₁ (rad)", "θ₂ (rad)", "converged (1) or not (0)"] {
+        assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
+    }
+
+    pendula(d)
+        .args([
+            "sweep",
+            "--grid",
+            "theta1=0:2:6",
+            "--grid",
+            "omega1=0:1:5",
+            "--t-end",
+            "0.5",
+            "--out",
+            "s.npy",
+        ])
+        .assert()
+        .success();
+    pendula(d).args(["plot", "s.npy", "--y", "omega2", "--out", "s.svg"]).assert().success();
+    let texts = svg_texts(&d.join("s.svg"));
+    for label in ["θ₁ (rad)", "ω₁ (rad/s)", "ω₂ (rad/s)"] {
+        assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
+    }
+    // A dimensionless system's sweep says so, with the symbol its presets use.
+    pendula(d)
+        .args([
+            "sweep",
+            "driven-pendulum",
+            "--grid",
+            "drive_amplitude=0.5:1.5:4",
+            "--grid",
+            "q=1:3:3",
+            "--t-end",
+            "1",
+            "--out",
+            "g.npy",
+        ])
+        .assert()
+        .success();
+    pendula(d).args(["plot", "g.npy", "--out", "g.svg"]).assert().success();
+    let texts = svg_texts(&d.join("g.svg"));
+    for label in ["drive amplitude g (dimensionless)", "q (dimensionless)", "θ (rad)"] {
+        assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
+    }
+}
+
 #[test]
 fn plot_bad_input_exits_2_and_writes_nothing() {
     let csv = "t,theta,omega,energy\n0,1,0,-4.9\n0.1,0.9,-1,-4.9\n";

@@ -305,6 +305,7 @@ fn fractal_writes_into_its_study_directory_by_default() {
             "pendula-out/fractal/fractal-converged.npy",
             "pendula-out/fractal/fractal-converged.png",
             "pendula-out/fractal/fractal.npy",
+            "pendula-out/fractal/fractal.npy.json",
             "pendula-out/fractal/fractal.png",
         ]
     );

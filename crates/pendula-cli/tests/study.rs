@@ -211,6 +211,45 @@ fn animate_writes_a_gif_with_one_frame_per_sample() {
     assert_eq!(frames, 11);
 }
 
+/// The texts of an SVG picture (title, axis labels, ticks, legend, notes), each trimmed.
+fn svg_texts(path: &Path) -> Vec<String> {
+    let svg = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    svg.split("<text")
+        .skip(1)
+        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim().to_owned())
+        .collect()
+}
+
+/// A table's header and rows.
+type Table = (Vec<String>, Vec<Vec<String>>);
+
+/// The tables captioned "Data of Figure N" in a report: N, the header and the rows.
+fn figure_tables(html: &str) -> Vec<(usize, Table)> {
+    let unescape =
+        |s: &str| s.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&amp;", "&");
+    html.split("<caption>Data of Figure ")
+        .skip(1)
+        .map(|t| {
+            let (n, rest) = t.split_once("</caption>").unwrap();
+            let table = rest.split("</table>").next().unwrap();
+            let mut rows = table.split("<tr>").skip(1);
+            let header = rows
+                .next()
+                .unwrap()
+                .split("<th>")
+                .skip(1)
+                .map(|c| unescape(c.split("</th>").next().unwrap()))
+                .collect();
+            let rows = rows
+                .map(|r| {
+                    r.split("<td>").skip(1).map(|c| unescape(c.split("</td>").next().unwrap())).collect()
+                })
+                .collect();
+            (n.parse().unwrap(), (header, rows))
+        })
+        .collect()
+}
+
 #[test]
 fn report_is_one_self_contained_page() {
     let dir = TempDir::new().unwrap();
@@ -255,8 +294,131 @@ fn report_is_one_self_contained_page() {
             "repeated: {c}"
         );
     }
-    // Each figure has its parameter table.
-    assert_eq!(html.matches("<summary>Parameters of Figure").count(), captions.len() - 1, "all but the GIF");
+    // Each figure has its own table, captioned with its number, right under it (all but the
+    // GIF, whose numbers are the divergence's).
+    let tables = figure_tables(&html);
+    assert_eq!(tables.len(), captions.len() - 1, "all but the GIF");
+    for (i, (n, (header, rows))) in tables.iter().enumerate() {
+        assert!(!rows.is_empty(), "Figure {n}: an empty table");
+        for row in rows {
+            assert_eq!(row.len(), header.len(), "Figure {n}: {row:?}");
+            for c in row {
+                // Integers as integers: no 30.0000, 2.0000 (a whole number through the
+                // four-decimal format of reals).
+                let whole = c.split_once('.').is_some_and(|(a, b)| {
+                    !a.is_empty()
+                        && a.trim_start_matches('-').chars().all(|d| d.is_ascii_digit())
+                        && b == "0000"
+                });
+                assert!(!whole, "Figure {n}: {c} is a whole number printed as a float");
+            }
+        }
+        for (m, other) in &tables[i + 1..] {
+            assert!(other != &tables[i].1, "Figures {n} and {m} share a table");
+        }
+    }
+    let table =
+        |n: usize| &tables.iter().find(|t| t.0 == n).unwrap_or_else(|| panic!("Figure {n}: no table")).1;
+    let column = |n: usize, name: &str| -> Vec<String> {
+        let (header, rows) = table(n);
+        let k = header
+            .iter()
+            .position(|h| h.contains(name))
+            .unwrap_or_else(|| panic!("Figure {n}: {name} in {header:?}"));
+        rows.iter().map(|r| r[k].clone()).collect()
+    };
+    let value = |n: usize, quantity: &str| -> String {
+        let (_, rows) = table(n);
+        rows.iter().find(|r| r[0].contains(quantity)).unwrap_or_else(|| panic!("Figure {n}: {quantity}"))[1]
+            .clone()
+    };
+    // Figure 1 (the free decay) lists its regimes' errors in metres, not the resonance's.
+    assert_eq!(column(1, "regime"), ["underdamped", "critically damped", "overdamped"]);
+    assert!(
+        table(1).0.iter().any(|h| h.contains("(m)")) && !table(1).0.iter().any(|h| h.contains("amplitude"))
+    );
+    assert!(table(2).0.iter().any(|h| h.contains("amplitude")));
+    assert!(table(3).0.iter().any(|h| h.contains("lag")));
+    // Figures 8–10 (work-precision, stability) hold each method's numbers.
+    let wp = column(8, "evaluations to error");
+    assert!(wp.len() >= 10 && wp.iter().filter(|c| c.parse::<u64>().is_ok()).count() >= 8, "{wp:?}");
+    for n in [9, 10] {
+        let methods = column(n, "method");
+        let steps = column(n, "largest stable step h (s)");
+        assert!(methods.contains(&"rk4".to_owned()) && methods.contains(&"tao-2".to_owned()), "{methods:?}");
+        assert!(steps.iter().all(|h| h.parse::<f64>().is_ok_and(|h| h > 0.0)), "Figure {n}: {steps:?}");
+    }
+    for (n, quantity) in [
+        (16, "orbits"),
+        (16, "crossings"),
+        (17, "threads"),
+        (17, "pixels"),
+        (19, "threads"),
+        (19, "values of g"),
+    ] {
+        let v = value(n, quantity);
+        assert!(v.parse::<u64>().is_ok(), "Figure {n}: {quantity} = {v}");
+    }
+    // Every section's prose quotes a number; the cost and stability sections quote the
+    // numbers their figures' tables show.
+    let sections: Vec<&str> = html.split("<h2 id=\"s").skip(1).collect();
+    for (k, section) in sections.iter().enumerate() {
+        let prose: String = section.split("<figure>").next().unwrap().split("<p>").skip(1).collect();
+        assert!(prose.chars().any(|c| c.is_ascii_digit()), "section {}: no number in {prose:?}", k + 1);
+    }
+    let cost = sections[4].split("<figure>").next().unwrap();
+    let cheapest = wp.iter().filter_map(|c| c.parse::<u64>().ok()).min().unwrap();
+    assert!(cost.contains(&format!("with {cheapest} evaluations")), "{cost}");
+    let stability = sections[5].split("<figure>").next().unwrap();
+    let smallest = column(9, "largest stable step h (s)")
+        .iter()
+        .map(|h| h.parse::<f64>().unwrap())
+        .fold(f64::INFINITY, f64::min);
+    let quoted = stability.split("run from ").nth(1).unwrap().split(" s (").next().unwrap();
+    assert_eq!(quoted.parse::<f64>().unwrap(), smallest, "{stability}");
+
+    // The figures: units on every axis, one symbol per quantity, one notation per axis,
+    // slope guides out of the legend, refused methods drawn as refused.
+    let runs = dir.path().join("r/runs");
+    let divergence = svg_texts(&runs.join("divergence/divergence.svg"));
+    assert!(
+        divergence.iter().any(|t| t == "distance |Δy| in state space (rad and rad/s combined)"),
+        "{divergence:?}"
+    );
+    let bifurcation = svg_texts(&runs.join("bifurcation/bifurcation.svg"));
+    assert!(bifurcation.iter().any(|t| t == "drive amplitude g (dimensionless)"), "{bifurcation:?}");
+    assert!(!bifurcation.iter().any(|t| t.contains("amplitude A")), "{bifurcation:?}");
+    let energy = std::fs::read_dir(&runs)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with("compare_double"))
+        .unwrap();
+    let energy = svg_texts(&energy.join("energy.svg"));
+    // One notation on the time axis: plain numbers to the end (90000, 100000), not a 10⁵
+    // after them (the error axis below 1 has only negative powers).
+    let plain = energy.iter().filter(|t| t.parse::<u64>().is_ok_and(|v| v >= 100)).count();
+    let powers = energy
+        .iter()
+        .filter(|t| t.starts_with("10") && t.chars().nth(2).is_some_and(|c| "¹²³⁴⁵⁶⁷⁸⁹".contains(c)))
+        .count();
+    assert!(plain > 0 && powers == 0, "{energy:?}");
+    for system in ["oscillator", "double"] {
+        let texts = svg_texts(&runs.join(format!("convergence_{system}/convergence.svg")));
+        for p in [1, 2, 4] {
+            assert_eq!(
+                texts.iter().filter(|t| **t == format!("slope {p}")).count(),
+                1,
+                "{system}: {texts:?}"
+            );
+        }
+        assert!(!texts.iter().any(|t| t.contains("guides")), "{system}: {texts:?}");
+    }
+    let stability = svg_texts(&runs.join("stability_double/stability.svg"));
+    assert_eq!(
+        stability.iter().filter(|t| t.starts_with("refused above 0.005 s")).count(),
+        2,
+        "{stability:?}"
+    );
     // The energy sections' sentences agree with their tables: the methods called bounded and
     // growing are those the table's `error` column says.
     let energy_tables: Vec<&str> = html.split("<table class=\"energy\">").skip(1).collect();

@@ -19,6 +19,16 @@ pub struct Bar {
     /// Text beside the bar (or in its place): a status such as "unstable at every step
     /// tried"; `None` prints the value.
     pub note: Option<String>,
+    /// The value is where the method refuses to go, a limit of its definition, not a
+    /// measured result: the bar is drawn empty and hatched (its note should say "refused").
+    pub refused: bool,
+}
+
+impl Bar {
+    /// A bar of `value` (none: only the note), measured, not refused.
+    pub fn new(label: impl Into<String>, value: Option<f64>, color: Rgb, note: Option<String>) -> Self {
+        Bar { label: label.into(), value, color, note, refused: false }
+    }
 }
 
 /// A horizontal bar chart: categories from top to bottom in the order given.
@@ -179,13 +189,43 @@ impl Bars {
         for (k, b) in self.bars.iter().enumerate() {
             let y = (n - 1 - k) as f64;
             let end = b.value.filter(|v| v.is_finite() && (!log || *v > 0.0)).map(|v| v.clamp(lo, hi));
-            if let Some(v) = end {
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(lo, y + 0.18), (v, y + 0.82)],
-                        b.color.filled(),
-                    )))
-                    .map_err(draw_error)?;
+            match end {
+                Some(v) if b.refused => {
+                    // An outline with diagonal hatching: a limit, not a result.
+                    chart
+                        .draw_series(std::iter::once(Rectangle::new(
+                            [(lo, y + 0.18), (v, y + 0.82)],
+                            ShapeStyle { color: b.color.to_rgba(), filled: false, stroke_width: 2 },
+                        )))
+                        .map_err(draw_error)?;
+                    let base = root.get_base_pixel();
+                    let (a, c) = (chart.backend_coord(&(lo, y + 0.82)), chart.backend_coord(&(v, y + 0.18)));
+                    let (x0, x1, top, bottom) = (a.0 - base.0, c.0 - base.0, a.1 - base.1, c.1 - base.1);
+                    let height = bottom - top;
+                    let style = ShapeStyle { color: b.color.to_rgba(), filled: false, stroke_width: 1 };
+                    // Lines rising at 45° every 8 pixels, cut to the bar.
+                    let mut x = x0 - height;
+                    while x < x1 {
+                        let (s0, s1) = ((x0 - x).max(0), (x1 - x).min(height));
+                        if s1 > s0 {
+                            root.draw(&PathElement::new(
+                                vec![(x + s0, bottom - s0), (x + s1, bottom - s1)],
+                                style,
+                            ))
+                            .map_err(draw_error)?;
+                        }
+                        x += 8;
+                    }
+                }
+                Some(v) => {
+                    chart
+                        .draw_series(std::iter::once(Rectangle::new(
+                            [(lo, y + 0.18), (v, y + 0.82)],
+                            b.color.filled(),
+                        )))
+                        .map_err(draw_error)?;
+                }
+                None => {}
             }
             let text = Self::note(b);
             let at = chart.backend_coord(&(end.unwrap_or(lo), y + 0.5));

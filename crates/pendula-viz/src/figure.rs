@@ -35,6 +35,10 @@ pub enum Kind {
     LineMarkers,
     /// Small dots, for clouds of many points.
     Dots,
+    /// A guide to the eye, not data (a slope of reference): a thin dashed line in the
+    /// series' colour, its label written on the plot beside the line's last point instead of
+    /// in the legend.
+    Guide,
 }
 
 /// Where the legend goes.
@@ -204,11 +208,11 @@ impl Figure {
         self
     }
 
-    /// Adds a series in one colour: solid (or, for [`Kind::Dashed`], dashed) lines, round
-    /// markers.
+    /// Adds a series in one colour: solid (or, for [`Kind::Dashed`] and [`Kind::Guide`],
+    /// dashed) lines, round markers.
     pub fn with(mut self, label: impl Into<String>, color: Rgb, kind: Kind, points: Vec<(f64, f64)>) -> Self {
         let marker = matches!(kind, Kind::Markers | Kind::LineMarkers).then_some(Marker::Circle);
-        let dash = if kind == Kind::Dashed { Dash::Dashed } else { Dash::Solid };
+        let dash = if matches!(kind, Kind::Dashed | Kind::Guide) { Dash::Dashed } else { Dash::Solid };
         self.series.push(Series { label: label.into(), color, kind, points, marker, dash });
         self
     }
@@ -291,8 +295,15 @@ impl Figure {
         Ok((Axis::new(x, self.x_scale == Scale::Log), Axis::new(y, self.y_scale == Scale::Log)))
     }
 
+    /// The series in the legend: those with a label, guides aside (their label is on the
+    /// plot).
     fn labelled(&self) -> impl Iterator<Item = &Series> {
-        self.series.iter().filter(|s| !s.label.is_empty())
+        self.series.iter().filter(|s| !s.label.is_empty() && s.kind != Kind::Guide)
+    }
+
+    /// The legend's entries, in order.
+    pub fn legend_entries(&self) -> Vec<&str> {
+        self.labelled().map(|s| s.label.as_str()).collect()
     }
 
     /// The legend's size in pixels.
@@ -419,8 +430,9 @@ impl Figure {
             .map_err(draw_error)?;
         for (index, s) in self.series.iter().enumerate() {
             let points: Vec<(f64, f64)> = self.visible(s).collect();
-            let line = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: 2 };
-            if matches!(s.kind, Kind::Line | Kind::Dashed | Kind::LineMarkers) {
+            let width = if s.kind == Kind::Guide { 1 } else { 2 };
+            let line = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: width };
+            if matches!(s.kind, Kind::Line | Kind::Dashed | Kind::LineMarkers | Kind::Guide) {
                 draw_line(&mut chart, points.clone(), s.dash, line)?;
             }
             let pixel = |p: &(f64, f64)| chart.backend_coord(p);
@@ -447,6 +459,25 @@ impl Figure {
                     }
                 }
                 (Kind::Line | Kind::Dashed, None) => {}
+                (Kind::Guide, _) => {
+                    // The label halfway along the line (in its points, which a guide spaces
+                    // evenly on the axes), above and left of it, on a white ground so that it
+                    // stays readable over data, in a grey darker than the line.
+                    if let (false, Some(mid)) = (s.label.is_empty(), points.get(points.len() / 2)) {
+                        let (x, y) = pixel(mid);
+                        let font = ("sans-serif", 14).into_font();
+                        let (w, h) =
+                            root.estimate_text_size(&s.label, &font.clone().into()).map_err(draw_error)?;
+                        let (x0, y0) = (x - w as i32 - 6, y - h as i32 - 6);
+                        root.draw(&Rectangle::new(
+                            [(x0 - 2, y0 - 1), (x0 + w as i32 + 2, y0 + h as i32 + 1)],
+                            WHITE.mix(0.85).filled(),
+                        ))
+                        .map_err(draw_error)?;
+                        let font = font.color(&RGBColor(90, 90, 90));
+                        root.draw(&Text::new(s.label.as_str(), (x0, y0), font)).map_err(draw_error)?;
+                    }
+                }
             }
         }
         if self.labelled().next().is_none() {

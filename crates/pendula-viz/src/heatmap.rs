@@ -72,6 +72,18 @@ impl Heatmap {
         encode_png(&rgb, w, h)
     }
 
+    /// The image as an SVG document (one rectangle per cell: large for large grids).
+    pub fn svg(&self) -> Result<String, Error> {
+        assert_eq!(self.values.len(), self.nx * self.ny, "nx * ny values");
+        let mut out = String::new();
+        {
+            let root = SVGBackend::with_string(&mut out, (900, 760)).into_drawing_area();
+            self.draw(&root)?;
+            root.present().map_err(draw_error)?;
+        }
+        Ok(out)
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> Result<(), Error> {
         ensure_font();
         root.fill(&WHITE).map_err(draw_error)?;

@@ -20,6 +20,15 @@ const GREEK: [(&str, &str); 12] = [
 /// Names of parameters and their symbols.
 const NAMED: [(&str, &str); 2] = [("drive_amplitude", "A"), ("drive_frequency", "Ω")];
 
+/// Parameters whose symbol in a system differs from [`NAMED`]'s: the symbol its catalogue
+/// description, presets and references use (Baker and Gollub's drive amplitude g and
+/// frequency ω_D; the oscillator's driving force F).
+const SYSTEM_NAMED: [(&str, &str, &str); 3] = [
+    ("driven-pendulum", "drive_amplitude", "g"),
+    ("driven-pendulum", "drive_frequency", "ω_D"),
+    ("oscillator", "drive_amplitude", "F"),
+];
+
 fn subscript(digits: &str) -> String {
     digits.chars().map(|c| char::from_u32(0x2080 + c.to_digit(10).unwrap_or(0)).unwrap_or(c)).collect()
 }
@@ -49,12 +58,30 @@ pub fn unit(unit: &str) -> String {
     unit.replace("^-1", "⁻¹").replace("^2", "²").replace("^3", "³").replace('*', " ")
 }
 
+/// The symbol of `name` in `system`: [`pretty`]'s, unless the system writes it otherwise
+/// (the driven pendulum's drive amplitude is g, as in its description and presets).
+pub fn symbol(system: &str, name: &str) -> String {
+    SYSTEM_NAMED
+        .iter()
+        .find(|(s, n, _)| *s == system && *n == name)
+        .map_or_else(|| pretty(name), |(_, _, symbol)| (*symbol).to_owned())
+}
+
+/// [`axis_label`] with the symbol `system` uses for `name` (see [`symbol`]):
+/// `drive amplitude g (dimensionless)` for the driven pendulum.
+pub fn system_axis_label(system: &str, name: &str, unit_text: &str) -> String {
+    label_of(name, symbol(system, name), unit_text)
+}
+
 /// An axis label: the symbol and its unit in parentheses, `θ₁ (rad)`, or
 /// `ω (dimensionless)` for a quantity without a unit (the catalogue's `1`, or the empty
 /// unit of time in a dimensionless system). A name of several words keeps its words
 /// before the symbol: `drive amplitude A (dimensionless)`.
 pub fn axis_label(name: &str, unit_text: &str) -> String {
-    let symbol = pretty(name);
+    label_of(name, pretty(name), unit_text)
+}
+
+fn label_of(name: &str, symbol: String, unit_text: &str) -> String {
     let symbol = if name.contains('_') && symbol != name {
         format!("{} {symbol}", name.replace('_', " "))
     } else {
@@ -109,5 +136,12 @@ mod tests {
         assert_eq!(with_unit(0.01, "s"), "0.01 s");
         assert_eq!(with_unit(0.01, ""), "0.01");
         assert_eq!(with_unit(3, "1"), "3");
+        assert_eq!(
+            system_axis_label("driven-pendulum", "drive_amplitude", "1"),
+            "drive amplitude g (dimensionless)"
+        );
+        assert_eq!(system_axis_label("double", "drive_amplitude", "N m"), "drive amplitude A (N m)");
+        assert_eq!(system_axis_label("oscillator", "drive_amplitude", "N"), "drive amplitude F (N)");
+        assert_eq!(system_axis_label("double", "theta1", "rad"), "θ₁ (rad)");
     }
 }

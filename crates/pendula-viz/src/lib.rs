@@ -24,7 +24,7 @@ pub use animate::{Animation, Layout, Snapshot, gif_delays};
 pub use bars::{Bar, Bars};
 pub use figure::{Dash, Figure, Kind, Legend, MARKERS, Marker, Scale, Series, Style};
 pub use heatmap::Heatmap;
-pub use labels::{axis_label, pretty, unit, with_unit};
+pub use labels::{axis_label, pretty, symbol, system_axis_label, unit, with_unit};
 pub use ticks::number;
 
 use plotters::style::RGBColor;

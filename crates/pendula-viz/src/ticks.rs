@@ -142,17 +142,39 @@ pub fn label(v: f64, step: f64, decades: bool) -> String {
         return format!("{sign}10{}", superscript(exponent));
     }
     if (1e-3..1e5).contains(&a) {
-        // Decimals from the step (a tick every 0.05 needs two), at least those of the value.
-        let step = if step > 0.0 && step.is_finite() { step } else { a };
-        let mut decimals = (-step.log10().floor()).max(0.0) as usize;
-        while decimals < 6
-            && ((a * 10f64.powi(decimals as i32)).round() / 10f64.powi(decimals as i32) - a).abs() > 1e-9 * a
-        {
-            decimals += 1;
-        }
-        return format!("{sign}{a:.decimals$}");
+        return fixed(v, step);
     }
-    if power_of_ten {
+    scientific(v)
+}
+
+/// `v` as a plain decimal, with as many decimals as `step` (the spacing of the ticks)
+/// needs, and at least those of the value.
+fn fixed(v: f64, step: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let (a, sign) = (v.abs(), if v < 0.0 { "−" } else { "" });
+    // Decimals from the step (a tick every 0.05 needs two), at least those of the value.
+    let step = if step > 0.0 && step.is_finite() { step } else { a };
+    let mut decimals = (-step.log10().floor()).max(0.0) as usize;
+    while decimals < 6
+        && ((a * 10f64.powi(decimals as i32)).round() / 10f64.powi(decimals as i32) - a).abs() > 1e-9 * a
+    {
+        decimals += 1;
+    }
+    format!("{sign}{a:.decimals$}")
+}
+
+/// `v` as m × 10ⁿ, or 10ⁿ when m is 1.
+fn scientific(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let (a, sign) = (v.abs(), if v < 0.0 { "−" } else { "" });
+    let exponent = a.log10().floor() as i32;
+    let exponent = if 10f64.powi(exponent + 1) <= a * (1.0 + 1e-12) { exponent + 1 } else { exponent };
+    let mantissa = a / 10f64.powi(exponent);
+    if (mantissa - 1.0).abs() < 1e-9 {
         return format!("{sign}10{}", superscript(exponent));
     }
     let m = format!("{mantissa:.2}");
@@ -224,7 +246,23 @@ impl Axis {
             return "0".into();
         }
         let decades = self.log && self.ticks.major.iter().all(|m| is_power_of_ten(*m));
-        label(v, step, decades)
+        if decades {
+            return label(v, step, true);
+        }
+        // One notation per axis: plain decimals when every labelled value reads well so, else
+        // m × 10ⁿ for all (not 90000 followed by 10⁵).
+        if self.plain() { fixed(v, step) } else { scientific(v) }
+    }
+
+    /// Whether every nonzero labelled value of this axis prints as a plain decimal:
+    /// none below 10⁻³ nor at or above 10⁶ in magnitude.
+    fn plain(&self) -> bool {
+        self.ticks
+            .major
+            .iter()
+            .map(|m| m.abs())
+            .filter(|m| *m > 1e-9 * (self.hi - self.lo))
+            .all(|m| (1e-3..1e6).contains(&m))
     }
 }
 

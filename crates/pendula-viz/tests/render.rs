@@ -179,7 +179,7 @@ fn bars_list_every_category_with_its_note() {
     for (i, m) in pendula::integrator::METHODS.iter().enumerate() {
         let value = if i == 0 { None } else { Some(1e-3 * (i as f64)) };
         let note = if i == 0 { Some("unstable at every step tried".to_owned()) } else { None };
-        bars.bars.push(Bar { label: m.name.to_owned(), value, color: method_color(m.name), note });
+        bars.bars.push(Bar::new(m.name, value, method_color(m.name), note));
     }
     let bytes = bars.png().unwrap();
     dump("bars.png", &bytes);
@@ -269,4 +269,72 @@ fn heat_maps_of_extreme_values_are_drawn() {
             assert!(w > 0 && h > 0);
         }
     }
+}
+
+/// The texts of an SVG document, trimmed.
+fn texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim().to_owned())
+        .collect()
+}
+
+/// One notation per axis: an axis to 100 000 reads 90000, 100000 (not 90000, 10⁵); one
+/// whose ticks reach 10⁶ writes them all as m × 10ⁿ.
+#[test]
+fn tick_labels_of_an_axis_share_one_notation() {
+    let line = |hi: f64| {
+        Figure::new("t", "t (s)", "y").with("", method_color("rk4"), Kind::Line, vec![(0.0, 1.0), (hi, 2.0)])
+    };
+    let labels = texts(&line(1e5).svg().unwrap());
+    assert!(labels.iter().any(|t| t == "90000") && labels.iter().any(|t| t == "100000"), "{labels:?}");
+    assert!(!labels.iter().any(|t| t.contains('⁵')), "{labels:?}");
+    let labels = texts(&line(3e6).svg().unwrap());
+    assert!(labels.iter().any(|t| t == "10⁶") && labels.iter().any(|t| t == "2×10⁶"), "{labels:?}");
+    assert!(!labels.iter().any(|t| t == "500000"), "{labels:?}");
+}
+
+/// A guide is named on the plot, not in the legend, and drawn thin and dashed.
+#[test]
+fn guides_are_named_on_the_plot_not_in_the_legend() {
+    let points: Vec<(f64, f64)> = (1..=10).map(|k| (k as f64, (k * k) as f64)).collect();
+    let fig = Figure::new("t", "h (s)", "error")
+        .scales(Scale::Log, Scale::Log)
+        .with_style("rk4", method_style("rk4"), Kind::LineMarkers, points.clone())
+        .with(
+            "slope 2",
+            pendula_viz::GUIDE,
+            Kind::Guide,
+            points.iter().map(|(x, y)| (*x, y / 10.0)).collect(),
+        );
+    assert_eq!(fig.legend_entries(), ["rk4"]);
+    let svg = fig.svg().unwrap();
+    assert!(texts(&svg).iter().any(|t| t == "slope 2"), "the guide is named on the plot");
+    assert_eq!(fig.series[1].dash, pendula_viz::Dash::Dashed);
+    assert!(svg.contains("stroke=\"#969696\" stroke-width=\"1\""), "a thin grey line");
+}
+
+/// A refused bar is an empty hatched outline, not a filled bar like a result.
+#[test]
+fn refused_bars_are_hatched_not_filled() {
+    let color = method_color("tao-2");
+    let mut bars = Bars::new("largest stable step", "h (s)", Scale::Log);
+    bars.limits = Some((1e-5, 2.0));
+    bars.bars.push(Bar::new("measured", Some(0.005), color, None));
+    bars.bars.push(Bar {
+        refused: true,
+        ..Bar::new("refused", Some(0.005), color, Some("refused above 0.005 s".into()))
+    });
+    let (w, h, pixels) = decode(&bars.png().unwrap());
+    assert_eq!(h, 130 + 34 * 2);
+    // The colour's pixels in the upper (measured) and lower (refused) half of the bars.
+    let count = |rows: std::ops::Range<u32>| {
+        rows.flat_map(|y| (0..w).map(move |x| ((y * w + x) * 3) as usize))
+            .filter(|&i| pixels[i] == color.0 && pixels[i + 1] == color.1 && pixels[i + 2] == color.2)
+            .count()
+    };
+    let (filled, hatched) = (count(0..h / 2), count(h / 2..h));
+    assert!(filled > 2000, "{filled}");
+    assert!(hatched > 100 && hatched * 3 < filled, "refused: {hatched} pixels of colour, measured: {filled}");
+    assert!(texts(&bars.svg().unwrap()).iter().any(|t| t == "refused above 0.005 s"));
 }

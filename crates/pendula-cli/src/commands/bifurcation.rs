@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
-use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, unit, with_unit};
+use pendula_viz::{Figure, Kind, Scale, palette, pretty, unit, with_unit};
 use serde_json::json;
 
 use crate::args::{Defaults, PresetArg, SystemArg, ThreadsArg};
@@ -200,7 +200,8 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
             "{system}: {samples} samples per value after t = {} (RK4, {m} steps/period)",
             with_unit(transient, tu)
         ),
-        axis_label(&axis.name, info.quantity(&axis.name)?.unit),
+        // The symbol of the system's own text and presets (g for Baker and Gollub's drive).
+        pendula_viz::system_axis_label(info.name, &axis.name, info.quantity(&axis.name)?.unit),
         format!(
             "{} at drive phase 0 ({})",
             pretty(state[variable].name),

@@ -197,7 +197,8 @@ pub fn study_orders(
     Ok((results, reference))
 }
 
-/// Error against step on log-log axes, with dashed guides of slope 1, 2 and 4.
+/// Error against step on log-log axes, with guides of slope 1, 2 and 4 (thin, dashed, grey,
+/// each named "slope p" at its end, outside the legend).
 pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference: &str) -> Figure {
     let tu = pendula::model::find(system).map_or("s", |i| i.time_unit());
     let mut fig = Figure::new(
@@ -244,8 +245,8 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
                 .map(|h| (h, c * h.powi(p)))
                 .filter(|(_, e)| *e >= floor)
                 .collect();
-            let label = if p == 1 { "guides: slopes 1, 2, 4" } else { "" };
-            fig = fig.with(label, GUIDE, Kind::Dashed, line);
+            // A guide, not data: thin, dashed, grey, named on the line and not in the legend.
+            fig = fig.with(format!("slope {p}"), GUIDE, Kind::Guide, line);
         }
     }
     fig

@@ -121,7 +121,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             method.name
         ),
         axis_label("t", tu),
-        "distance in state space",
+        distance_label(info),
     )
     .scales(Scale::Linear, Scale::Log);
     let positive: Vec<(f64, f64)> =
@@ -160,4 +160,22 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         }),
     )?;
     Ok(())
+}
+
+/// The label of the distance axis: the Euclidean norm of the difference of the two states,
+/// whose components have the state's units (angles and angular velocities mixed, for the
+/// double pendulum), so its unit is theirs combined as plain numbers.
+pub fn distance_label(info: &pendula::system::SystemInfo) -> String {
+    let mut units: Vec<String> = Vec::new();
+    for q in info.state {
+        let u = pendula_viz::unit(q.unit);
+        if !u.is_empty() && !units.contains(&u) {
+            units.push(u);
+        }
+    }
+    match units.as_slice() {
+        [] => "distance |Δy| in state space (dimensionless)".to_owned(),
+        [one] => format!("distance |Δy| in state space ({one})"),
+        many => format!("distance |Δy| in state space ({} combined)", many.join(" and ")),
+    }
 }

@@ -5,7 +5,8 @@
 //! Writes FILE.npy (float64, shape (N₂, N₁), θ₁ fastest as in `pendula sweep`, NaN where no
 //! flip happens before --t-max), FILE.png (viridis, log time, colour bar; black: no flip),
 //! FILE-converged.npy (uint8, 1 where the flip time moved by at most --tolerance between the
-//! two steps) and FILE-converged.png, in `--out-dir` (default `pendula-out/fractal/`, with
+//! two steps), FILE-converged.png and FILE.npy.json (the description `plot` names the axes,
+//! values and units by) in `--out-dir` (default `pendula-out/fractal/`, with
 //! FILE = fractal) or beside `--out FILE.npy`; all files appear whole or not at all.
 
 use std::path::{Path, PathBuf};
@@ -378,7 +379,8 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         Some(_) => None,
         None => Some(OutDir::new(args.out_dir.as_deref(), "fractal")?),
     };
-    let names = ["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"];
+    let names =
+        ["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png", "fractal.npy.json"];
     let (paths, files): (Vec<PathBuf>, Vec<AtomicFile>) = match (&args.out, &dir) {
         (Some(out), _) => {
             let paths = [
@@ -386,6 +388,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
                 beside(out, ".png"),
                 beside(out, "-converged.npy"),
                 beside(out, "-converged.png"),
+                beside(out, ".npy.json"),
             ];
             let files = paths.iter().map(|p| AtomicFile::create(p, "--out")).collect::<Result<_>>()?;
             (paths.to_vec(), files)
@@ -480,7 +483,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     let flipped = fractal.flip_time.iter().filter(|t| t.is_finite()).count();
     let share = unconverged as f64 / pixels as f64;
 
-    let [npy, png, flags_npy, flags_png] = <[AtomicFile; 4]>::try_from(files).expect("four files");
+    let [npy, png, flags_npy, flags_png, described] = <[AtomicFile; 5]>::try_from(files).expect("five files");
     write_npy(&npy, &[n2, n1], &fractal.flip_time)?;
     let flags: Vec<u8> = fractal.converged.iter().map(|c| u8::from(*c)).collect();
     write_npy(&flags_npy, &[n2, n1], &flags)?;
@@ -537,6 +540,32 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         )
     };
     flags_png.write_all(&flags_map.png()?)?;
+    // The description beside the arrays (FILE.npy.json, as a sweep's): what `plot` names
+    // their axes and values by.
+    let description = json!({
+        "pendula_description": 1,
+        "pendula": env!("CARGO_PKG_VERSION"),
+        "command": "fractal",
+        "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
+        "tolerance": tolerance,
+        "axes": [
+            {"name": "theta1", "lo": theta1.lo, "hi": theta1.hi, "n": n1},
+            {"name": "theta2", "lo": theta2.lo, "hi": theta2.hi, "n": n2},
+        ],
+        "axis_units": ["rad", "rad"],
+        "columns": ["flip_time"],
+        "units": ["s"],
+        "labels": ["time to first flip"],
+        "missing": format!("NaN: no flip by t_max = {t_max} s"),
+        "converged": {
+            "file": paths[2].file_name().map(|n| n.to_string_lossy().into_owned()),
+            "columns": ["converged"],
+            "labels": ["converged (1) or not (0)"],
+            "meaning": format!("1 where the flip time moved by at most {tolerance} s between dt and dt/2"),
+        },
+        "shape": [n2, n1],
+    });
+    crate::commands::sweep::write_json(&described, &description)?;
     let doc = json!({
         "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
         "tolerance": tolerance,
@@ -562,9 +591,9 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     let wrote =
         format!("wrote {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     let on_stdout = summary.on_stdout();
-    // The four files and the summary appear together or not at all, and a finished
+    // The five files and the summary appear together or not at all, and a finished
     // fractal's checkpoint goes in the same step.
-    let files = vec![npy, png, flags_npy, flags_png];
+    let files = vec![npy, png, flags_npy, flags_png, described];
     let finish = |guard: &mut crate::output::Guard<'_>| chunks.map_or(Ok(()), |c| c.finish(guard));
     match dir {
         Some(mut dir) => {

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use pendula::system::{self, SystemInfo};
-use pendula_viz::{Figure, Heatmap, Kind, Legend, palette};
+use pendula_viz::{Bar, Bars, Figure, Heatmap, Kind, Legend, Scale, method_color, method_style, palette};
 
 use crate::args::LargeArg;
 use crate::output::AtomicFile;
@@ -322,19 +322,25 @@ pub(crate) struct Grid {
     axes: Vec<(String, f64, f64, usize)>,
     /// Column names; one unnamed column for a fractal.
     columns: Vec<String>,
+    /// The axes' labels, with units where the description gives them.
+    axis_labels: Vec<String>,
+    /// The columns' labels, with units where the description gives them.
+    labels: Vec<String>,
     /// Cells, the first axis fastest, each with `columns.len()` values.
     values: Vec<f64>,
     /// A fractal's flip times (coloured by their logarithm, as `fractal` draws them).
     flip_times: bool,
 }
 
-/// The JSON description of a .npy: FILE.npy.json (a sweep shard's, or one written there),
-/// else FILE.json beside it (`--summary` of `sweep` or `fractal` under the same name; for
-/// a fractal's FILE-converged.npy, FILE.json), if it has the grid's axes.
+/// The JSON description of a .npy: FILE.npy.json (what `sweep` and `fractal` write beside
+/// their arrays), else FILE.json beside it (`--summary` of `sweep` or `fractal` under the
+/// same name; for a fractal's FILE-converged.npy, the fractal's FILE.npy.json or FILE.json),
+/// if it has the grid's axes.
 fn description(path: &Path) -> Option<serde_json::Value> {
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
     let mut candidates = vec![PathBuf::from(format!("{}.json", path.display())), path.with_extension("json")];
     if let Some(fractal) = stem.strip_suffix("-converged") {
+        candidates.push(path.with_file_name(format!("{fractal}.npy.json")));
         candidates.push(path.with_file_name(format!("{fractal}.json")));
     }
     candidates.iter().find_map(|p| {
@@ -438,15 +444,11 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
     let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     // Positive values over two decades or more (flip times) are coloured by their logarithm.
     let log = grid.flip_times || (lo > 0.0 && hi / lo >= 100.0);
-    let label = |name: &str| match pendula::model::find("double").ok().and_then(|i| i.quantity(name).ok()) {
-        Some(q) => pendula_viz::axis_label(name, q.unit),
-        None => pendula_viz::pretty(name),
-    };
     Ok(Heatmap {
         title,
-        x_label: label(&x.0),
-        y_label: label(&y.0),
-        bar_label: grid.columns[column].clone(),
+        x_label: grid.axis_labels[0].clone(),
+        y_label: grid.axis_labels[1].clone(),
+        bar_label: grid.labels[column].clone(),
         x: (x.1, x.2),
         y: (y.1, y.2),
         nx: x.3,
@@ -462,6 +464,179 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
 pub(crate) enum Contents {
     Table(Trajectory),
     Grid(Grid),
+    Categories(Categories),
+}
+
+/// A table whose first column names things (a method, in `compare`'s, `stability`'s,
+/// `convergence`'s and `work-precision`'s tables): its numeric columns are drawn per name —
+/// one bar per name when each has one row, one line per name when names repeat — and its
+/// other text columns are notes.
+pub(crate) struct Categories {
+    title: String,
+    /// The first column's name (`method`).
+    key: String,
+    /// The first column, row by row.
+    labels: Vec<String>,
+    /// Numeric columns: name and values (NaN where empty).
+    numbers: Vec<(String, Vec<f64>)>,
+    /// Text columns after the first: name and values.
+    texts: Vec<(String, Vec<String>)>,
+}
+
+/// The value column a bar chart of these columns draws by default: the headline of
+/// pendula's tables when present, else the first numeric column.
+const HEADLINES: [&str; 3] = ["max_rel_energy_error", "largest_stable_dt", "error"];
+
+impl Categories {
+    fn column(&self, name: &str) -> Result<usize> {
+        self.numbers.iter().position(|(n, _)| n == name).ok_or_else(|| {
+            let text = self.texts.iter().any(|(n, _)| n == name) || name == self.key;
+            anyhow!(
+                "{} column `{name}`: the numeric columns are {}",
+                if text { "not a numeric" } else { "unknown" },
+                self.numbers.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+            )
+        })
+    }
+
+    fn unique(&self) -> bool {
+        self.labels.iter().enumerate().all(|(i, l)| !self.labels[..i].contains(l))
+    }
+
+    /// A log scale for these values when all are positive and span two decades or more.
+    fn scale(values: impl Iterator<Item = f64>) -> Scale {
+        let (lo, hi) = values
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        if lo > 0.0 && hi / lo >= 100.0 { Scale::Log } else { Scale::Linear }
+    }
+
+    /// The style of a name: a method's own, else the i-th.
+    fn style(name: &str, i: usize) -> pendula_viz::Style {
+        if pendula::integrator::find(name).is_ok() {
+            method_style(name)
+        } else {
+            pendula_viz::series_style(i)
+        }
+    }
+
+    /// One bar per name of column `--y` (default: [`HEADLINES`]), each row's notes beside it
+    /// (the text columns, where a value is missing or a note says why); a row whose note
+    /// says it was refused is drawn as refused.
+    fn bars(&self, ys: &[String]) -> Result<Figure> {
+        let k = match ys {
+            [] => HEADLINES.iter().find_map(|h| self.column(h).ok()).unwrap_or(0),
+            [name] => self.column(name)?,
+            _ => bail!(
+                "{} has one row per {}: it is drawn as bars of one column; give one --y NAME ({})",
+                self.title,
+                self.key,
+                self.numbers.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+            ),
+        };
+        let (name, values) = &self.numbers[k];
+        let scale = Self::scale(values.iter().copied());
+        let mut bars = Bars::new(format!("{}: {name} per {}", self.title, self.key), name.clone(), scale);
+        for (r, label) in self.labels.iter().enumerate() {
+            let v = Some(values[r]).filter(|v| v.is_finite() && (scale == Scale::Linear || *v > 0.0));
+            let notes: Vec<&str> =
+                self.texts.iter().map(|(_, t)| t[r].as_str()).filter(|t| !t.is_empty()).collect();
+            let refused = notes.iter().any(|n| n.starts_with("refused"));
+            let note = match (v, notes.is_empty()) {
+                (Some(v), true) => pendula_viz::number(v),
+                (Some(v), false) => format!("{}: {}", pendula_viz::number(v), notes.join("; ")),
+                (None, false) => notes.join("; "),
+                (None, true) => "no value".to_owned(),
+            };
+            let bar = Bar::new(label.clone(), v, method_color(label), Some(shorten(&note, 90)));
+            bars.bars.push(Bar { refused, ..bar });
+        }
+        if bars.bars.iter().all(|b| b.value.is_none()) {
+            bail!("nothing to draw: column `{name}` of {} has no value", self.title);
+        }
+        Ok(Figure::from(bars))
+    }
+
+    /// One line per name: `--y` (default `error` when there is one, else every other numeric
+    /// column) against `--x` (default the first numeric column).
+    fn lines(&self, x: Option<&str>, ys: &[String]) -> Result<Figure> {
+        let given = x.map(|name| self.column(name)).transpose()?;
+        let ys: Vec<usize> = if ys.is_empty() {
+            match self.column("error") {
+                Ok(e) if given != Some(e) => vec![e],
+                // Every numeric column but x (the first, unless given).
+                _ => (0..self.numbers.len())
+                    .filter(|&k| Some(k) != given)
+                    .skip(usize::from(given.is_none()))
+                    .collect(),
+            }
+        } else {
+            ys.iter().map(|n| self.column(n)).collect::<Result<_>>()?
+        };
+        let x = given.unwrap_or_else(|| (0..self.numbers.len()).find(|k| !ys.contains(k)).unwrap_or(0));
+        if ys.is_empty() {
+            bail!("nothing to draw against {}: it is the only numeric column", self.numbers[x].0);
+        }
+        let (xs, x_name) = (&self.numbers[x].1, &self.numbers[x].0);
+        let y_names: Vec<&str> = ys.iter().map(|&k| self.numbers[k].0.as_str()).collect();
+        let mut fig = Figure::new(self.title.clone(), x_name.clone(), y_names.join(", ")).scales(
+            Self::scale(xs.iter().copied()),
+            Self::scale(ys.iter().flat_map(|&k| self.numbers[k].1.iter().copied())),
+        );
+        let mut names: Vec<&str> = Vec::new();
+        for l in &self.labels {
+            if !names.contains(&l.as_str()) {
+                names.push(l);
+            }
+        }
+        for (i, name) in names.iter().enumerate() {
+            for &k in &ys {
+                let points: Vec<(f64, f64)> = (0..self.labels.len())
+                    .filter(|&r| self.labels[r] == *name)
+                    .map(|r| (xs[r], self.numbers[k].1[r]))
+                    .collect();
+                let label =
+                    if ys.len() == 1 { (*name).to_owned() } else { format!("{name}: {}", self.numbers[k].0) };
+                fig = fig.with_style(label, Self::style(name, i), Kind::LineMarkers, points);
+            }
+        }
+        Ok(fig)
+    }
+}
+
+/// `text`, or its first `keep` characters and an ellipsis (a bar's note must fit its row).
+fn shorten(text: &str, keep: usize) -> String {
+    match text.char_indices().nth(keep) {
+        None => text.to_owned(),
+        Some((i, _)) => format!("{}…", &text[..i]),
+    }
+}
+
+/// A CSV table whose first column holds names, read into its numeric and text columns.
+fn categories(
+    title: String,
+    names: &[String],
+    records: &[csv::StringRecord],
+    number: &dyn Fn(&str) -> bool,
+) -> Result<Contents> {
+    let field = |r: &csv::StringRecord, c: usize| r.get(c).unwrap_or("").trim().to_owned();
+    let (mut numbers, mut texts) = (Vec::new(), Vec::new());
+    for (c, name) in names.iter().enumerate().skip(1) {
+        let column: Vec<String> = records.iter().map(|r| field(r, c)).collect();
+        if column.iter().all(|f| number(f)) {
+            numbers.push((name.clone(), column.iter().map(|f| f.parse().unwrap_or(f64::NAN)).collect()));
+        } else {
+            texts.push((name.clone(), column));
+        }
+    }
+    if numbers.is_empty() {
+        bail!(
+            "{title}: no numeric column to draw (the columns are {}, all text)",
+            names.iter().map(|n| crate::config::clip(n)).collect::<Vec<_>>().join(", ")
+        );
+    }
+    let labels = records.iter().map(|r| field(r, 0)).collect();
+    Ok(Contents::Categories(Categories { title, key: names[0].clone(), labels, numbers, texts }))
 }
 
 /// Reads `args.file` (the fuzz harness, `src/fuzz/`, calls it on generated files).
@@ -480,10 +655,20 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                 .iter()
                 .map(|s| s.trim().to_owned())
                 .collect();
+            let records: Vec<csv::StringRecord> = reader
+                .records()
+                .enumerate()
+                .map(|(r, record)| {
+                    record.with_context(|| format!("cannot read {} row {}", path.display(), r + 1))
+                })
+                .collect::<Result<_>>()?;
+            let number = |f: &str| f.trim().is_empty() || f.trim().parse::<f64>().is_ok();
+            // A first column of names (pendula's tables put the method first): drawn per name.
+            if !records.is_empty() && records.iter().any(|r| !r.get(0).is_some_and(number)) {
+                return categories(title, &names, &records, &number);
+            }
             let mut rows = Vec::new();
-            for (r, record) in reader.records().enumerate() {
-                let record =
-                    record.with_context(|| format!("cannot read {} row {}", path.display(), r + 1))?;
+            for (r, record) in records.iter().enumerate() {
                 for (c, field) in record.iter().enumerate() {
                     let v = match field.trim() {
                         "" => f64::NAN,
@@ -519,17 +704,59 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
             // A fractal's summary has its t-max; its flags file ends in -converged.
             let fractal = doc.as_ref().is_some_and(|d| d.get("t_max").is_some());
             let flags = title.contains("-converged");
-            let grid_of = |axes: Vec<(String, f64, f64, usize)>, columns: usize| Grid {
-                axes,
-                columns: match &named {
-                    Some(n) if n.len() == columns => n.clone(),
-                    _ if columns == 1 && flags => vec!["converged (1) or not (0)".into()],
-                    _ if columns == 1 && fractal => vec!["time to first flip (s)".into()],
-                    _ if columns == 1 => vec!["value".into()],
-                    _ => (0..columns).map(|k| format!("c{k}")).collect(),
-                },
-                values: values.clone(),
-                flip_times: fractal && !flags && columns == 1,
+            // The description's system (a summary of a fractal names none: the double
+            // pendulum), for the units and symbols of what it does not spell out.
+            let system = doc.as_ref().and_then(|d| d["system"].as_str()).unwrap_or("double");
+            let info = pendula::model::find(system).ok();
+            let axis_label = |i: usize, name: &str| {
+                let unit = doc.as_ref().and_then(|d| d["axis_units"][i].as_str()).map(str::to_owned);
+                match unit.or_else(|| Some(info?.quantity(name).ok()?.unit.to_owned())) {
+                    Some(u) => pendula_viz::system_axis_label(system, name, &u),
+                    None => pendula_viz::pretty(name),
+                }
+            };
+            let column_label = |k: usize, name: &str| {
+                let doc = doc.as_ref();
+                let unit = doc.and_then(|d| d["units"][k].as_str()).map(str::to_owned).or_else(|| {
+                    info.map(|i| crate::commands::sweep::quantity_unit(i, name).to_owned())
+                        .filter(|u| !u.is_empty())
+                });
+                match (doc.and_then(|d| d["labels"][k].as_str()), unit) {
+                    (Some(label), Some(u)) if pendula_viz::unit(&u).is_empty() => {
+                        format!("{label} (dimensionless)")
+                    }
+                    (Some(label), Some(u)) => format!("{label} ({})", pendula_viz::unit(&u)),
+                    (Some(label), None) => label.to_owned(),
+                    (None, Some(u)) => pendula_viz::axis_label(name, &u),
+                    (None, None) => name.to_owned(),
+                }
+            };
+            let grid_of = |axes: Vec<(String, f64, f64, usize)>, columns: usize| {
+                let one = columns == 1;
+                let (columns, labels) = match &named {
+                    _ if columns == 1 && flags => {
+                        (vec!["converged".into()], vec!["converged (1) or not (0)".into()])
+                    }
+                    Some(n) if n.len() == columns => {
+                        (n.clone(), n.iter().enumerate().map(|(k, c)| column_label(k, c)).collect())
+                    }
+                    _ if columns == 1 && fractal => {
+                        (vec!["flip_time".into()], vec!["time to first flip (s)".into()])
+                    }
+                    _ if columns == 1 => (vec!["value".into()], vec!["value".into()]),
+                    _ => {
+                        let names: Vec<String> = (0..columns).map(|k| format!("c{k}")).collect();
+                        (names.clone(), names)
+                    }
+                };
+                Grid {
+                    axis_labels: axes.iter().enumerate().map(|(i, a)| axis_label(i, &a.0)).collect(),
+                    axes,
+                    columns,
+                    labels,
+                    values: values.clone(),
+                    flip_times: fractal && !flags && one,
+                }
             };
             let index_axes = |dims: &[usize]| -> Vec<(String, f64, f64, usize)> {
                 ["column index", "row index"]
@@ -554,6 +781,11 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                     let g = grid_of(axes, *c);
                     let mut names = vec![g.axes[0].0.clone()];
                     names.extend(g.columns.iter().cloned());
+                    // The axis's and columns' units, from the description.
+                    let units: Vec<String> = std::iter::once(&g.axis_labels[0])
+                        .chain(&g.labels)
+                        .map(|l| l.rsplit_once(" (").map_or("", |(_, u)| u.trim_end_matches(')')).to_owned())
+                        .collect();
                     let (a, step) = (g.axes[0].1, (g.axes[0].2 - g.axes[0].1) / *n1 as f64);
                     let rows = values
                         .chunks_exact(*c)
@@ -562,7 +794,9 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                             std::iter::once(a + (i as f64 + 0.5) * step).chain(row.iter().copied())
                         })
                         .collect();
-                    Ok(Contents::Table(Trajectory::new(title, names, rows, None)))
+                    let mut t = Trajectory::new(title, names, rows, None);
+                    t.units = units;
+                    Ok(Contents::Table(t))
                 }
                 [_, c] if looks_like_time(&shape, &values) => {
                     let (names, info) = npy_columns(*c, args.system.as_deref())?;
@@ -634,6 +868,9 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     let file = AtomicFile::create(&out, "--out")?;
     let bytes = match picture(args, &out, read(args)?)? {
         Picture::Panels(panels) => draw(&panels, &out)?,
+        Picture::Map(map) if out.extension().and_then(|e| e.to_str()) == Some("svg") => {
+            map.svg()?.into_bytes()
+        }
         Picture::Map(map) => map.png()?,
     };
     file.write_all(&bytes)?;
@@ -650,7 +887,7 @@ pub(crate) enum Picture {
 
 /// The picture of `contents` that the flags ask for, checked and laid out, not yet drawn
 /// into `out`.
-pub(crate) fn picture(args: &PlotArgs, out: &Path, contents: Contents) -> Result<Picture> {
+pub(crate) fn picture(args: &PlotArgs, _out: &Path, contents: Contents) -> Result<Picture> {
     Ok(match contents {
         Contents::Table(t) => {
             let mut panels = Vec::new();
@@ -664,6 +901,29 @@ pub(crate) fn picture(args: &PlotArgs, out: &Path, contents: Contents) -> Result
                 panels.push(t.energy_error()?);
             }
             Picture::Panels(panels)
+        }
+        Contents::Categories(c) => {
+            if args.phase || args.energy {
+                bail!(
+                    "{} is a table per {} ({}): --phase and --energy apply to trajectories",
+                    args.file.display(),
+                    c.key,
+                    c.labels.len()
+                );
+            }
+            if c.unique() {
+                if args.x.is_some() {
+                    bail!(
+                        "{} has one row per {}: it is drawn as bars of one column (--y NAME); --x applies to tables whose {} repeats",
+                        args.file.display(),
+                        c.key,
+                        c.key
+                    );
+                }
+                Picture::Panels(vec![c.bars(&args.y)?])
+            } else {
+                Picture::Panels(vec![c.lines(args.x.as_deref(), &args.y)?])
+            }
         }
         Contents::Grid(g) => {
             if args.phase || args.energy || args.x.is_some() {
@@ -681,9 +941,6 @@ pub(crate) fn picture(args: &PlotArgs, out: &Path, contents: Contents) -> Result
                 })?,
                 _ => bail!("a heat map shows one column: give one --y NAME ({})", g.columns.join(", ")),
             };
-            if out.extension().and_then(|e| e.to_str()) == Some("svg") {
-                bail!("invalid --out {}: heat maps are drawn as .png", out.display());
-            }
             let title = args.file.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
             Picture::Map(heatmap(&g, column, title)?)
         }

@@ -113,6 +113,63 @@ struct Page {
     figures: usize,
     /// Summaries of the commands already run, by command.
     runs: Vec<(String, Option<Value>)>,
+    /// The caption of the next table: it holds the data of the figure just shown.
+    next_caption: Option<String>,
+}
+
+/// The table that belongs to a figure: the numbers it is drawn from or that it shows.
+enum Data {
+    /// This table, under the figure.
+    Table { header: Vec<String>, rows: Vec<Vec<String>> },
+    /// The next table the page writes (the caller's own) is the figure's.
+    Next,
+    /// None (an animation, whose numbers are those of the figures beside it).
+    None,
+}
+
+impl Data {
+    /// A table of (quantity with its unit, value) rows.
+    fn pairs(rows: Vec<(&str, String)>) -> Self {
+        Data::Table {
+            header: vec!["quantity".into(), "value".into()],
+            rows: rows.into_iter().map(|(k, v)| vec![k.to_owned(), v]).collect(),
+        }
+    }
+
+    /// A table with this header.
+    fn table(header: &[&str], rows: Vec<Vec<String>>) -> Self {
+        Data::Table { header: header.iter().map(|h| (*h).to_owned()).collect(), rows }
+    }
+}
+
+/// A number as a table cell: a whole number as an integer (5, not 5.0000), others to a few
+/// digits without trailing zeros (0.05, 1.5387, 2.475e-5).
+fn number(v: f64) -> String {
+    if v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15 {
+        return format!("{v:.0}");
+    }
+    let s = short(v);
+    if s.contains('.') && !s.contains('e') {
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        s
+    }
+}
+
+/// A summary's value as a table cell: integers as integers (30, not 30.0000), other numbers
+/// to a few digits, strings as they are, lists joined, none as "-".
+fn cell(v: &Value) -> String {
+    match v {
+        Value::Number(n) => match (n.as_u64(), n.as_i64()) {
+            (Some(u), _) => u.to_string(),
+            (_, Some(i)) => i.to_string(),
+            _ => n.as_f64().map_or_else(|| n.to_string(), number),
+        },
+        Value::String(s) => s.clone(),
+        Value::Bool(b) => if *b { "yes" } else { "no" }.to_owned(),
+        Value::Array(a) => a.iter().map(cell).collect::<Vec<_>>().join(", "),
+        Value::Null | Value::Object(_) => "-".to_owned(),
+    }
 }
 
 impl Page {
@@ -137,15 +194,15 @@ impl Page {
         let _ = writeln!(self.html, "<p>{text}</p>");
     }
 
-    /// Embeds the figure `shown` with a caption that ends by naming its command, and a table
-    /// of the scalar settings of the run (from its summary).
-    fn figure(&mut self, shown: &Shown, caption: &str) -> Result<()> {
-        let summary = self.run(shown.command)?;
+    /// Embeds the figure `shown` with a caption that ends by naming its command, and its own
+    /// table (`data`, from the run's summary and files).
+    fn figure(&mut self, shown: &Shown, caption: &str, data: Data) -> Result<()> {
+        self.run(shown.command)?;
         let path = self.dir.join(slug(shown.command)).join(shown.file);
         let bytes = std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
         let mime = if shown.file.ends_with(".gif") { "image/gif" } else { "image/png" };
         self.figures += 1;
-        let data = base64::engine::general_purpose::STANDARD.encode(&bytes);
+        let encoded = base64::engine::general_purpose::STANDARD.encode(&bytes);
         let full = format!(
             "Figure {}. {caption} Made by <code>pendula {}</code>.",
             self.figures,
@@ -153,30 +210,33 @@ impl Page {
         );
         let _ = writeln!(
             self.html,
-            "<figure><img src=\"data:{mime};base64,{data}\" alt=\"{}\"><figcaption>{full}</figcaption></figure>",
+            "<figure><img src=\"data:{mime};base64,{encoded}\" alt=\"{}\"><figcaption>{full}</figcaption></figure>",
             escape(caption)
         );
-        if let Some(Value::Object(map)) = summary {
-            let rows: Vec<Vec<String>> = map
-                .iter()
-                .filter_map(|(k, v)| match v {
-                    Value::Number(n) => Some(vec![k.clone(), n.as_f64().map_or(n.to_string(), short)]),
-                    Value::String(s) => Some(vec![k.clone(), s.clone()]),
-                    _ => None,
-                })
-                .collect();
-            if !rows.is_empty() {
-                let _ =
-                    writeln!(self.html, "<details><summary>Parameters of Figure {}</summary>", self.figures);
-                self.table(&["parameter", "value"], &rows, "params");
-                self.html.push_str("</details>\n");
+        match data {
+            Data::Table { header, rows } => {
+                self.next_caption = Some(format!("Data of Figure {}", self.figures));
+                let header: Vec<&str> = header.iter().map(String::as_str).collect();
+                self.table(&header, &rows, "figure-data");
             }
+            Data::Next => self.next_caption = Some(format!("Data of Figure {}", self.figures)),
+            Data::None => self.next_caption = None,
         }
         Ok(())
     }
 
+    /// The summary of a command run earlier, and the folder of its files.
+    fn summary(&mut self, command: &str) -> Result<(Value, PathBuf)> {
+        let s = self.run(command)?.with_context(|| format!("`pendula {command}` writes a summary"))?;
+        Ok((s, self.dir.join(slug(command))))
+    }
+
     fn table(&mut self, header: &[&str], rows: &[Vec<String>], class: &str) {
-        let _ = write!(self.html, "<table class=\"{class}\"><tr>");
+        let _ = write!(self.html, "<table class=\"{class}\">");
+        if let Some(caption) = self.next_caption.take() {
+            let _ = write!(self.html, "<caption>{}</caption>", escape(&caption));
+        }
+        self.html.push_str("<tr>");
         for h in header {
             let _ = write!(self.html, "<th>{}</th>", escape(h));
         }
@@ -230,8 +290,14 @@ pub fn run(args: &ReportArgs) -> Result<()> {
     let mut out = OutDir::new(args.out_dir.as_deref(), "report")?;
     let dir = out.path().to_path_buf();
     let _quiet = Quiet::on();
-    let mut page =
-        Page { dir: dir.join("runs"), html: String::new(), toc: Vec::new(), figures: 0, runs: Vec::new() };
+    let mut page = Page {
+        dir: dir.join("runs"),
+        html: String::new(),
+        toc: Vec::new(),
+        figures: 0,
+        runs: Vec::new(),
+        next_caption: None,
+    };
     build(&mut page)?;
     drop(_quiet);
 
@@ -250,7 +316,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
          \"From Simple to Double Pendulum\"</title>\n<style>body{{font-family:sans-serif;max-width:1000px;margin:2em auto;\
          line-height:1.45;color:#222}}img{{max-width:100%}}figure{{margin:1em 0}}figcaption{{color:#555;font-size:90%}}\
          table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
-         code{{background:#f4f4f4}}</style></head><body>\n<h1>pendula: the numerical study of \"From Simple to Double \
+         caption{{caption-side:top;text-align:left;color:#555;font-size:90%}}code{{background:#f4f4f4}}</style></head><body>\n<h1>pendula: the numerical study of \"From Simple to Double \
          Pendulum\"</h1>\n<p>Every figure below was computed by pendula {} in {wall:.0} s, by the command its caption \
          names (run with <code>--out-dir</code> and <code>--summary</code> pointing into this folder; the figures, \
          CSV tables and JSON summaries are in <code>runs/</code>). Equations and methods follow the paper as corrected by \
@@ -330,7 +396,7 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
         };
     }
     page.paragraph(&text);
-    page.figure(&Shown { command, file: "energy.png" }, caption)?;
+    page.figure(&Shown { command, file: "energy.png" }, caption, Data::Next)?;
     page.table(
         &["method", "dt (s)", "cost (evals)", "max rel. error", "drift (1/s)", "error", "note"],
         &rows,
@@ -368,21 +434,48 @@ fn build(page: &mut Page) -> Result<()> {
          resonance, not \"slightly delayed\" as §2.2 says (ERRATA).",
     );
     let regimes = "oscillator-regimes";
+    let (r, dir) = page.summary(regimes)?;
     page.figure(
         &Shown { command: regimes, file: "regimes.png" },
         "Underdamped, critically damped and overdamped decay: exact lines, RK4 markers.",
+        transients_data(&dir.join("transients.csv"))?,
     )?;
-    let r = page.run(regimes)?.context("summary")?;
+    let peaks: Vec<Vec<String>> = r["resonance_peaks"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| {
+            vec![
+                cell(&p["zeta"]),
+                cell(&p["drive_ratio"]),
+                cell(&p["amplitude_exact"]),
+                cell(&p["amplitude_simulated"]),
+            ]
+        })
+        .collect();
     page.figure(
         &Shown { command: regimes, file: "resonance_amplitude.png" },
         &format!(
             "Steady-state amplitude against drive frequency; simulated amplitudes agree with the exact ones to {} (relative).",
             short(f(&r["max_rel_amplitude_error"]))
         ),
+        Data::table(
+            &[
+                "damping ratio ζ",
+                "peak at Ω/ω₀ (dimensionless)",
+                "peak amplitude X k/F, exact (dimensionless)",
+                "simulated (dimensionless)",
+            ],
+            peaks,
+        ),
     )?;
     page.figure(
         &Shown { command: regimes, file: "resonance_phase.png" },
-        "Phase lag of the steady state against drive frequency.",
+        &format!(
+            "Phase lag of the steady state against drive frequency; simulated lags agree with the exact ones to {} rad.",
+            short(f(&r["max_phase_error"]))
+        ),
+        phase_data(&dir.join("resonance.csv"))?,
     )?;
 
     page.section(
@@ -429,33 +522,93 @@ fn build(page: &mut Page) -> Result<()> {
         page.figure(
             &Shown { command, file: "convergence.png" },
             &format!("{system}: global error against step for every applicable method; the legend gives the fitted orders."),
+            Data::Next,
         )?;
         convergence_table(page, command)?;
     }
 
-    page.section(
-        "Cost: work-precision (error against right-hand-side evaluations)",
+    let wp = "work-precision pendulum";
+    let (w, _) = page.summary(wp)?;
+    let costs = work_precision_rows(&w);
+    // The cheapest method to reach the target error, and what RK4 spends for it.
+    let reach = |m: &str| costs.iter().find(|c| c.0 == m).and_then(|c| c.1);
+    let cheapest = costs.iter().filter_map(|c| c.1.map(|n| (c.0.as_str(), n))).min_by_key(|c| c.1);
+    let mut text = String::from(
         "The same errors against what they cost, for fixed-step methods over their ladders and for the adaptive pairs \
          dopri5 and dop853 over tolerances 10⁻³ … 10⁻¹²: the higher-order and adaptive methods reach a given accuracy \
          for far fewer evaluations.",
     );
+    if let Some((m, n)) = cheapest {
+        let _ = write!(
+            text,
+            " To bring the error at 10 s to 10⁻⁶ or below the cheapest is {m}, with {n} evaluations"
+        );
+        let _ = match (reach("rk4"), reach("euler")) {
+            (Some(r), Some(e)) => write!(text, "; RK4 needs {r}, Euler {e}."),
+            (Some(r), None) => write!(text, "; RK4 needs {r}, and Euler does not get there on its ladder."),
+            _ => write!(text, "."),
+        };
+    }
+    page.section("Cost: work-precision (error against right-hand-side evaluations)", &text);
     page.figure(
-        &Shown { command: "work-precision pendulum", file: "work_precision_evals.png" },
+        &Shown { command: wp, file: "work_precision_evals.png" },
         "Simple pendulum from 60°: error at 10 s against right-hand-side evaluations, every method.",
+        Data::table(
+            &["method", "evaluations to error ≤ 10⁻⁶", "smallest error (rad, rad/s)", "evaluations there"],
+            costs
+                .iter()
+                .map(|(m, n, e, at)| {
+                    vec![
+                        m.clone(),
+                        n.map_or_else(|| "not reached".to_owned(), |n| n.to_string()),
+                        number(*e),
+                        at.to_string(),
+                    ]
+                })
+                .collect(),
+        ),
     )?;
 
-    page.section(
-        "Stability: the largest usable step (paper §7.3 \"Stability\")",
+    let mut text = String::from(
         "The largest step at which the relative energy error (against the energy scale) stays below 10% over 20 s, found by \
-         bisection. Tao's maps are refused above binding · h = 1; that is a limit of the method's definition, shown as \
-         such, not a stability result.",
+         bisection. Tao's maps are refused above binding · h = 1; that is a limit of the method's definition, drawn as \
+         such (an empty, hatched bar marked refused), not a stability result.",
     );
     for command in ["stability", "stability double"] {
-        let s = page.run(command)?.context("summary")?;
+        let (s, _) = page.summary(command)?;
+        let steps = stability_rows(&s);
+        let measured = steps.iter().filter(|r| !r.3 && r.1.is_some());
+        let smallest =
+            measured.clone().min_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
+        let largest = measured.max_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
+        if let (Some(a), Some(b)) = (smallest, largest) {
+            let _ = write!(
+                text,
+                " On the {}, the stable steps run from {} s ({}) to {} s ({}).",
+                match s["system"].as_str().unwrap_or("") {
+                    "pendulum" => "simple pendulum",
+                    "double" => "double pendulum",
+                    other => other,
+                },
+                number(a.1.unwrap_or(f64::NAN)),
+                a.0,
+                number(b.1.unwrap_or(f64::NAN)),
+                b.0
+            );
+        }
+    }
+    page.section("Stability: the largest usable step (paper §7.3 \"Stability\")", &text);
+    for command in ["stability", "stability double"] {
+        let (s, _) = page.summary(command)?;
         let system = s["system"].as_str().unwrap_or("").to_owned();
+        let rows = stability_rows(&s)
+            .into_iter()
+            .map(|(m, h, note, _)| vec![m, h.map_or_else(|| "-".to_owned(), number), note])
+            .collect();
         page.figure(
             &Shown { command, file: "stability.png" },
             &format!("{system}: largest stable step of every applicable method."),
+            Data::table(&["method", "largest stable step h (s)", "note"], rows),
         )?;
     }
 
@@ -469,13 +622,36 @@ fn build(page: &mut Page) -> Result<()> {
             short(f(&p["max_rel_error_simulated"]))
         ),
     );
+    // Every 15° and the largest amplitude (all of them are in runs/period/period.csv).
+    let all: Vec<&Value> = p["rows"].as_array().into_iter().flatten().collect();
+    let period_rows: Vec<&Value> = all
+        .iter()
+        .enumerate()
+        .filter(|(k, r)| f(&r["amplitude_deg"]) % 15.0 == 0.0 || *k + 1 == all.len())
+        .map(|(_, r)| *r)
+        .collect();
     page.figure(
         &Shown { command: "period", file: "period.png" },
-        "Period against amplitude: exact, simulated and small-angle.",
+        "Period against amplitude: exact, simulated and small-angle (the table: every 15° and the largest amplitude).",
+        Data::table(
+            &["amplitude θ₀ (°)", "exact period T (s)", "simulated (s)", "small-angle (s)"],
+            period_rows
+                .iter()
+                .map(|r| vec![cell(&r["amplitude_deg"]), cell(&r["exact"]), cell(&r["simulated"]), cell(&r["small_angle"])])
+                .collect(),
+        ),
     )?;
+    let rel = |r: &Value, k: &str| number((f(&r[k]) / f(&r["exact"]) - 1.0).abs());
     page.figure(
         &Shown { command: "period", file: "period_error.png" },
         "Relative error of the simulated and of the small-angle period.",
+        Data::table(
+            &["amplitude θ₀ (°)", "|T_sim / T − 1| (dimensionless)", "|T_small / T − 1| (dimensionless)"],
+            period_rows
+                .iter()
+                .map(|r| vec![cell(&r["amplitude_deg"]), rel(r, "simulated"), rel(r, "small_angle")])
+                .collect(),
+        ),
     )?;
 
     let d = page.run("divergence")?.context("summary")?;
@@ -488,13 +664,24 @@ fn build(page: &mut Page) -> Result<()> {
             short(f(&d["growth_rate"]))
         ),
     );
+    let window = d["fit_window"].as_array().map(|w| w.iter().map(cell).collect::<Vec<_>>().join(" … "));
     page.figure(
         &Shown { command: "divergence", file: "divergence.png" },
         "Distance between two nearby double pendulums, log scale, with the fitted exponential.",
+        Data::pairs(vec![
+            ("initial separation δ in θ₁ (rad)", cell(&d["delta"])),
+            ("fitted growth rate (1/s)", cell(&d["growth_rate"])),
+            ("fit window t (s)", window.unwrap_or_else(|| "-".into())),
+            ("distance where the fit stops (rad, rad/s combined)", cell(&d["saturation"])),
+            ("method", cell(&d["method"])),
+            ("step h (s)", cell(&d["dt"])),
+            ("duration (s)", cell(&d["t_end"])),
+        ]),
     )?;
     page.figure(
         &Shown { command: "animate double --compare 1e-3 --t-end 12 --fps 20 --size 400x400", file: "animation.gif" },
         "Two double pendulums 10⁻³ rad apart part ways after a few seconds; the gauges show each one's relative energy error.",
+        Data::None,
     )?;
 
     let l = page.run("lyapunov --spectrum --t-end 500")?.context("summary")?;
@@ -508,9 +695,29 @@ fn build(page: &mut Page) -> Result<()> {
             spectrum.join(", ")
         ),
     );
+    let uncertainty: Vec<f64> = l["spectrum_uncertainty"].as_array().into_iter().flatten().map(f).collect();
+    let mut rows: Vec<Vec<String>> = l["spectrum"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .enumerate()
+        .map(|(k, v)| {
+            vec![
+                format!("{} (1/s)", pendula_viz::pretty(&format!("lambda{}", k + 1))),
+                format!("{} ± {}", short(f(v)), uncertainty.get(k).map_or("-".into(), |u| short(*u))),
+            ]
+        })
+        .collect();
+    rows.extend([
+        vec!["method".to_owned(), cell(&l["method"])],
+        vec!["step h (s)".to_owned(), cell(&l["dt"])],
+        vec!["duration (s)".to_owned(), cell(&l["t_end"])],
+        vec!["transient left out (s)".to_owned(), cell(&l["transient"])],
+    ]);
     page.figure(
         &Shown { command: "lyapunov --spectrum --t-end 500", file: "lyapunov.png" },
         "Running estimates of the four Lyapunov exponents.",
+        Data::table(&["quantity", "value"], rows),
     )?;
 
     let q = page.run("poincare")?.context("summary")?;
@@ -520,7 +727,7 @@ fn build(page: &mut Page) -> Result<()> {
             "{} orbits on the energy surface E = {} J, their {} upward crossings of θ₁ = 0 located by events on dop853's \
              dense output (largest energy error {}): invariant curves of regular orbits beside a chaotic sea.",
             q["count"],
-            short(f(&q["energy"])),
+            cell(&q["energy"]),
             q["crossings"],
             short(f(&q["max_energy_error"]))
         ),
@@ -528,6 +735,14 @@ fn build(page: &mut Page) -> Result<()> {
     page.figure(
         &Shown { command: "poincare", file: "poincare.png" },
         "Poincaré section of the double pendulum (θ₂, p₂) at θ₁ = 0.",
+        Data::pairs(vec![
+            ("orbits", cell(&q["count"])),
+            ("energy E (J)", cell(&q["energy"])),
+            ("crossings of θ₁ = 0, rising", cell(&q["crossings"])),
+            ("duration of each orbit (s)", cell(&q["t_end"])),
+            ("largest relative energy error", cell(&q["max_energy_error"])),
+            ("method", cell(&q["method"])),
+        ]),
     )?;
 
     let fr = page.run("fractal")?.context("summary")?;
@@ -539,25 +754,177 @@ fn build(page: &mut Page) -> Result<()> {
             fr["unconverged_share"].as_f64().map_or("-".into(), |v| format!("{:.1} %", 100.0 * v))
         ),
     );
+    let grid = |a: &Value| format!("{} … {} rad, {} pixels", cell(&a["lo"]), cell(&a["hi"]), cell(&a["n"]));
     page.figure(
         &Shown { command: "fractal", file: "fractal.png" },
         "Time to the first flip (log colour scale); black: no flip within the horizon.",
+        Data::pairs(vec![
+            ("θ₁ range", grid(&fr["axes"][0])),
+            ("θ₂ range", grid(&fr["axes"][1])),
+            ("pixels", cell(&fr["pixels"])),
+            ("pixels that flip", cell(&fr["flipped"])),
+            ("pixels that cannot flip (energy)", cell(&fr["forbidden_by_energy"])),
+            ("horizon t_max (s)", cell(&fr["t_max"])),
+            ("method", cell(&fr["method"])),
+            ("step h (s)", cell(&fr["dt"])),
+            ("threads", cell(&fr["threads"])),
+        ]),
     )?;
     page.figure(
         &Shown { command: "fractal", file: "fractal-converged.png" },
         "Convergence flags of the flip fractal: pixels whose flip time moved when the step was halved.",
+        Data::pairs(vec![
+            ("steps compared h, h/2 (s)", format!("{}, {}", cell(&fr["dt"]), cell(&fr["dt_check"]))),
+            ("tolerance on the flip time (s)", cell(&fr["tolerance"])),
+            ("pixels not converged", cell(&fr["unconverged"])),
+            (
+                "share not converged",
+                fr["unconverged_share"].as_f64().map_or("-".into(), |v| format!("{:.1} %", 100.0 * v)),
+            ),
+        ]),
     )?;
 
+    let (b, _) = page.summary("bifurcation")?;
     page.section(
         "Bifurcation of the driven pendulum",
-        "Baker and Gollub's damped, driven pendulum (q = 2, ω_D = 2/3): the angular velocity once per drive period against \
-         the drive amplitude — period doubling, chaos, windows.",
+        &format!(
+            "Baker and Gollub's damped, driven pendulum (q = 2, ω_D = 2/3): the angular velocity once per drive period \
+             against the drive amplitude g, {} values from {} to {}, {} samples each after a transient of {} (time \
+             in units of 1/ω₀) — period doubling, chaos, windows.",
+            cell(&b["param"]["n"]),
+            cell(&b["param"]["lo"]),
+            cell(&b["param"]["hi"]),
+            cell(&b["samples"]),
+            cell(&b["transient"]),
+        ),
     );
     page.figure(
         &Shown { command: "bifurcation", file: "bifurcation.png" },
         "Stroboscopic orbit diagram of the driven pendulum.",
+        Data::pairs(vec![
+            (
+                "drive amplitude g (dimensionless)",
+                format!("{} … {}", cell(&b["param"]["lo"]), cell(&b["param"]["hi"])),
+            ),
+            ("values of g", cell(&b["param"]["n"])),
+            ("samples per value", cell(&b["samples"])),
+            ("transient (1/ω₀)", cell(&b["transient"])),
+            ("RK4 steps per drive period", cell(&b["steps_per_period"])),
+            ("kernel", cell(&b["kernel"])),
+            ("threads", cell(&b["threads"])),
+        ]),
     )?;
     Ok(())
+}
+
+/// The data of the free-decay figure: per damping ratio, the largest deviation of RK4 from
+/// the exact decay, read from the run's transients.csv (zeta, t, exact, simulated).
+fn transients_data(path: &Path) -> Result<Data> {
+    let mut worst: Vec<(f64, f64, f64)> = Vec::new();
+    for row in read_csv(path)? {
+        let (zeta, exact, simulated) = (row[0], row[2], row[3]);
+        let dev = (simulated - exact).abs();
+        match worst.iter_mut().find(|w| w.0 == zeta) {
+            Some(w) => {
+                w.1 = w.1.max(dev);
+                w.2 = w.2.max(exact.abs());
+            }
+            None => worst.push((zeta, dev, exact.abs())),
+        }
+    }
+    let regime = |z: f64| {
+        if z < 1.0 {
+            "underdamped"
+        } else if z == 1.0 {
+            "critically damped"
+        } else {
+            "overdamped"
+        }
+    };
+    Ok(Data::table(
+        &["damping ratio ζ", "regime", "largest |x_RK4 − x_exact| (m)"],
+        worst.iter().map(|(z, d, _)| vec![format!("{z}"), regime(*z).to_owned(), number(*d)]).collect(),
+    ))
+}
+
+/// The data of the phase figure: per damping ratio, the exact lag at resonance (Ω = ω₀,
+/// where it is π/2) and the largest deviation of the simulated lags, from resonance.csv
+/// (zeta, drive_ratio, amplitude_exact, amplitude_simulated, phase_exact, phase_simulated).
+fn phase_data(path: &Path) -> Result<Data> {
+    let mut per: Vec<(f64, f64, f64, f64)> = Vec::new();
+    for row in read_csv(path)? {
+        let (zeta, ratio, exact, simulated) = (row[0], row[1], row[4], row[5]);
+        let dev = (simulated - exact).abs();
+        match per.iter_mut().find(|p| p.0 == zeta) {
+            Some(p) => {
+                p.1 = p.1.max(dev);
+                if (ratio - 1.0).abs() < (p.3 - 1.0).abs() {
+                    (p.2, p.3) = (exact, ratio);
+                }
+            }
+            None => per.push((zeta, dev, exact, ratio)),
+        }
+    }
+    Ok(Data::table(
+        &[
+            "damping ratio ζ",
+            "exact lag at Ω/ω₀ nearest 1 (rad)",
+            "at Ω/ω₀",
+            "largest |φ_sim − φ_exact| (rad)",
+        ],
+        per.iter().map(|(z, d, lag, r)| vec![format!("{z}"), number(*lag), number(*r), number(*d)]).collect(),
+    ))
+}
+
+/// The numeric rows of a CSV file written by a study command.
+fn read_csv(path: &Path) -> Result<Vec<Vec<f64>>> {
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    reader
+        .records()
+        .map(|r| {
+            let r = r.with_context(|| format!("cannot read {}", path.display()))?;
+            Ok(r.iter().map(|v| v.trim().parse().unwrap_or(f64::NAN)).collect())
+        })
+        .collect()
+}
+
+/// The error the work-precision section quotes the cost of.
+const WP_TARGET: f64 = 1e-6;
+
+/// Per method of a work-precision summary: the fewest evaluations of a run whose error is at
+/// most [`WP_TARGET`] (none when no run gets there), the smallest error, and its evaluations.
+fn work_precision_rows(s: &Value) -> Vec<(String, Option<u64>, f64, u64)> {
+    let mut rows = Vec::new();
+    for (m, points) in s["methods"].as_object().into_iter().flatten() {
+        let points: Vec<(f64, u64)> = points
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|p| Some((p["error"].as_f64()?, p["rhs_evals"].as_u64()?)))
+            .filter(|p| p.0.is_finite())
+            .collect();
+        let Some(best) = points.iter().copied().min_by(|a, b| a.0.total_cmp(&b.0)) else { continue };
+        let reach = points.iter().filter(|p| p.0 <= WP_TARGET).map(|p| p.1).min();
+        rows.push((m.clone(), reach, best.0, best.1));
+    }
+    rows
+}
+
+/// Per method of a stability summary: its largest stable step, its note, and whether that
+/// step is a refusal (a limit of the method's definition) rather than a stability limit.
+fn stability_rows(s: &Value) -> Vec<(String, Option<f64>, String, bool)> {
+    s["largest_stable_dt"]
+        .as_object()
+        .into_iter()
+        .flatten()
+        .map(|(m, h)| {
+            let h = h.as_f64();
+            let limit = pendula::integrator::find(m).ok().and_then(pendula::analysis::accepted_step_limit);
+            let refused = matches!((h, limit), (Some(h), Some(l)) if h >= l / 1.01);
+            (m.clone(), h, s["notes"][m].as_str().unwrap_or("").to_owned(), refused)
+        })
+        .collect()
 }
 
 /// Regenerates the README gallery into `dir`.

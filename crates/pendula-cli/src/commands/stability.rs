@@ -148,32 +148,45 @@ pub fn figure(
     results: &[(&'static str, Option<f64>)],
 ) -> Figure {
     let (h_min, h_max) = H_RANGE;
-    let rows: Vec<(&str, Option<f64>, Option<String>)> = results
+    let tu = pendula::model::find(system).map_or("s", |i| i.time_unit());
+    let rows: Vec<Row<'_>> = results
         .iter()
         .map(|(m, h)| {
             let limit = pendula::integrator::find(m).ok().and_then(pendula::analysis::accepted_step_limit);
+            let refused = matches!(h, Some(h) if limit.is_some_and(|l| *h >= l / 1.01));
             let note = match h {
-                // A refusal is not a stability result: say which it is.
-                Some(h) if limit.is_some_and(|l| *h >= l / 1.01) => {
-                    Some(format!("refused above {} (binding · h ≤ 1)", num(limit.unwrap_or_default())))
-                }
-                None => Some(format!("unstable at every step tried (down to {})", num(h_min))),
-                Some(h) if *h >= h_max => Some(format!("≥ {} (the search limit)", num(h_max))),
+                // A refusal is not a stability result: say which it is (the bar is drawn
+                // empty and hatched).
+                Some(_) if refused => Some(format!(
+                    "refused above {} (binding · h ≤ 1); stable below",
+                    with_unit(num(limit.unwrap_or_default()), tu)
+                )),
+                None => Some(format!("unstable at every step tried (down to {})", with_unit(num(h_min), tu))),
+                Some(h) if *h >= h_max => Some(format!("≥ {} (the search limit)", with_unit(num(h_max), tu))),
                 Some(_) => None,
             };
-            (*m, *h, note)
+            Row { method: m, h: *h, note, refused }
         })
         .collect();
     bars_figure(system, criterion, &rows)
 }
 
-/// The bar chart of [`figure`] from (method, largest stable step, note) rows: a note, when
-/// given, is printed beside the bar (or in place of a missing one) instead of the value.
-pub fn bars_figure(
-    system: &str,
-    criterion: &StabilityCriterion,
-    rows: &[(&str, Option<f64>, Option<String>)],
-) -> Figure {
+/// One bar of the stability chart.
+pub struct Row<'a> {
+    /// The method.
+    pub method: &'a str,
+    /// Its largest stable step (or refusal limit), if any.
+    pub h: Option<f64>,
+    /// Printed beside the bar (or in place of a missing one) instead of the value.
+    pub note: Option<String>,
+    /// The step is where the method refuses to go, not a stability limit: drawn as refused.
+    pub refused: bool,
+}
+
+/// The bar chart of [`figure`] from its rows: a note, when given, is printed beside the bar
+/// (or in place of a missing one) instead of the value; a refused method's bar is empty and
+/// hatched.
+pub fn bars_figure(system: &str, criterion: &StabilityCriterion, rows: &[Row<'_>]) -> Figure {
     let (bound, t_end) = (criterion.max_rel_energy_error, criterion.t_end);
     let info = pendula::model::find(system).ok();
     let tu = info.map_or("s", |i| i.time_unit());
@@ -187,9 +200,10 @@ pub fn bars_figure(
         Scale::Log,
     );
     bars.limits = Some(H_RANGE);
-    for (m, h, note) in rows {
-        let note = note.clone().or_else(|| h.map(|h| with_unit(pendula_viz::number(h), tu)));
-        bars.bars.push(Bar { label: (*m).to_owned(), value: *h, color: method_color(m), note });
+    for r in rows {
+        let note = r.note.clone().or_else(|| r.h.map(|h| with_unit(pendula_viz::number(h), tu)));
+        let bar = Bar::new(r.method, r.h, method_color(r.method), note);
+        bars.bars.push(Bar { refused: r.refused, ..bar });
     }
     Figure::from(bars)
 }

@@ -313,8 +313,12 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         None => None,
     };
     let out_file = AtomicFile::create(&out_path, "--out")?;
-    let side_file =
-        if sharded { Some(AtomicFile::create(&side_path, "--out (shard description)")?) } else { None };
+    // The description beside the array (its axes, columns and units, for `plot`; for a
+    // shard, also what `merge` checks), whole or sharded.
+    let side_file = AtomicFile::create(
+        &side_path,
+        if sharded { "--out (shard description)" } else { "--out (description)" },
+    )?;
     let summary = args.summary.open()?;
     if let Some(c) = &checkpoint {
         Chunks::claim(c)?;
@@ -387,7 +391,11 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         "dt": sweep.spec().h,
         "steps": sweep.spec().steps,
         "axes": sweep.spec().axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
+        // Units beside, not inside, `axes` and `columns`: those keys stay as Python's
+        // `pendula.sweep` writes them.
+        "axis_units": sweep.spec().axes.iter().map(|a| quantity_unit(sweep.info(), &a.name)).collect::<Vec<_>>(),
         "columns": sweep.columns(),
+        "units": sweep.columns().iter().map(|c| quantity_unit(sweep.info(), c)).collect::<Vec<_>>(),
         "shape": sweep.shape(),
         "shard": sweep.spec().shard.0,
         "shards": sweep.spec().shard.1,
@@ -400,16 +408,13 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         "threads": threads,
         "wall_s": wall_s,
     });
-    let mut files = vec![out_file];
-    if let Some(f) = side_file {
-        write_json(&f, &description)?;
-        files.push(f);
-    }
-    // The array, its shard description and the summary appear together or not at all, and
+    write_json(&side_file, &description)?;
+    let files = vec![out_file, side_file];
+    // The array, its description and the summary appear together or not at all, and
     // a finished sweep's checkpoint goes in the same step.
     summary.write_then(&description, files, |guard| chunks.map_or(Ok(()), |c| c.finish(guard)))?;
     eprintln!(
-        "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?}{}",
+        "{}: {} cells{} with {} ({} steps of {} s) on {threads} threads in {wall_s:.3} s -> {} {:?} and {}",
         sweep.info().name,
         end - start,
         if sharded {
@@ -422,7 +427,7 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         Short(sweep.spec().h),
         out_path.display(),
         shape,
-        if sharded { format!(" and {}", side_path.display()) } else { String::new() },
+        side_path.display(),
     );
     Ok(())
 }
@@ -534,6 +539,18 @@ impl Progress {
         if n.is_multiple_of(1024) {
             self.bar.set_position(n);
         }
+    }
+}
+
+/// The unit of a swept quantity or recorded column of `info`, as the catalogue writes it
+/// (`1` for a dimensionless one): a parameter's or state variable's own, seconds for a flip
+/// time, the energy's for an energy error.
+pub(crate) fn quantity_unit(info: &pendula::system::SystemInfo, name: &str) -> &'static str {
+    let or_one = |u: &'static str| if u.is_empty() { "1" } else { u };
+    match name {
+        "flip_time" => or_one(info.time_unit()),
+        "energy_error" => or_one(info.energy_unit()),
+        _ => info.quantity(name).map_or("", |q| q.unit),
     }
 }
 

@@ -196,6 +196,8 @@ fn special_files() -> Vec<Case> {
         Case::new("sweep into a FIFO", &format!("{SWEEP} --out ff.npy"))
             .setup(|d| mkfifo(d, "ff.npy"))
             .reads_fifo("ff.npy", |b| assert!(b.starts_with(b"\x93NUMPY"), "{} bytes", b.len()))
+            // The array's description (axes, columns, units) beside it, a regular file.
+            .creates("ff.npy.json")
             .exit(0),
         Case::new("two outputs onto one FIFO", &format!("{FAST} --out ff --summary ff"))
             .setup(|d| mkfifo(d, "ff"))
