@@ -86,15 +86,14 @@ impl RunSpec {
             }
             End::Time(t_end) => {
                 let span = t_end - self.t0;
-                if backward && !(t_end.is_finite() && span < 0.0) {
-                    return Err(invalid(
-                        "t_end",
-                        t_end,
-                        "with a negative step the run goes backward: the end time must be finite and before the start",
-                    ));
-                }
-                if !backward && !(t_end.is_finite() && span > 0.0) {
-                    return Err(invalid("t_end", t_end, "the end time must be finite and > 0"));
+                let ahead = if backward { span < 0.0 } else { span > 0.0 };
+                if !(t_end.is_finite() && ahead) {
+                    let allowed = if backward {
+                        "with a negative step the run goes backward: the end time must be finite and before the start"
+                    } else {
+                        "the end time must be finite and > 0"
+                    };
+                    return Err(invalid("t_end", t_end, allowed));
                 }
                 let ratio = span / h;
                 if ratio > MAX_STEPS {
