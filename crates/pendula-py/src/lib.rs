@@ -84,6 +84,22 @@ fn solve_error(py: Python<'_>, e: &Error) -> PyErr {
     }
 }
 
+/// Tao's step limit (w h <= 1) for a step `h` of `method`, when it is exceeded, in the words of
+/// Python's arguments: the step is `dt`, and the binding constant w, which Python does not
+/// set, is only quoted. None for other methods and steps within the limit.
+pub(crate) fn tao_step_refusal(method: &Method, h: f64) -> Option<String> {
+    let Scheme::Tao(scheme) = &method.scheme else { return None };
+    integrator::tao::check_binding_step(scheme, h).err()?;
+    let short = pendula::error::Short;
+    Some(format!(
+        "invalid value {} for `dt`: {} is unstable above w dt = 1 (its binding constant w = {} 1/s): a dt of at most {} s",
+        short(h.abs()),
+        method.name,
+        short(scheme.binding),
+        short(integrator::tao::MAX_BINDING_STEP / scheme.binding)
+    ))
+}
+
 /// The time a failed run failed at, if the error says.
 fn failure_time(e: &Error) -> Option<f64> {
     match e {
@@ -620,21 +636,8 @@ fn solve<'py>(
         // Checked here, to be named as the arguments are (the library speaks of h and of
         // its binding constant, which Python does not set).
         spec.schedule().map_err(|e| solve_error(py, &e))?;
-        if let Scheme::Tao(scheme) = &method.scheme
-            && integrator::tao::check_binding_step(scheme, spec.h).is_err()
-        {
-            let short = pendula::error::Short;
-            return Err(raise(
-                py,
-                "InvalidValueError",
-                format!(
-                    "invalid value {} for `dt`: {} is unstable above w dt = 1 (its binding constant w = {} 1/s): a dt of at most {} s",
-                    short(spec.h.abs()),
-                    method.name,
-                    short(scheme.binding),
-                    short(integrator::tao::MAX_BINDING_STEP / scheme.binding)
-                ),
-            ));
+        if let Some(why) = tao_step_refusal(method, spec.h) {
+            return Err(raise(py, "InvalidValueError", why));
         }
     }
     let model = &*system.model;

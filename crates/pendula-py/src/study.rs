@@ -542,6 +542,34 @@ fn methods_of(
 
 /// Whether a run's failure drops its point with a note (as the CLI's studies do) rather
 /// than ending the study.
+/// Why a step of a study's ladder was dropped, in the words of Python's arguments: the step
+/// is `dt`, and Tao's step limit names the largest dt (the library's message speaks of h and
+/// of the binding constant, which the studies do not set).
+fn dropped(method: &Method, h: f64, e: &Error) -> String {
+    if let Error::InvalidValue { .. } = e
+        && let Some(why) = crate::tao_step_refusal(method, h)
+    {
+        return why;
+    }
+    match e {
+        Error::InvalidValue { name, value, allowed } if name == "h" => {
+            format!("invalid value {} for `dt`: {allowed}", Short(*value))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// A dropped step's error and its reason in Python's words ([`dropped`]).
+type Dropped = (Error, String);
+
+/// The error of a study whose every step was dropped, with the message of [`dropped`].
+fn refused(py: Python<'_>, e: &Error, why: String) -> PyErr {
+    match e {
+        Error::InvalidValue { .. } => raise(py, "InvalidValueError", why),
+        other => to_py(py, other),
+    }
+}
+
 fn droppable(e: &Error) -> bool {
     matches!(
         e,
@@ -606,7 +634,7 @@ pub(crate) fn convergence<'py>(
     }
     let y0 = system.values.initial_state();
     type Row = (&'static str, Vec<f64>, Vec<f64>, OrderEstimate, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
         let scale = reference.scale();
         let (mut results, mut first) = (Vec::new(), None);
@@ -619,8 +647,9 @@ pub(crate) fn convergence<'py>(
                         errors.push(e[0]);
                     }
                     Err(e) if droppable(&e) => {
-                        failure = Some(format!("at h = {}: {e}", Short(h)));
-                        first.get_or_insert(e);
+                        let why = dropped(method, h, &e);
+                        failure = Some(format!("at dt = {}: {why}", Short(h)));
+                        first.get_or_insert((e, why));
                     }
                     Err(e) => return Err(e),
                 }
@@ -633,9 +662,9 @@ pub(crate) fn convergence<'py>(
     let (reference, results, first) =
         interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
     if results.iter().all(|r| r.1.is_empty())
-        && let Some(e) = first
+        && let Some((e, why)) = first
     {
-        return Err(to_py(py, &e));
+        return Err(refused(py, &e, why));
     }
     let list = PyList::empty(py);
     for (name, hs, errors, estimate, failure) in results {
@@ -715,7 +744,7 @@ pub(crate) fn work_precision<'py>(
     }
     let y0 = system.values.initial_state();
     type Row = (&'static str, Vec<analysis::WorkPoint>, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
         let (mut results, mut first) = (Vec::new(), None);
         for &method in &methods {
@@ -731,8 +760,10 @@ pub(crate) fn work_precision<'py>(
                 match point {
                     Ok(p) => points.extend(p),
                     Err(e) if droppable(&e) => {
-                        note = Some(format!("at {} = {}: {e}", if adaptive { "tol" } else { "h" }, Short(x)));
-                        first.get_or_insert(e);
+                        let why = if adaptive { e.to_string() } else { dropped(method, x, &e) };
+                        note =
+                            Some(format!("at {} = {}: {why}", if adaptive { "tol" } else { "dt" }, Short(x)));
+                        first.get_or_insert((e, why));
                     }
                     Err(e) => return Err(e),
                 }
@@ -744,9 +775,9 @@ pub(crate) fn work_precision<'py>(
     let (reference, results, first) =
         interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
     if results.iter().all(|r| r.1.is_empty())
-        && let Some(e) = first
+        && let Some((e, why)) = first
     {
-        return Err(to_py(py, &e));
+        return Err(refused(py, &e, why));
     }
     let list = PyList::empty(py);
     for (name, points, note) in results {

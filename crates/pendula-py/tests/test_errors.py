@@ -107,3 +107,21 @@ def test_other_calls_name_their_arguments(call, name):
     with pytest.raises(ValueError) as e:
         call()
     assert name in str(e.value) and "`h`" not in str(e.value), str(e.value)
+
+
+def test_study_notes_name_dt_and_the_largest_tao_step():
+    """A step of a study's ladder that Tao's limit refuses is noted as `dt` (the argument is
+    `dts`) with the largest step allowed, not as h and the binding constant."""
+    why = (
+        "invalid value 0.01 for `dt`: tao-4 is unstable above w dt = 1 (its binding constant "
+        "w = 200 1/s): a dt of at most 0.005 s"
+    )
+    c = pendula.convergence("double", methods=["tao-4"], dts=[0.01, 0.002, 0.001, 0.0005], t_end=2.0)
+    assert c.methods[0].failure == f"at dt = 0.01: {why}"
+    assert list(c.methods[0].dt) == [0.002, 0.001, 0.0005]
+    w = pendula.work_precision("double", methods=["tao-4"], dts=[0.01, 0.001], tols=[1e-6], t_end=2.0)
+    assert w.methods[0].failure == f"at dt = 0.01: {why}"
+    # Every step refused: the call fails with the same words.
+    with pytest.raises(pendula.InvalidValueError) as e:
+        pendula.convergence("double", methods=["tao-4"], dts=[0.01], t_end=2.0)
+    assert str(e.value) == why

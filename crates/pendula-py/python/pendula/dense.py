@@ -227,7 +227,7 @@ class Progress:
         self.started = clock()
         self.bar = None
         self.shown = False
-        self.done = 0.0
+        self.done = 0
         if not auto:
             self._show()
 
@@ -238,17 +238,20 @@ class Progress:
         except ImportError:
             self.bar = None
         else:
-            self.bar = tqdm(total=self.span, unit=self.unit or "it", desc=self.desc, leave=False)
+            # A time bar: the simulated time run, to 4 digits (not 95.39100000000002/600.0).
+            fmt = None if self.label is None else "{l_bar}{bar}| {n:.4g}/{total:.4g} " + self.unit + " [{elapsed}<{remaining}]"
+            self.bar = tqdm(total=self.span, unit=self.unit or "it", desc=self.desc, leave=False, bar_format=fmt)
 
     def __call__(self, t: float) -> None:
-        done = min(max((t - self.t0) * self.direction, 0.0), self.span)
+        # The distance run; whole counts stay whole (a bar of members reads 12/300, not 12.0/300).
+        done = min(max(t - self.t0 if self.direction > 0 else self.t0 - t, 0), self.span)
         if not self.shown:
             elapsed = self.clock() - self.started
             fraction = done / self.span if self.span > 0 else None
             if elapsed < AUTO_AFTER or not show_bar(None, estimate_seconds(elapsed, fraction), True):
                 return
             self._show()
-            self.done = 0.0
+            self.done = 0
         if self.bar is not None:
             self.bar.update(done - self.done)
         else:
@@ -334,6 +337,7 @@ class Elapsed:
         self.auto = auto
         self.shown = False
         self.bar = None
+        self.said = -1  # the whole seconds the fallback line last said
         if not auto:
             self._show()
 
@@ -353,9 +357,10 @@ class Elapsed:
                 return
             self._show()
         if self.bar is not None:
-            self.bar.refresh()
-        else:
-            sys.stderr.write(f"\r{self.desc}: working, {elapsed:.0f} s elapsed")
+            self.bar.update(0)  # redrawn at tqdm's pace, with the time elapsed
+        elif int(elapsed) != self.said:
+            self.said = int(elapsed)
+            sys.stderr.write(f"\r{self.desc}: working, {self.said} s elapsed")
             sys.stderr.flush()
 
     def close(self) -> None:

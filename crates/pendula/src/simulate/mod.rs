@@ -65,9 +65,9 @@ impl RunSpec {
         let invalid =
             |name: &str, value: f64, allowed| Error::InvalidValue { name: name.to_owned(), value, allowed };
         let h = self.h;
-        // A negative step runs backward, to an end time before the start; a step count
-        // takes positive steps only.
-        let backward = h < 0.0 && matches!(self.end, End::Time(_));
+        // A negative step runs backward, to an end time before the start; toward a later
+        // end, or for a step count, it is the step that is wrong.
+        let backward = h < 0.0 && matches!(self.end, End::Time(t_end) if t_end < self.t0);
         if !(h.is_finite() && (h > 0.0 || backward)) {
             return Err(invalid("h", h, "the step size must be finite and > 0"));
         }
