@@ -239,7 +239,8 @@ class Progress:
             self.bar = None
         else:
             # A time bar: the simulated time run, to 4 digits (not 95.39100000000002/600.0).
-            fmt = None if self.label is None else "{l_bar}{bar}| {n:.4g}/{total:.4g} " + self.unit + " [{elapsed}<{remaining}]"
+            unit = f" {self.unit}" if self.unit else ""
+            fmt = None if self.label is None else "{l_bar}{bar}| {n:.4g}/{total:.4g}" + unit + " [{elapsed}<{remaining}]"
             self.bar = tqdm(total=self.span, unit=self.unit or "it", desc=self.desc, leave=False, bar_format=fmt)
 
     def __call__(self, t: float) -> None:
