@@ -54,6 +54,52 @@ fn to_py(py: Python<'_>, e: &Error) -> PyErr {
     raise(py, class, e.to_string())
 }
 
+/// The library's error from a run of `solve`, in the words of `pendula.solve`'s arguments:
+/// the step `h` is `dt`, the times `t0` and `t_end` are `t_span`, and a step size too small is
+/// cured by `rtol` and `atol` (Python sets no smallest step).
+fn solve_error(py: Python<'_>, e: &Error) -> PyErr {
+    match e {
+        Error::InvalidValue { name, value, allowed } => {
+            let name = match name.as_str() {
+                "h" => "dt",
+                "t0" | "t_end" => "t_span",
+                other => other,
+            };
+            raise(
+                py,
+                "InvalidValueError",
+                format!("invalid value {} for `{name}`: {allowed}", pendula::error::Short(*value)),
+            )
+        }
+        Error::StepSizeTooSmall { t, h } => raise(
+            py,
+            "StepSizeTooSmallError",
+            format!(
+                "the step size fell to {} s at t = {} s, below what the time can resolve (loosen rtol and atol)",
+                pendula::error::Short(*h),
+                pendula::error::Short(*t)
+            ),
+        ),
+        other => to_py(py, other),
+    }
+}
+
+/// Tao's step limit (w h <= 1) for a step `h` of `method`, when it is exceeded, in the words of
+/// Python's arguments: the step is `dt`, and the binding constant w, which Python does not
+/// set, is only quoted. None for other methods and steps within the limit.
+pub(crate) fn tao_step_refusal(method: &Method, h: f64) -> Option<String> {
+    let Scheme::Tao(scheme) = &method.scheme else { return None };
+    integrator::tao::check_binding_step(scheme, h).err()?;
+    let short = pendula::error::Short;
+    Some(format!(
+        "invalid value {} for `dt`: {} is unstable above w dt = 1 (its binding constant w = {} 1/s): a dt of at most {} s",
+        short(h.abs()),
+        method.name,
+        short(scheme.binding),
+        short(integrator::tao::MAX_BINDING_STEP / scheme.binding)
+    ))
+}
+
 /// The time a failed run failed at, if the error says.
 fn failure_time(e: &Error) -> Option<f64> {
     match e {
@@ -405,14 +451,16 @@ impl Observer for Rows<'_> {
 /// calling) thread checks Python's signal handlers every 20 ms (they run only in the main
 /// thread, with the GIL): a Ctrl-C sets the flag `f` is given, which the run polls, and the
 /// KeyboardInterrupt is raised once the run has returned. A `short` run (well under the 0.2 s
-/// a Ctrl-C may wait) runs here, without the thread's cost.
+/// a Ctrl-C may wait) runs here, without the thread's cost. `progress`, if given, is called
+/// (with 0: the work is not counted) at each check, so that Python can show the time elapsed.
 pub(crate) fn interruptible<T: Send>(
     py: Python<'_>,
     short: bool,
+    progress: Option<&Bound<'_, PyAny>>,
     f: impl FnOnce(&AtomicBool) -> T + Send,
 ) -> PyResult<T> {
     let done = AtomicU64::new(0);
-    interruptible_counted(py, short, None, &done, |flag| f(flag))
+    interruptible_counted(py, short, progress, &done, |flag| f(flag))
 }
 
 /// [`interruptible`] for a run that counts what it has finished in `done` (members, cells,
@@ -516,23 +564,36 @@ fn solve<'py>(
         .map(|e| EventSpec::parse(e, &*system.model, stop_on_event))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| to_py(py, &e))?;
-    for (name, v) in [("t0", t0), ("t_end", t_end)] {
-        if !v.is_finite() {
-            return Err(raise(
-                py,
-                "InvalidValueError",
-                format!("invalid value {v} for `{name}`: a finite time"),
-            ));
-        }
-    }
-    if t_end <= t0 {
+    // The messages name Python's arguments (t_span, dt), never the library's (t0, h).
+    if !(t0.is_finite() && t_end.is_finite()) {
         return Err(raise(
             py,
             "InvalidValueError",
-            format!("invalid t_span ({t0}, {t_end}): the end must be after the start"),
+            format!("invalid t_span ({t0}, {t_end}): finite times (s)"),
         ));
     }
-    for (name, v) in [("dt", dt), ("rtol", rtol), ("atol", atol)] {
+    if t_end == t0 {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid t_span ({t0}, {t_end}): the end must differ from the start (before it: the run goes backward in time)"
+            ),
+        ));
+    }
+    if let Some(v) = dt
+        && !(v.is_finite() && v > 0.0)
+    {
+        // scipy's convention: the step is a size, the direction is t_span's.
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid value {v} for `dt`: a finite step size > 0 (s); the direction comes from t_span, as in scipy's solve_ivp: t_span=(10, 0) runs backward"
+            ),
+        ));
+    }
+    for (name, v) in [("rtol", rtol), ("atol", atol)] {
         if let Some(v) = v
             && !(v.is_finite() && v > 0.0)
         {
@@ -559,14 +620,6 @@ fn solve<'py>(
             ),
         ));
     }
-    if adaptive && t0 != 0.0 {
-        // The adaptive loop starts at t = 0 (its first step is chosen from there).
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!("invalid value {t0} for `t0`: adaptive runs start at 0"),
-        ));
-    }
     let tol = Tolerances {
         rtol: rtol.unwrap_or(1e-6),
         atol: atol.unwrap_or(1e-6),
@@ -574,9 +627,19 @@ fn solve<'py>(
         h_max: f64::INFINITY,
     };
     if adaptive {
-        tol.validate().map_err(|e| to_py(py, &e))?;
+        tol.validate().map_err(|e| solve_error(py, &e))?;
     }
-    let spec = RunSpec { t0, h: dt.unwrap_or(1e-3), end: End::Time(t_end) };
+    // Backward when t_end < t0: negative steps of size dt.
+    let direction = if t_end < t0 { -1.0 } else { 1.0 };
+    let spec = RunSpec { t0, h: direction * dt.unwrap_or(1e-3), end: End::Time(t_end) };
+    if !adaptive {
+        // Checked here, to be named as the arguments are (the library speaks of h and of
+        // its binding constant, which Python does not set).
+        spec.schedule().map_err(|e| solve_error(py, &e))?;
+        if let Some(why) = tao_step_refusal(method, spec.h) {
+            return Err(raise(py, "InvalidValueError", why));
+        }
+    }
     let model = &*system.model;
     let n = y0.len();
     let watch_events = !specs.is_empty();
@@ -600,11 +663,14 @@ fn solve<'py>(
             pending: None,
         };
         let mut chain = EndAtEvent { events: EventLocator::new(model, specs), inner: rows };
-        let stepping =
-            if adaptive { Stepping::Adaptive { t_end, h0: dt, tol: &tol } } else { Stepping::Fixed(spec) };
         // Without events the locator is left out: one call per step less.
         let observer: &mut dyn Observer = if watch_events { &mut chain } else { &mut chain.inner };
-        let result = model.solve_fastest(method, &y0, &stepping, observer, None, &Pause::NEVER);
+        let result = if adaptive {
+            // From any start, either way in time.
+            model.solve_adaptive_from(method, &y0, t0, t_end, dt, &tol, observer).map(Leg::Done)
+        } else {
+            model.solve_fastest(method, &y0, &Stepping::Fixed(spec), observer, None, &Pause::NEVER)
+        };
         let stopped = chain.events.stopped_at().map(|e| e.name.clone());
         let Rows { rows, dense, pending, .. } = chain.inner;
         ((rows, dense, pending), chain.events.found, stopped, result)
@@ -656,7 +722,7 @@ fn solve<'py>(
         }
         Ok(Leg::Paused(_)) => unreachable!("never paused"),
         Err(e) => {
-            let class = to_py(py, &e);
+            let class = solve_error(py, &e);
             out.set_item("nfev", py.None())?;
             out.set_item("steps", k.saturating_sub(1))?;
             out.set_item("rejected", py.None())?;

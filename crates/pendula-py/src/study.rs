@@ -74,7 +74,7 @@ fn rows<'py>(py: Python<'py>, data: Vec<f64>, cols: usize) -> Bound<'py, numpy::
 /// as `pendula lyapunov`. Returns `exponents`, `uncertainty` (1/s), `running` (rows of t
 /// since the transient, λ₁ … λ_k).
 #[pyfunction]
-#[pyo3(signature = (system, method, dt, t_end, transient, renormalise, spectrum))]
+#[pyo3(signature = (system, method, dt, t_end, transient, renormalise, spectrum, progress=None))]
 #[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn lyapunov<'py>(
     py: Python<'py>,
@@ -85,6 +85,7 @@ pub(crate) fn lyapunov<'py>(
     transient: f64,
     renormalise: f64,
     spectrum: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
     let dt = positive(py, "dt", dt)?;
@@ -120,8 +121,10 @@ pub(crate) fn lyapunov<'py>(
     let spec = LyapunovSpec { h: dt, transient, t_end, renormalise, count, blocks: 10 };
     let model = &*system.model;
     let y0 = system.values.initial_state();
-    let result = interruptible(py, false, |_| analysis::lyapunov(&AsSystem(model), method, y0, &spec))?
-        .map_err(|e| renamed(py, e, &[("h", "dt")]))?;
+    let result = interruptible(py, false, progress.as_ref(), |_| {
+        analysis::lyapunov(&AsSystem(model), method, y0, &spec)
+    })?
+    .map_err(|e| renamed(py, e, &[("h", "dt")]))?;
     let out = PyDict::new(py);
     out.set_item("method", method.name)?;
     out.set_item("exponents", result.exponents.into_pyarray(py))?;
@@ -136,7 +139,7 @@ pub(crate) fn lyapunov<'py>(
 /// q₁, q₂, p₁, p₂), `q`, `p` (the other angle, wrapped, and its momentum); `initial`
 /// (count, 4); `max_energy_error` (J); `section_index`.
 #[pyfunction]
-#[pyo3(signature = (system, energy, count, section, value, t_end, method, dt, tol))]
+#[pyo3(signature = (system, energy, count, section, value, t_end, method, dt, tol, progress=None))]
 #[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn poincare<'py>(
     py: Python<'py>,
@@ -149,6 +152,7 @@ pub(crate) fn poincare<'py>(
     method: &str,
     dt: Option<f64>,
     tol: f64,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = &*system.model;
     let info = system.values.info();
@@ -198,8 +202,10 @@ pub(crate) fn poincare<'py>(
         }
     };
     let spec = PoincareSpec { energy, count, section: index, value, t_end };
-    let orbits = interruptible(py, false, |_| section_of::poincare(model, method, stepping, &spec))?
-        .map_err(|e| to_py(py, &e))?;
+    let orbits = interruptible(py, false, progress.as_ref(), |_| {
+        section_of::poincare(model, method, stepping, &spec)
+    })?
+    .map_err(|e| to_py(py, &e))?;
     let worst = section_of::max_energy_error(model, &orbits, energy);
     let other = 1 - index;
     let (mut orbit, mut t, mut states, mut q, mut p, mut initial) =
@@ -412,7 +418,8 @@ fn assembled<'py>(
 /// `samples` periods after `transient` (s, whole periods), RK4 at `steps_per_period`.
 /// Returns `values` (n,), `samples` (n, samples, n_state), `kernel`.
 #[pyfunction]
-#[pyo3(signature = (system, param, transient, samples, steps_per_period, threads=None))]
+#[pyo3(signature = (system, param, transient, samples, steps_per_period, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn bifurcation<'py>(
     py: Python<'py>,
     system: &CoreSystem,
@@ -421,6 +428,7 @@ pub(crate) fn bifurcation<'py>(
     samples: usize,
     steps_per_period: u32,
     threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let info = system.values.info();
     if info.quantity("drive_frequency").is_err() {
@@ -474,8 +482,8 @@ pub(crate) fn bifurcation<'py>(
     }
     let pool = pool(py, threads)?;
     let spec = OrbitDiagramSpec { transient, samples, steps_per_period };
-    let data =
-        interruptible(py, false, |_| pool.install(|| orbit_diagram(&all, &spec)))?.map_err(|e| match e {
+    let data = interruptible(py, false, progress.as_ref(), |_| pool.install(|| orbit_diagram(&all, &spec)))?
+        .map_err(|e| match e {
             Error::NonFiniteMember { member, t } => raise(
                 py,
                 "NonFiniteStateError",
@@ -534,6 +542,34 @@ fn methods_of(
 
 /// Whether a run's failure drops its point with a note (as the CLI's studies do) rather
 /// than ending the study.
+/// Why a step of a study's ladder was dropped, in the words of Python's arguments: the step
+/// is `dt`, and Tao's step limit names the largest dt (the library's message speaks of h and
+/// of the binding constant, which the studies do not set).
+fn dropped(method: &Method, h: f64, e: &Error) -> String {
+    if let Error::InvalidValue { .. } = e
+        && let Some(why) = crate::tao_step_refusal(method, h)
+    {
+        return why;
+    }
+    match e {
+        Error::InvalidValue { name, value, allowed } if name == "h" => {
+            format!("invalid value {} for `dt`: {allowed}", Short(*value))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// A dropped step's error and its reason in Python's words ([`dropped`]).
+type Dropped = (Error, String);
+
+/// The error of a study whose every step was dropped, with the message of [`dropped`].
+fn refused(py: Python<'_>, e: &Error, why: String) -> PyErr {
+    match e {
+        Error::InvalidValue { .. } => raise(py, "InvalidValueError", why),
+        other => to_py(py, other),
+    }
+}
+
 fn droppable(e: &Error) -> bool {
     matches!(
         e,
@@ -571,13 +607,15 @@ fn horizon_and_steps(
 /// ladder) to `t_end` (default: the study horizon), the max-norm error against the exact
 /// solution or a dop853 reference, and the order fitted in the asymptotic range.
 #[pyfunction]
-#[pyo3(signature = (system, methods=None, dts=None, t_end=None))]
+#[pyo3(signature = (system, methods=None, dts=None, t_end=None, progress=None))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn convergence<'py>(
     py: Python<'py>,
     system: &CoreSystem,
     methods: Option<Vec<String>>,
     dts: Option<Vec<f64>>,
     t_end: Option<f64>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
     let model = &*system.model;
@@ -596,7 +634,7 @@ pub(crate) fn convergence<'py>(
     }
     let y0 = system.values.initial_state();
     type Row = (&'static str, Vec<f64>, Vec<f64>, OrderEstimate, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
         let scale = reference.scale();
         let (mut results, mut first) = (Vec::new(), None);
@@ -609,8 +647,9 @@ pub(crate) fn convergence<'py>(
                         errors.push(e[0]);
                     }
                     Err(e) if droppable(&e) => {
-                        failure = Some(format!("at h = {}: {e}", Short(h)));
-                        first.get_or_insert(e);
+                        let why = dropped(method, h, &e);
+                        failure = Some(format!("at dt = {}: {why}", Short(h)));
+                        first.get_or_insert((e, why));
                     }
                     Err(e) => return Err(e),
                 }
@@ -620,11 +659,12 @@ pub(crate) fn convergence<'py>(
         }
         Ok((reference, results, first))
     };
-    let (reference, results, first) = interruptible(py, false, |_| run())?.map_err(|e| to_py(py, &e))?;
+    let (reference, results, first) =
+        interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
     if results.iter().all(|r| r.1.is_empty())
-        && let Some(e) = first
+        && let Some((e, why)) = first
     {
-        return Err(to_py(py, &e));
+        return Err(refused(py, &e, why));
     }
     let list = PyList::empty(py);
     for (name, hs, errors, estimate, failure) in results {
@@ -655,7 +695,8 @@ pub(crate) fn convergence<'py>(
 /// (rtol = atol), to `t_end` (default: the study horizon). Per method, points (dt, tol,
 /// error, rhs_evals, wall_s) and why some are missing.
 #[pyfunction]
-#[pyo3(signature = (system, tols, methods=None, dts=None, t_end=None))]
+#[pyo3(signature = (system, tols, methods=None, dts=None, t_end=None, progress=None))]
+#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn work_precision<'py>(
     py: Python<'py>,
     system: &CoreSystem,
@@ -663,6 +704,7 @@ pub(crate) fn work_precision<'py>(
     methods: Option<Vec<String>>,
     dts: Option<Vec<f64>>,
     t_end: Option<f64>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
     if tols.is_empty() {
@@ -702,7 +744,7 @@ pub(crate) fn work_precision<'py>(
     }
     let y0 = system.values.initial_state();
     type Row = (&'static str, Vec<analysis::WorkPoint>, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Error>), Error> {
+    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
         let (mut results, mut first) = (Vec::new(), None);
         for &method in &methods {
@@ -718,8 +760,10 @@ pub(crate) fn work_precision<'py>(
                 match point {
                     Ok(p) => points.extend(p),
                     Err(e) if droppable(&e) => {
-                        note = Some(format!("at {} = {}: {e}", if adaptive { "tol" } else { "h" }, Short(x)));
-                        first.get_or_insert(e);
+                        let why = if adaptive { e.to_string() } else { dropped(method, x, &e) };
+                        note =
+                            Some(format!("at {} = {}: {why}", if adaptive { "tol" } else { "dt" }, Short(x)));
+                        first.get_or_insert((e, why));
                     }
                     Err(e) => return Err(e),
                 }
@@ -728,11 +772,12 @@ pub(crate) fn work_precision<'py>(
         }
         Ok((reference, results, first))
     };
-    let (reference, results, first) = interruptible(py, false, |_| run())?.map_err(|e| to_py(py, &e))?;
+    let (reference, results, first) =
+        interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
     if results.iter().all(|r| r.1.is_empty())
-        && let Some(e) = first
+        && let Some((e, why)) = first
     {
-        return Err(to_py(py, &e));
+        return Err(refused(py, &e, why));
     }
     let list = PyList::empty(py);
     for (name, points, note) in results {
@@ -761,7 +806,7 @@ pub(crate) fn work_precision<'py>(
 /// they exceed `saturation`. Returns `t`, `distance`, `growth_rate` (1/s or None),
 /// `fit_window` ((t₀, t₁) or None), `variable`.
 #[pyfunction]
-#[pyo3(signature = (system, method, dt, t_end, delta, variable, saturation))]
+#[pyo3(signature = (system, method, dt, t_end, delta, variable, saturation, progress=None))]
 #[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
 pub(crate) fn divergence<'py>(
     py: Python<'py>,
@@ -772,6 +817,7 @@ pub(crate) fn divergence<'py>(
     delta: f64,
     variable: Option<&str>,
     saturation: f64,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let info = system.values.info();
     if !delta.is_finite() || delta == 0.0 {
@@ -817,9 +863,10 @@ pub(crate) fn divergence<'py>(
     let every = analysis::divergence::sample_every(schedule.steps);
     let model = &*system.model;
     let y0 = system.values.initial_state();
-    let d =
-        interruptible(py, false, |_| analysis::divergence(model, method, y0, index, delta, &spec, every))?
-            .map_err(|e| renamed(py, e, &names))?;
+    let d = interruptible(py, false, progress.as_ref(), |_| {
+        analysis::divergence(model, method, y0, index, delta, &spec, every)
+    })?
+    .map_err(|e| renamed(py, e, &names))?;
     let fit = analysis::growth_rate(&d, saturation);
     let out = PyDict::new(py);
     out.set_item("method", method.name)?;

@@ -342,10 +342,11 @@ impl Observer for EventLocator<'_> {
                     terminal.push(self.specs[k].terminal);
                 }
             }
-            // In time order; the run ends at the first terminal event, so later ones in the
-            // same step did not happen.
+            // In the run's time order (decreasing t on a run backward in time); the run ends
+            // at the first terminal event, so later ones in the same step did not happen.
             let mut order: Vec<usize> = (0..hits.len()).collect();
-            order.sort_by(|&a, &b| hits[a].t.total_cmp(&hits[b].t));
+            let d = h.signum();
+            order.sort_by(|&a, &b| (d * hits[a].t).total_cmp(&(d * hits[b].t)));
             for i in order {
                 self.found.push(hits[i].clone());
                 if terminal[i] {

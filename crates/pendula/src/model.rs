@@ -231,6 +231,22 @@ pub trait DynModel: DynSystem {
         tol: &Tolerances,
         observer: &mut dyn Observer,
     ) -> Result<Report, Error>;
+    /// [`DynModel::solve_adaptive`] from `t0`, forward or backward in time (see
+    /// [`crate::simulate::adaptive::solve_adaptive_from`]).
+    ///
+    /// # Errors
+    /// As [`crate::simulate::adaptive::solve_adaptive_from`].
+    #[allow(clippy::too_many_arguments)] // solve_adaptive's arguments and the start time
+    fn solve_adaptive_from(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t0: f64,
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error>;
     /// Runs `method` from `y0` as `stepping` says, able to pause and to continue from a
     /// paused state (see [`crate::simulate::resume::solve_resumable`]).
     ///
@@ -313,6 +329,18 @@ impl<M: Model> DynModel for M {
         observer: &mut dyn Observer,
     ) -> Result<Report, Error> {
         crate::simulate::solve_adaptive(self, method, y0, t_end, h0, tol, observer)
+    }
+    fn solve_adaptive_from(
+        &self,
+        method: &Method,
+        y0: &[f64],
+        t0: f64,
+        t_end: f64,
+        h0: Option<f64>,
+        tol: &Tolerances,
+        observer: &mut dyn Observer,
+    ) -> Result<Report, Error> {
+        crate::simulate::adaptive::solve_adaptive_from(self, method, y0, t0, t_end, h0, tol, observer)
     }
     fn solve_resumable(
         &self,

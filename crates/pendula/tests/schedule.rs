@@ -114,3 +114,51 @@ fn ref_rk4_matches_the_benchmark_c_reference() {
         assert!(diff < 1e-9, "{diff:e}");
     }
 }
+
+/// A negative step runs backward in time to an end before the start (scipy's `solve_ivp`
+/// with `t_span = (t0, t_end)`, `t_end < t0`): whole steps of |h| and a last one that lands
+/// on the end. A negative step toward a later end (or the start itself), or for a step
+/// count, is a wrong step, as it always was.
+#[test]
+fn a_negative_step_runs_backward_to_an_earlier_end() {
+    let s = RunSpec { t0: 10.0, h: -1e-3, end: End::Time(0.0) }.schedule().unwrap();
+    assert_eq!((s.steps, s.last_h, s.t_end), (10_000, -1e-3, 0.0));
+    let s = RunSpec { t0: 1.0, h: -0.3, end: End::Time(0.0) }.schedule().unwrap();
+    assert_eq!((s.steps, s.t_end), (4, 0.0));
+    assert!((s.last_h + 0.1).abs() < 1e-15, "{}", s.last_h);
+    for (spec, name) in [
+        (RunSpec { t0: 0.0, h: -0.1, end: End::Time(1.0) }, "h"),
+        (RunSpec { t0: 1.0, h: -0.1, end: End::Time(1.0) }, "h"),
+        (RunSpec { t0: 1.0, h: -0.1, end: End::Time(f64::NEG_INFINITY) }, "t_end"),
+        (RunSpec { t0: 0.0, h: -0.1, end: End::Steps(10) }, "h"),
+        (RunSpec { t0: 0.0, h: f64::NEG_INFINITY, end: End::Time(-1.0) }, "h"),
+    ] {
+        match spec.schedule() {
+            Err(Error::InvalidValue { name: n, .. }) => assert_eq!(n, name, "{spec:?}"),
+            other => panic!("{spec:?}: {other:?}"),
+        }
+    }
+}
+
+/// The driven, damped oscillator run backward from t₀ = 2 s to −1 s with RK4 is its exact
+/// solution: the drive is evaluated at the true, decreasing times (a run that took t − t₀ or
+/// −t instead would miss it by the drive's amplitude), and every recorded time decreases.
+#[test]
+fn a_backward_fixed_step_run_of_the_driven_oscillator_is_exact() {
+    let v =
+        values("oscillator", &[("c", 0.2), ("drive_amplitude", 1.0), ("drive_frequency", 1.3), ("k", 4.0)]);
+    let model = v.build();
+    let y0 = v.initial_state();
+    let at2 = model.exact(2.0, y0).unwrap();
+    let mut rec = Recorder::default();
+    let spec = RunSpec { t0: 2.0, h: -1e-3, end: End::Time(-1.0) };
+    let rk4 = pendula::integrator::find("rk4").unwrap();
+    let report = model.solve(rk4, &at2, &spec, &mut rec).unwrap();
+    assert_eq!(report.outcome, Outcome::ReachedEnd { steps: 3000, t: -1.0 });
+    let times: Vec<f64> = rec.rows.chunks(3).map(|r| r[0]).collect();
+    assert_eq!((times[0], times[3000]), (2.0, -1.0));
+    assert!(times.windows(2).all(|w| w[1] < w[0]));
+    let exact = model.exact(-1.0, y0).unwrap();
+    let diff = crate::support::max_diff(&report.state, &exact);
+    assert!(diff < 1e-11, "{diff:e}");
+}

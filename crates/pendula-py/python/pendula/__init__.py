@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from . import _core
-from .dense import DenseOutput, Progress, counted, locate
+from .dense import DenseOutput, counted, locate, time_bar
 from .errors import (
     IntegrationError,
     InvalidValueError,
@@ -490,7 +490,7 @@ def solve(
     dense_output: bool = False,
     events: Any = None,
     stop_on_event: bool = False,
-    progress: bool | Callable[[float], None] = False,
+    progress: bool | None | Callable[[float], None] = None,
 ) -> Solution:
     """Integrates ``system`` over ``t_span = (t0, t_end)`` (s) from ``y0`` (default: the
     system's initial state) with ``method`` (a name from ``catalogue().methods``, or
@@ -498,8 +498,15 @@ def solve(
     or, for an embedded pair (dopri5, dop853), adaptive steps with ``rtol``, ``atol``
     (default 1e-6 each, as the CLI; ``dt`` is then the first step to try).
 
-    The solution holds every accepted step, or with ``t_eval`` (increasing times in
-    ``t_span``) the states at those times, from the continuous solution. ``dense_output=True``
+    With ``t_end < t0`` the run goes backward in time, as scipy's ``solve_ivp`` does:
+    ``t_span=(10, 0)`` starts from ``y0`` at t = 10 s and ends at t = 0, every method
+    stepping with ``-dt`` (the drive of a driven system is evaluated at the true, decreasing
+    times). As in scipy, ``dt`` is a step *size* (> 0) and ``t_span`` gives the direction; ``t``,
+    ``t_eval`` and ``t_events`` then run from t0 down to t_end.
+
+    The solution holds every accepted step, or with ``t_eval`` (times in ``t_span``, in the
+    run's direction: increasing, or decreasing on a backward run) the states at those
+    times, from the continuous solution. ``dense_output=True``
     keeps that continuous solution as ``sol``: the method's own dense output where it has
     one (dop853: order 7, dopri5: order 4), else the cubic Hermite interpolant of each step.
 
@@ -511,8 +518,11 @@ def solve(
     continuous solution. ``t_events[i]`` (times, s) and ``y_events[i]`` (states) follow the
     order of ``events``.
 
-    ``progress=True`` shows a bar (tqdm's, in a terminal or a notebook, when tqdm is
-    installed; else a line on stderr); a callable is called with the time reached instead.
+    ``progress``: by default (None) a bar shows when stderr is a terminal or the call runs in
+    a notebook and the run proves long (estimated from its progress after 0.5 s to take 3 s
+    or more); ``True`` always shows it, ``False`` never; a callable is called with the time
+    reached instead, about every 20 ms. The bar is tqdm's (``tqdm.auto``) when tqdm is
+    installed (``pip install pendula[progress]``), else a line on stderr.
 
     Raises a ``ValueError`` subclass for bad input and :class:`IntegrationError` (with the
     time and the partial solution) when the run fails.
@@ -542,21 +552,18 @@ def solve(
             raise InvalidValueError(f"invalid event {e!r}: a spec such as 'flip' or 'section:theta1=0+', or a callable g(t, y)")
     specs = [e for e in event_list if isinstance(e, str)]
     callables = [e for e in event_list if not isinstance(e, str)]
+    # +1 forward in time, -1 backward (t_span = (10, 0)).
+    direction = -1.0 if t_end < t0 else 1.0
     if t_eval is not None:
         t_eval = np.asarray(t_eval, dtype=np.float64).reshape(-1)
         lo, hi = min(t0, t_end), max(t0, t_end)
         outside = ~np.isfinite(t_eval) | (t_eval < lo) | (t_eval > hi)
         if outside.any():
-            raise InvalidValueError(f"invalid t_eval value {t_eval[np.argmax(outside)]}: times within t_span [{t0}, {t_end}] s")
-        if np.any(np.diff(t_eval) <= 0):
-            raise InvalidValueError("invalid t_eval: the times must be increasing")
-    bar = None
-    if progress is True:
-        bar = Progress(t0, t_end, unit="" if system.dimensionless else "s")
-    elif callable(progress):
-        bar = progress
-    elif progress is not False:
-        raise InvalidValueError(f"invalid value {progress!r} for `progress`: True, False or a callable of t")
+            raise InvalidValueError(f"invalid t_eval value {t_eval[np.argmax(outside)]}: times within t_span ({t0:g}, {t_end:g}) s")
+        if np.any(direction * np.diff(t_eval) <= 0):
+            order = "increasing" if direction > 0 else "decreasing (t_span runs backward)"
+            raise InvalidValueError(f"invalid t_eval: the times must be {order}, as t_span ({t0:g}, {t_end:g}) runs")
+    bar, bar_to_close = time_bar(progress, t0, t_end, "" if system.dimensionless else "s", f"solve {system.name}")
     dense = dense_output or t_eval is not None or bool(callables)
     try:
         raw = _core.solve(
@@ -564,13 +571,13 @@ def solve(
             dense, specs, bool(stop_on_event), bar,
         )
     except BaseException:
-        if isinstance(bar, Progress):
-            bar.close(None)
+        if bar_to_close is not None:
+            bar_to_close.close(None)
         raise
     t, states = raw["t"], raw["states"]
     # The bar's last word is where the run ended (a short run may never have been ticked).
-    if isinstance(bar, Progress):
-        bar.close(float(t[-1]) if len(t) else None)
+    if bar_to_close is not None:
+        bar_to_close.close(float(t[-1]) if len(t) else None)
     elif bar is not None and len(t):
         bar(float(t[-1]))
     sol = None
@@ -588,16 +595,16 @@ def solve(
     for e in callables:
         i = event_list.index(e)
         found[i] = locate(e, sol, t, states)
-        if getattr(e, "terminal", False) and found[i] and found[i][0][0] < t[-1]:
+        if getattr(e, "terminal", False) and found[i] and direction * found[i][0][0] < direction * t[-1]:
             te, ye = found[i][0]
-            keep = t < te
+            keep = direction * t < direction * te
             t = np.append(t[keep], te)
             states = np.vstack([states[keep], ye[None, :]])
             status, message = 1, f"a terminal event ({_event_name(e)}) ended the run at t = {te:g}"
     if status == 1:
         # Events after the run's end did not happen.
         for i in found:
-            found[i] = [(te, ye) for te, ye in found[i] if te <= t[-1]]
+            found[i] = [(te, ye) for te, ye in found[i] if direction * te <= direction * t[-1]]
     t_events = y_events = names = None
     if event_list:
         names = [e if isinstance(e, str) else _event_name(e) for e in event_list]
@@ -606,7 +613,7 @@ def solve(
             np.array([ye for _, ye in found[i]]).reshape(-1, len(y0)) for i in range(len(event_list))
         ]
     if t_eval is not None and sol is not None:
-        t = t_eval[t_eval <= t[-1]]
+        t = t_eval[direction * t_eval <= direction * t[-1]]
         states = np.ascontiguousarray(sol(t).T) if len(t) else np.empty((0, len(y0)))
     if not dense_output:
         sol = None
@@ -702,7 +709,7 @@ def ensemble(
     record: Sequence[str] | str = ("final",),
     until: str | None = None,
     threads: int | None = None,
-    progress: bool | Callable[[int], None] = False,
+    progress: bool | None | Callable[[int], None] = None,
 ) -> EnsembleResult:
     """Integrates m members of ``system`` from the rows of ``y0s`` (m, n_state), with
     per-member parameters ``params`` ({name: array of m}), ``steps`` steps of ``dt`` (or to
@@ -711,7 +718,9 @@ def ensemble(
     at its first flip. ``record``: what ``data`` holds per member, in this order, as
     ``pendula sweep --record``: ``"final"`` (the state), ``"flip-time"`` (s, NaN if no flip),
     ``"energy-error"`` (E_end − E_0, J). Results are bitwise identical whatever the thread
-    count. ``progress=True`` shows a bar of the members done (a callable gets the count).
+    count. ``progress``: a bar of the members done, by default (None) where a terminal or
+    notebook shows it and the run is estimated to take 3 s or more; ``True`` always,
+    ``False`` never; a callable gets the count instead.
     """
     system = _system(system)
     y0s = np.ascontiguousarray(np.atleast_2d(np.asarray(y0s, dtype=np.float64)))
@@ -744,6 +753,7 @@ def ensemble(
             system._core, y0s, names, p, str(method), float(dt), int(steps), until == "flip", threads,
             "energy-error" in records, tick,
         ),
+        desc=f"ensemble {system.name}",
     )
     n = len(system.names)
     parts = {"final": raw[:, :n], "flip-time": raw[:, n : n + 1], "energy-error": raw[:, n + 1 : n + 2]}

@@ -68,6 +68,7 @@ def lyapunov(
     transient: float,
     renormalise: float,
     spectrum: bool,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def poincare(
     system: CoreSystem,
@@ -79,6 +80,7 @@ def poincare(
     method: str,
     dt: Optional[float],
     tol: float,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def fractal(
     system: CoreSystem,
@@ -100,12 +102,14 @@ def bifurcation(
     samples: int,
     steps_per_period: int,
     threads: Optional[int] = None,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def convergence(
     system: CoreSystem,
     methods: Optional[list[str]] = None,
     dts: Optional[list[float]] = None,
     t_end: Optional[float] = None,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def work_precision(
     system: CoreSystem,
@@ -113,6 +117,7 @@ def work_precision(
     methods: Optional[list[str]] = None,
     dts: Optional[list[float]] = None,
     t_end: Optional[float] = None,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def divergence(
     system: CoreSystem,
@@ -122,6 +127,7 @@ def divergence(
     delta: float,
     variable: Optional[str],
     saturation: float,
+    progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
 def tolerance_ladder(loosest: float, tightest: float, levels: int) -> list[float]: ...
 

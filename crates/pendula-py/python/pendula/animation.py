@@ -82,7 +82,9 @@ def animate(solution: Solution, *, fps: int = 30, speed: float = 1.0, size: tupl
     t = solution.t
     if len(t) < 1:
         raise InvalidValueError("the solution has no samples to animate")
-    times = np.arange(t[0], t[-1] + 1e-12, speed / fps)
+    # A run backward in time (t_span=(10, 0)) plays as it ran: from t0 down to t_end.
+    d = 1.0 if t[-1] >= t[0] else -1.0
+    times = np.arange(t[0], t[-1] + d * 1e-12, d * speed / fps)
     if len(times) > 10_000:
         raise InvalidValueError(
             f"{len(times)} frames: at most 10000 (raise speed, lower fps, or animate a shorter run)"
@@ -92,8 +94,8 @@ def animate(solution: Solution, *, fps: int = 30, speed: float = 1.0, size: tupl
     elif len(t) == 1:
         states = np.repeat(solution.states[:1], len(times), axis=0)
     else:
-        i = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
-        i = i - ((times - t[i - 1]) < (t[i] - times))
+        i = np.clip(np.searchsorted(d * t, d * times), 1, len(t) - 1)
+        i = i - (d * (times - t[i - 1]) < d * (t[i] - times))
         states = solution.states[i]
     angles = np.ascontiguousarray(states[:, None, :links])
     energy = solution.system.energy(states.T)

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _core
-from .dense import counted
+from .dense import counted, timed
 from .errors import InvalidValueError, PendulaError, UnknownNameError
 
 if TYPE_CHECKING:
@@ -206,6 +206,7 @@ def lyapunov(
     transient: float = 10.0,
     renormalise: float = 0.5,
     spectrum: bool = False,
+    progress: Any = None,
 ) -> LyapunovResult:
     """The largest Lyapunov exponent of ``system`` (a System or a catalogue name) from its
     initial state, or the whole ``spectrum``, as ``pendula lyapunov``: the state and its
@@ -213,9 +214,13 @@ def lyapunov(
     steps, or Gauss–Legendre) at steps ``dt`` (s), a ``transient`` (s) discarded, then
     averaged over ``t_end`` (s) with re-orthonormalisation every ``renormalise`` (s; at least
     20 of them).
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    raw = _core.lyapunov(
+    args = (
         system._core,
         str(method),
         _float("dt", dt),
@@ -224,6 +229,7 @@ def lyapunov(
         _float("renormalise", renormalise),
         bool(spectrum),
     )
+    raw = timed(progress, f"lyapunov {system.name}", lambda tick: _core.lyapunov(*args, tick))
     running = raw["running"]
     return LyapunovResult(
         system=system,
@@ -318,6 +324,7 @@ def poincare(
     method: str = "dop853",
     dt: Optional[float] = None,
     tol: float = 1e-10,
+    progress: Any = None,
 ) -> PoincareResult:
     """A Poincaré section of a conservative two-degree-of-freedom ``system`` (the double
     pendulum, or the chain with links=2), as ``pendula poincare``: ``count`` orbits
@@ -326,9 +333,13 @@ def poincare(
     rad, mod 2π) with that angle increasing located on the dense output. ``method`` adaptive
     (dop853, dopri5) at rtol = atol = ``tol``, or fixed steps ``dt`` (s) for any method.
     The system's initial-state values are not used.
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    raw = _core.poincare(
+    args = (
         system._core,
         _float("energy", energy),
         _int("count", count, 1, 10_000, "orbits"),
@@ -339,6 +350,7 @@ def poincare(
         None if dt is None else _float("dt", dt),
         _float("tol", tol),
     )
+    raw = timed(progress, f"poincare {system.name}", lambda tick: _core.poincare(*args, tick))
     return PoincareResult(
         system=system,
         method=raw["method"],
@@ -461,7 +473,7 @@ def fractal(
     dt: float = 0.01,
     tolerance: float = 0.01,
     threads: Optional[int] = None,
-    progress: Any = False,
+    progress: Any = None,
 ) -> FractalResult:
     """The double pendulum's flip fractal, as ``pendula fractal``: released from rest at the
     cell centres of ``theta1`` × ``theta2`` ((lo, hi, n), rad), the time to the first flip
@@ -470,7 +482,9 @@ def fractal(
     (agreement within ``tolerance`` s). ``system``: the double pendulum with its parameters
     (undamped, undriven); its initial-state values are not used. All cores unless
     ``threads``; the result does not depend on them. Ctrl-C stops it within a slice of
-    pixels. ``progress=True`` shows a bar of the pixels done (a callable gets the count).
+    pixels. ``progress``: a bar of the pixels done, by default (None) where a terminal or notebook
+    shows it and the run is estimated to take 3 s or more; ``True`` always, ``False`` never;
+    a callable gets the count instead.
     """
     system = _system(system)
     t1, t2 = _axis("theta1", theta1), _axis("theta2", theta2)
@@ -489,6 +503,7 @@ def fractal(
             _threads(threads),
             tick,
         ),
+        desc=f"fractal {system.name}",
     )
     return _fractal_result(system, raw, t1, t2, dt, t_max, tolerance)
 
@@ -574,6 +589,7 @@ def bifurcation(
     steps_per_period: int = 100,
     variable: Optional[str] = None,
     threads: Optional[int] = None,
+    progress: Any = None,
 ) -> BifurcationResult:
     """A stroboscopic orbit diagram of a driven ``system``, as ``pendula bifurcation``:
     ``param`` = (name, lo, hi, n) swept over n cell centres (default for the driven
@@ -582,6 +598,10 @@ def bifurcation(
     after ``transient`` (s, rounded up to whole periods), RK4 at ``steps_per_period``
     (4 to 10^6). ``variable``: the state variable the plot shows (default: the first
     velocity). All cores unless ``threads``; the result does not depend on them.
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
     if param is None:
@@ -598,7 +618,7 @@ def bifurcation(
         variable = names[len(names) // 2]
     elif variable not in names:
         raise UnknownNameError(f"unknown variable `{variable}` of {system.name}; valid: {', '.join(names)}")
-    raw = _core.bifurcation(
+    args = (
         system._core,
         param,
         _float("transient", transient),
@@ -606,6 +626,7 @@ def bifurcation(
         _int("steps_per_period", steps_per_period, 4, 1_000_000, "steps"),
         _threads(threads),
     )
+    raw = timed(progress, f"bifurcation {system.name}", lambda tick: _core.bifurcation(*args, tick))
     return BifurcationResult(
         system=system,
         param=param,
@@ -708,6 +729,7 @@ def convergence(
     methods: "Sequence[str] | str | None" = None,
     dts: Any = None,
     t_end: Optional[float] = None,
+    progress: Any = None,
 ) -> ConvergenceResult:
     """The order of convergence of ``methods`` (names, or a comma-separated string; default:
     every method that applies) on ``system``, as ``pendula convergence``: the max-norm error
@@ -716,11 +738,19 @@ def convergence(
     ``dts`` (s; default: each method's own ladder of halved steps), and the order fitted
     where the errors are in the asymptotic range. A method that fails at some step keeps
     the errors of the others and says why (``failure``).
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    raw = _core.convergence(
-        system._core, _names(methods), _steps("dts", dts), None if t_end is None else _float("t_end", t_end)
+    args = (
+        system._core,
+        _names(methods),
+        _steps("dts", dts),
+        None if t_end is None else _float("t_end", t_end),
     )
+    raw = timed(progress, f"convergence {system.name}", lambda tick: _core.convergence(*args, tick))
     return ConvergenceResult(
         system=system,
         t_end=float(raw["t_end"]),
@@ -809,6 +839,7 @@ def work_precision(
     dts: Any = None,
     tols: Any = None,
     t_end: Optional[float] = None,
+    progress: Any = None,
 ) -> WorkPrecisionResult:
     """Error against cost of ``methods`` (default: every method that applies) on
     ``system``, as ``pendula work-precision``: fixed-step methods at the steps ``dts`` (s;
@@ -816,12 +847,21 @@ def work_precision(
     tolerances ``tols`` (rtol = atol; default: 10 from 1e-3 to 1e-12, geometric), the error
     at ``t_end`` (s; default: the system's study horizon) against the exact solution or a
     dop853 reference. Wall times are medians of runs repeated for at least 20 ms.
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
     tols = _core.tolerance_ladder(1e-3, 1e-12, 10) if tols is None else _steps("tols", tols)
-    raw = _core.work_precision(
-        system._core, tols, _names(methods), _steps("dts", dts), None if t_end is None else _float("t_end", t_end)
+    args = (
+        system._core,
+        tols,
+        _names(methods),
+        _steps("dts", dts),
+        None if t_end is None else _float("t_end", t_end),
     )
+    raw = timed(progress, f"work-precision {system.name}", lambda tick: _core.work_precision(*args, tick))
     return WorkPrecisionResult(
         system=system,
         t_end=float(raw["t_end"]),
@@ -894,6 +934,7 @@ def divergence(
     delta: float = 1e-9,
     variable: Optional[str] = None,
     saturation: float = 1e-2,
+    progress: Any = None,
 ) -> DivergenceResult:
     """The divergence of nearby trajectories, as ``pendula divergence``: ``system`` from its
     initial state and from the same with ``delta`` added to ``variable`` (default: the first
@@ -901,9 +942,13 @@ def divergence(
     at about 2000 samples and the exponential growth rate (1/s) fitted to ln(distance)
     before it first exceeds ``saturation`` — a finite-time estimate of the largest Lyapunov
     exponent.
+
+    ``progress``: by default (None) a line with the time elapsed appears where a terminal or
+    notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
+    ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    raw = _core.divergence(
+    args = (
         system._core,
         str(method),
         _float("dt", dt),
@@ -912,6 +957,7 @@ def divergence(
         None if variable is None else str(variable),
         _float("saturation", saturation),
     )
+    raw = timed(progress, f"divergence {system.name}", lambda tick: _core.divergence(*args, tick))
     window = raw["fit_window"]
     return DivergenceResult(
         system=system,

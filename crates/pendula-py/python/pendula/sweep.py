@@ -255,7 +255,7 @@ def sweep(
     record: Union[str, Iterable[str]] = ("final",),
     threads: Optional[int] = None,
     shard: Any = None,
-    progress: Any = False,
+    progress: Any = None,
 ) -> SweepResult:
     """Integrates ``system`` (a name, or a System: its values are the ``set`` ones) from
     every cell of ``grid`` — ``{name: (lo, hi, n)}`` or ``["NAME=LO:HI:N", ...]``, the
@@ -266,7 +266,9 @@ def sweep(
     NaN without a flip), ``energy-error`` (E_end − E_0, J), in that column order.
     ``shard=(K, N)`` or ``"K/N"`` computes shard K of N only (assemble them with
     :func:`merge`). Bitwise the CLI's ``pendula sweep``, for any thread count.
-    ``progress=True`` shows a bar of the cells done (a callable gets the count).
+    ``progress``: a bar of the cells done, by default (None) where a terminal or notebook
+    shows it and the run is estimated to take 3 s or more; ``True`` always, ``False`` never;
+    a callable gets the count instead.
     """
     args = _arguments(system, grid, set, method, dt, steps, t_end, until, record)
     if threads is not None:
@@ -280,6 +282,7 @@ def sweep(
         k * cells // n - (k - 1) * cells // n,
         "cells",
         lambda tick: _core.sweep(*args, (k, n), threads, tick),
+        desc="sweep",
     )
     return _result(out)
 

@@ -48,7 +48,7 @@ def view(obj=None, *, method: str | None = None, dt: float | None = None, width:
         system = obj.system
         share["method"] = obj.method
         if not obj.adaptive and len(obj.t) > 1:
-            share["dt"] = float(obj.t[1] - obj.t[0])
+            share["dt"] = abs(float(obj.t[1] - obj.t[0]))  # a step size, also of a backward run
     elif isinstance(obj, System):
         system = obj
     elif isinstance(obj, str):

@@ -14,8 +14,9 @@ use crate::observe::{Observer, Sample};
 use crate::simulate::{Counted, Outcome, Report};
 use crate::system::{Model, System};
 
-/// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly),
-/// showing the initial state and every accepted step to `observer`. `h0` is the first step
+/// Runs an embedded pair with adaptive steps from t = 0 to `t_end` (landing on it exactly;
+/// a negative `t_end` runs backward in time, see [`solve_adaptive_from`]), showing the
+/// initial state and every accepted step to `observer`. `h0` is the size of the first step
 /// to try; `None` picks one from the problem (Hairer, Nørsett, Wanner §II.4).
 ///
 /// # Errors
@@ -31,7 +32,33 @@ pub fn solve_adaptive<M: Model>(
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
     assert_eq!(y0.len(), model.dim(), "initial state of the wrong length");
-    match run(model, method, y0, t_end, h0, tol, observer, None, &Pause::NEVER)? {
+    match run(model, method, y0, 0.0, t_end, h0, tol, observer, None, &Pause::NEVER)? {
+        Leg::Done(report) => Ok(report),
+        Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
+    }
+}
+
+/// [`solve_adaptive`] from `t0` instead of 0, forward or backward in time: with `t_end`
+/// before `t0` the steps are negative (the system is evaluated at the true times, so a
+/// drive is followed backward), as scipy's `solve_ivp` integrates a span `(t0, t_end)`
+/// with `t_end < t0`. `h0` is the first step's size (> 0; its sign is the run's direction).
+///
+/// # Errors
+/// As [`solve_adaptive`]; [`Error::InvalidValue`] for a start time that is not finite or an
+/// end time equal to it.
+#[allow(clippy::too_many_arguments)] // solve_adaptive's arguments and the start time
+pub fn solve_adaptive_from<M: Model>(
+    model: &M,
+    method: &Method,
+    y0: &[f64],
+    t0: f64,
+    t_end: f64,
+    h0: Option<f64>,
+    tol: &Tolerances,
+    observer: &mut dyn Observer,
+) -> Result<Report, Error> {
+    assert_eq!(y0.len(), model.dim(), "initial state of the wrong length");
+    match run(model, method, y0, t0, t_end, h0, tol, observer, None, &Pause::NEVER)? {
         Leg::Done(report) => Ok(report),
         Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
     }
@@ -40,7 +67,7 @@ pub fn solve_adaptive<M: Model>(
 /// Where the loop stands between two steps.
 struct Position {
     t: f64,
-    /// The next step to try, s.
+    /// The size of the next step to try, s (> 0; the run's direction gives its sign).
     h: f64,
     accepted: u64,
     rejected: u64,
@@ -48,13 +75,15 @@ struct Position {
     just_rejected: bool,
 }
 
-/// The adaptive loop of [`solve_adaptive`], started afresh or `from` a paused state, pausing
-/// after an accepted step (not the last) when `pause` says so.
+/// The adaptive loop of [`solve_adaptive`] (from `t0`, backward when `t_end` < `t0`), started
+/// afresh or `from` a paused state, pausing after an accepted step (not the last) when
+/// `pause` says so.
 #[allow(clippy::too_many_arguments)] // solve_adaptive's arguments, and where to start and pause
 pub(crate) fn run<M: Model>(
     model: &M,
     method: &Method,
     y0: &[f64],
+    t0: f64,
     t_end: f64,
     h0: Option<f64>,
     tol: &Tolerances,
@@ -71,13 +100,24 @@ pub(crate) fn run<M: Model>(
         });
     };
     tol.validate()?;
-    if !(t_end.is_finite() && t_end > 0.0) {
+    if !t0.is_finite() {
+        return Err(Error::InvalidValue {
+            name: "t0".into(),
+            value: t0,
+            allowed: "the start time must be finite",
+        });
+    }
+    if !(t_end.is_finite() && t_end != t0) {
         return Err(Error::InvalidValue {
             name: "t_end".into(),
             value: t_end,
-            allowed: "the end time must be finite and > 0",
+            allowed: "the end time must be finite and differ from the start (before it: a run backward in time)",
         });
     }
+    // The direction of time: +1 forward, −1 backward. Step sizes are kept positive; the
+    // loop compares times in the run's direction (d·t, exact), so a forward run is the same
+    // bits as before backward runs existed.
+    let d = if t_end < t0 { -1.0 } else { 1.0 };
     let system = Counted::new(model);
     let mut stepper = EmbeddedRk::new(tableau, y0.len());
     let mut control = PiController::new(tableau.control);
@@ -93,15 +133,18 @@ pub(crate) fn run<M: Model>(
         None => {
             let y = y0.to_vec();
             if y.iter().any(|v| !v.is_finite()) {
-                return Err(Error::NonFinite { t: 0.0 });
+                return Err(Error::NonFinite { t: t0 });
             }
-            if let ControlFlow::Break(stop) = observer.observe(&Sample::new(0, 0.0, &y, false)) {
+            if let ControlFlow::Break(stop) = observer.observe(&Sample::new(0, t0, &y, false)) {
                 stop.into_result()?;
-                return Ok(Leg::Done(report(Outcome::Stopped { steps: 0, t: 0.0 }, y, 0, &system)));
+                return Ok(Leg::Done(report(Outcome::Stopped { steps: 0, t: t0 }, y, 0, &system)));
             }
-            let h =
-                h0.unwrap_or_else(|| initial_step(&system, &y, method.order, tol)).min(tol.h_max).min(t_end);
-            (y, Position { t: 0.0, h, accepted: 0, rejected: 0, just_rejected: false })
+            let h = h0
+                .map(f64::abs)
+                .unwrap_or_else(|| initial_step(&system, t0, d, &y, method.order, tol))
+                .min(tol.h_max)
+                .min(d * (t_end - t0));
+            (y, Position { t: t0, h, accepted: 0, rejected: 0, just_rejected: false })
         }
         Some(state) => {
             state.check(y0.len())?;
@@ -110,7 +153,7 @@ pub(crate) fn run<M: Model>(
             let (h, just_rejected) = (r.f64()?, r.bool()?);
             control.restore(&mut r)?;
             r.finish()?;
-            if !(state.t < t_end && h.is_finite() && h > 0.0) {
+            if !(d * state.t < d * t_end && h.is_finite() && h > 0.0) {
                 return Err(Error::BadCheckpoint {
                     part: "the run",
                     reason: format!(
@@ -128,23 +171,23 @@ pub(crate) fn run<M: Model>(
     loop {
         let Position { t, mut h, .. } = at;
         // Land on t_end exactly; stretch a last step that would leave a sliver.
-        let last = t + 1.01 * h >= t_end;
+        let last = d * t + 1.01 * h >= d * t_end;
         if last {
-            h = t_end - t;
+            h = d * (t_end - t);
         }
         // Never below what the end time can resolve: a smaller step would need more than
         // 1/(16 ε) ≈ 3·10¹⁴ steps to get there, and at t = 0 a floor of 16 ε |t| alone is 0,
         // which let a rejected step shrink to 0 and the run stall for ever.
-        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs().max(t_end));
+        let floor = tol.h_min.max(16.0 * f64::EPSILON * t.abs().max(t_end.abs()));
         if h < floor && !last {
             return Err(Error::StepSizeTooSmall { t, h });
         }
-        stepper.attempt(&system, t, h, &y);
+        stepper.attempt(&system, t, d * h, &y);
         let err = stepper.error_norm(&y, tol.rtol, tol.atol);
         match control.judge(h, err) {
             Verdict::Accept(next) => {
-                let t_new = if last { t_end } else { t + h };
-                stepper.accept(&system, t, h, t_new, &mut y, dense);
+                let t_new = if last { t_end } else { t + d * h };
+                stepper.accept(&system, t, d * h, t_new, &mut y, dense);
                 at.accepted += 1;
                 at.t = t_new;
                 if y.iter().any(|v| !v.is_finite()) {
@@ -198,17 +241,26 @@ pub(crate) fn run<M: Model>(
 /// h₀ = 0.01 ‖y₀‖/‖f₀‖, one Euler step to estimate ‖f'‖, then h₁ = (0.01 / max(‖f₀‖,
 /// ‖f'‖))^(1/p) with p the method's order, and the smaller of 100 h₀ and h₁. Norms are
 /// weighted sums of squares (not means), as in the codes.
-fn initial_step<S: System + ?Sized>(system: &S, y0: &[f64], order: u32, tol: &Tolerances) -> f64 {
+///
+/// The run starts at `t0` in direction `d` (±1); the step returned is a size (> 0).
+fn initial_step<S: System + ?Sized>(
+    system: &S,
+    t0: f64,
+    d: f64,
+    y0: &[f64],
+    order: u32,
+    tol: &Tolerances,
+) -> f64 {
     let n = y0.len();
     let scale: Vec<f64> = y0.iter().map(|v| tol.atol + tol.rtol * v.abs()).collect();
     let norm2 = |v: &[f64]| v.iter().zip(&scale).map(|(a, s)| (a / s) * (a / s)).sum::<f64>();
     let mut f0 = vec![0.0; n];
-    system.rhs(0.0, y0, &mut f0);
+    system.rhs(t0, y0, &mut f0);
     let (dny, dnf) = (norm2(y0), norm2(&f0));
     let h0 = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { 0.01 * (dny / dnf).sqrt() }.min(tol.h_max);
-    let y1: Vec<f64> = y0.iter().zip(&f0).map(|(y, f)| y + h0 * f).collect();
+    let y1: Vec<f64> = y0.iter().zip(&f0).map(|(y, f)| y + d * h0 * f).collect();
     let mut f1 = vec![0.0; n];
-    system.rhs(h0, &y1, &mut f1);
+    system.rhs(t0 + d * h0, &y1, &mut f1);
     let diff: Vec<f64> = f1.iter().zip(&f0).map(|(a, b)| a - b).collect();
     let der2 = norm2(&diff).sqrt() / h0;
     let der12 = der2.max(dnf.sqrt());

@@ -41,7 +41,8 @@ pub enum End {
 pub struct RunSpec {
     /// Start time t₀, s.
     pub t0: f64,
-    /// Step size h, s.
+    /// Step size h, s: > 0, or < 0 for a run backward in time to an `End::Time` before t₀
+    /// (every method steps with a negative h as with a positive one; t = t₀ + k h).
     pub h: f64,
     /// Where the run ends.
     pub end: End,
@@ -64,7 +65,10 @@ impl RunSpec {
         let invalid =
             |name: &str, value: f64, allowed| Error::InvalidValue { name: name.to_owned(), value, allowed };
         let h = self.h;
-        if !(h.is_finite() && h > 0.0) {
+        // A negative step runs backward, to an end time before the start; toward a later
+        // end, or for a step count, it is the step that is wrong.
+        let backward = h < 0.0 && matches!(self.end, End::Time(t_end) if t_end < self.t0);
+        if !(h.is_finite() && (h > 0.0 || backward)) {
             return Err(invalid("h", h, "the step size must be finite and > 0"));
         }
         if !self.t0.is_finite() {
@@ -82,8 +86,14 @@ impl RunSpec {
             }
             End::Time(t_end) => {
                 let span = t_end - self.t0;
-                if !(t_end.is_finite() && span > 0.0) {
-                    return Err(invalid("t_end", t_end, "the end time must be finite and > 0"));
+                let ahead = if backward { span < 0.0 } else { span > 0.0 };
+                if !(t_end.is_finite() && ahead) {
+                    let allowed = if backward {
+                        "with a negative step the run goes backward: the end time must be finite and before the start"
+                    } else {
+                        "the end time must be finite and > 0"
+                    };
+                    return Err(invalid("t_end", t_end, allowed));
                 }
                 let ratio = span / h;
                 if ratio > MAX_STEPS {

@@ -35,7 +35,7 @@ pub fn solve_resumable<M: Model>(
             dispatch(model, method, spec.h, Resumable { y0, spec, observer, from, pause })
         }
         Stepping::Adaptive { t_end, h0, tol } => {
-            crate::simulate::adaptive::run(model, method, y0, *t_end, *h0, tol, observer, from, pause)
+            crate::simulate::adaptive::run(model, method, y0, 0.0, *t_end, *h0, tol, observer, from, pause)
         }
     }
 }
