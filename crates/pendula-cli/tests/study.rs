@@ -89,10 +89,15 @@ fn compare_writes_its_summary_and_figures() {
     assert!(error("euler") > 100.0 * error("verlet"), "{csv}");
     assert_eq!(field("verlet", 9), "bounded");
     assert_eq!(field("euler", 9), "growing");
-    for name in ["energy", "trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"]
-    {
+    for name in ["trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"] {
         assert_chart_size!(png_size(&dir.path().join(format!("c/{name}.png"))), "{name}");
     }
+    // The energy figure: the chart, and below it a panel over the span of Euler's run, which
+    // was stopped when its error reached the energy scale.
+    let (w, h) = png_size(&dir.path().join("c/energy.png"));
+    assert!(h == 1200 && (960..1400).contains(&w), "energy: {w}x{h}");
+    let svg = std::fs::read_to_string(dir.path().join("c/energy.svg")).unwrap();
+    assert!(svg.contains("euler over its own run") && svg.contains("euler (stopped at t = "), "energy.svg");
 }
 
 #[test]
