@@ -17,7 +17,7 @@ pub use convergence::{
     method_ladder, reference_state, roundoff_floor, study_horizon, tolerance_ladder, work_precision,
     work_precision_adaptive,
 };
-pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
+pub use divergence::{Divergence, GrowthFit, divergence, growth_rate, growth_rate_between};
 pub use energy::{
     EnergyBalance, EnergySeries, GROWTH_FACTOR, Growth, drift_rate, envelope, first_exceeding, growth,
 };
