@@ -330,7 +330,21 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
         };
     }
     page.paragraph(&text);
-    page.figure(&Shown { command, file: "energy.png" }, caption)?;
+    // Runs stopped for their error are drawn again below the chart, over their own span.
+    let stopped: Vec<&str> = methods
+        .iter()
+        .filter(|(_, m)| m["failure"].as_str().is_some_and(|f| f.starts_with("stopped at t = ")))
+        .map(|(name, _)| name.as_str())
+        .collect();
+    let caption = if stopped.is_empty() {
+        caption.to_owned()
+    } else {
+        format!(
+            "{caption} Below: {} over its own run, to where its error reached the energy scale.",
+            stopped.join(", ")
+        )
+    };
+    page.figure(&Shown { command, file: "energy.png" }, &caption)?;
     page.table(
         &["method", "dt (s)", "cost (evals)", "max rel. error", "drift (1/s)", "error", "note"],
         &rows,
@@ -431,7 +445,7 @@ fn build(page: &mut Page) -> Result<()> {
         let system = command.split_whitespace().nth(1).unwrap_or("");
         page.figure(
             &Shown { command, file: "convergence.png" },
-            &format!("{system}: global error against step for every applicable method; the legend gives the fitted orders."),
+            &format!("{system}: global error against step for every applicable method; the legend gives the fitted orders, or why there is none."),
         )?;
         convergence_table(page, command)?;
     }
@@ -687,8 +701,8 @@ fn growth_rates(page: &mut Page, divergence_figure: usize) -> Result<()> {
     let combined = f(&l["uncertainty"]).hypot(f(&s["uncertainty"]));
     let paragraph = format!(
         "<b>Four growth rates, one exponent.</b> The largest Lyapunov exponent λ₁ is a limit over infinite time; each \
-         number below is a finite-time estimate of it, and they differ for that reason. Benettin's method follows one \
-         tangent vector, renormalised every {} s, and averages its logarithmic growth: over {} s it gives {} 1/s, over \
+         number below is a finite-time estimate of it, and they differ for that reason. Benettin's method follows the \
+         tangent dynamics (λ₁ from one vector), renormalised every {} s, and averages its logarithmic growth: over {} s it gives {} 1/s, over \
          the default {} s {} 1/s — the same orbit, the shorter average being its first {} s; they differ by {:.3} 1/s, \
          {} their combined uncertainty {:.3}. The divergence fit (Figure {divergence_figure}, {} 1/s) is the slope of \
          ln distance of two real orbits over one window, t = {} … {} s, from the start until the distance passes {}: \
