@@ -150,3 +150,34 @@ fn estimate_order_finds_the_asymptotic_order_between_a_preasymptotic_head_and_a_
     assert_eq!(e.label(), "step too large");
     assert!(e.reason().unwrap().starts_with("step too large: "));
 }
+
+/// Where rounding is larger than the floor's model: a smallest step whose error is lifted
+/// by 30% (a slope of 1.6 into it, Tao's maps round more than an ulp a step) is left out of
+/// the fit; errors that level off at 2·10⁻¹³ (above the model's 10⁻¹⁴, as a long chain's do)
+/// set the floor the fit keeps 10 times away from.
+#[test]
+fn estimate_order_leaves_out_steps_that_rounding_disturbs() {
+    let (t_end, accuracy) = (2.0, 1e-14);
+    let hs: Vec<f64> = (0..12).map(|k| 5e-3 / 2f64.powi(k)).collect();
+    let mut lifted: Vec<f64> = hs.iter().map(|h| 2.0 * h * h).collect();
+    *lifted.last_mut().unwrap() *= 1.3;
+    match estimate_order(&hs, &lifted, 1.0, t_end, accuracy) {
+        OrderEstimate::Fitted { order, h_min, .. } => {
+            assert!((order - 2.0).abs() < 1e-9, "{order}");
+            assert_eq!(h_min, hs[hs.len() - 2]);
+        }
+        other => panic!("{other:?}"),
+    }
+    let level = 2e-13;
+    let hs5: Vec<f64> = (0..14).map(|k| 0.1 / 2f64.powi(k)).collect();
+    let truth = |h: f64| 1e-3 * h.powi(5);
+    let plateau: Vec<f64> =
+        hs5.iter().enumerate().map(|(k, &h)| truth(h) + level * if k % 2 == 0 { 1.0 } else { 0.4 }).collect();
+    match estimate_order(&hs5, &plateau, 1.0, t_end, accuracy) {
+        OrderEstimate::Fitted { order, h_min, points, .. } => {
+            assert!((order - 5.0).abs() < 0.05, "{order} over {points}");
+            assert!(plateau[hs5.iter().position(|h| *h == h_min).unwrap()] > 10.0 * 0.4 * level, "{h_min}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
