@@ -1,5 +1,5 @@
 //! The study commands on their defaults, for every catalogued system: they finish, and every
-//! order they print is within ±0.15 of the declared one or carries a stated reason.
+//! order they print is within ±0.3 of the declared one or carries a stated reason.
 
 use std::path::Path;
 
@@ -9,6 +9,15 @@ use tempfile::TempDir;
 
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The legend entries of an SVG figure: the text after each legend sample.
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| t.split_once('>'))
+        .map(|(_, rest)| rest.split("</text>").next().unwrap_or("").trim().to_owned())
+        .collect()
 }
 
 #[test]
@@ -24,30 +33,53 @@ fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
         let s = json(&dir.path().join("s.json"));
         let orders = s["orders"].as_object().unwrap();
         assert!(orders.len() >= 5, "{}: only {} methods", info.name, orders.len());
+        // The report's two convergence figures: a curve without an order is too coarse for
+        // its asymptotic range or at the round-off floor, and says so; elsewhere a curve may
+        // also be irregular (a long chain's Tao map), or its method may fail.
+        let report = ["oscillator", "double"].contains(&info.name);
+        let reasons: &[&str] = if report {
+            &["step too large: ", "saturated at round-off: "]
+        } else {
+            &["step too large: ", "saturated at round-off: ", "irregular: ", "did not converge", "non-finite"]
+        };
+        let legends = svg_texts(&std::fs::read_to_string(dir.path().join("c/convergence.svg")).unwrap());
         let mut fitted = 0;
         for (method, order) in orders {
             let declared = pendula::integrator::find(method).unwrap().order as f64;
             let note = s["notes"][method].as_str().unwrap();
+            let legend = legends
+                .iter()
+                .find(|l| l.starts_with(&format!("{method} (")) || l.starts_with(&format!("{method}, ")))
+                .unwrap_or_else(|| panic!("{}: no legend entry for {method}: {legends:?}", info.name));
             match order.as_f64() {
                 Some(o) => {
                     assert!(
-                        (o - declared).abs() <= 0.15,
+                        (o - declared).abs() <= 0.3,
                         "{}: {method} fitted {o}, declared {declared}",
                         info.name
                     );
+                    assert!(legend.ends_with(&format!("(order {o:.2})")), "{}: {legend}", info.name);
                     fitted += 1;
                 }
-                None => assert!(
-                    ["saturated", "round-off", "no straight stretch", "did not converge", "non-finite"]
-                        .iter()
-                        .any(|r| note.contains(r)),
-                    "{}: {method} has no order and no reason: {note:?}",
-                    info.name
-                ),
+                None => {
+                    assert!(
+                        reasons.iter().any(|r| note.starts_with(r) || note.contains(r)),
+                        "{}: {method} has no order and no reason: {note:?}",
+                        info.name
+                    );
+                    // The legend says why in the note's first words, never "no order".
+                    let why = note.split(':').next().unwrap();
+                    assert!(legend.ends_with(&format!("({why})")), "{}: {legend} vs {note}", info.name);
+                }
             }
         }
-        // The studies measure: at least half the methods get an order on every system.
+        // The studies measure: most methods get an order on every system, and on the
+        // report's systems every method but at most one (dop853 on the double pendulum,
+        // whose error falls from 1% to the floor in five steps of √2).
         assert!(fitted * 2 >= orders.len(), "{}: {fitted} of {} fitted", info.name, orders.len());
+        if report {
+            assert!(fitted + 1 >= orders.len(), "{}: {fitted} of {} fitted", info.name, orders.len());
+        }
         let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
         assert!(stdout.contains("fitted order") && stdout.contains("note"), "{stdout}");
     }

@@ -89,10 +89,15 @@ fn compare_writes_its_summary_and_figures() {
     assert!(error("euler") > 100.0 * error("verlet"), "{csv}");
     assert_eq!(field("verlet", 9), "bounded");
     assert_eq!(field("euler", 9), "growing");
-    for name in ["energy", "trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"]
-    {
+    for name in ["trajectory", "phase_euler", "phase_rk4", "phase_symplectic-euler", "phase_verlet"] {
         assert_chart_size!(png_size(&dir.path().join(format!("c/{name}.png"))), "{name}");
     }
+    // The energy figure: the chart, and below it a panel over the span of Euler's run, which
+    // was stopped when its error reached the energy scale.
+    let (w, h) = png_size(&dir.path().join("c/energy.png"));
+    assert!(h == 1200 && (960..1400).contains(&w), "energy: {w}x{h}");
+    let svg = std::fs::read_to_string(dir.path().join("c/energy.svg")).unwrap();
+    assert!(svg.contains("euler over its own run") && svg.contains("euler (stopped at t = "), "energy.svg");
 }
 
 #[test]
@@ -463,6 +468,56 @@ fn report_is_one_self_contained_page() {
         let row = double.split(&format!("<td>{method}</td>")).nth(1).unwrap().split("</tr>").next().unwrap();
         assert!(row.contains(&format!("<td>{verdict}</td>")), "{method}: {row}");
     }
+    // The growth rates reconciled: the table's values are the summaries' (and, for the
+    // windowed rates, the long run's running estimate's), and the paragraph quotes them.
+    let runs = dir.path().join("r/runs");
+    let slug = |c: &str| -> String {
+        c.chars().map(|ch| if ch.is_ascii_alphanumeric() || ch == '-' { ch } else { '_' }).take(60).collect()
+    };
+    let summary = |c: &str| json(&runs.join(slug(c)).join("summary.json"));
+    let (long, default, divergence, lab) = (
+        summary("lyapunov --spectrum --t-end 500"),
+        summary("lyapunov"),
+        summary("divergence"),
+        summary("divergence --dt 0.01 --delta 7e-9 --fit-from 1e-7 --saturation 0.1"),
+    );
+    let pm = |s: &serde_json::Value| {
+        format!("{:.3} ± {:.3}", s["lambda_max"].as_f64().unwrap(), s["uncertainty"].as_f64().unwrap())
+    };
+    let rate = |s: &serde_json::Value| format!("{:.3}", s["growth_rate"].as_f64().unwrap());
+    let window =
+        divergence["fit_window"][1].as_f64().unwrap() - divergence["fit_window"][0].as_f64().unwrap();
+    // Finite-time rates over consecutive windows of that length, from the running average.
+    let csv =
+        std::fs::read_to_string(runs.join(slug("lyapunov --spectrum --t-end 500")).join("lyapunov.csv"))
+            .unwrap();
+    let (mut start, mut sum, mut rates) = (0.0, 0.0, Vec::new());
+    for line in csv.lines().skip(1) {
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        if cells[0] - start >= window - 1e-9 {
+            rates.push((cells[1] * cells[0] - sum) / (cells[0] - start));
+            (start, sum) = (cells[0], cells[1] * cells[0]);
+        }
+    }
+    let n = rates.len() as f64;
+    let mean = rates.iter().sum::<f64>() / n;
+    let sd = (rates.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let want = [pm(&long), pm(&default), rate(&divergence), rate(&lab), format!("{mean:.3} ± {sd:.3}")];
+    assert_eq!(html.matches("<table class=\"growth-rates\">").count(), 1);
+    let table =
+        html.split("<table class=\"growth-rates\">").nth(1).unwrap().split("</table>").next().unwrap();
+    let values: Vec<&str> = table
+        .split("<tr>")
+        .skip(2)
+        .map(|r| r.split("<td>").last().unwrap().split("</td>").next().unwrap())
+        .collect();
+    assert_eq!(values, want);
+    let paragraph = html.split("<p>").find(|p| p.contains("Four growth rates")).unwrap();
+    for v in &want[..4] {
+        assert!(paragraph.contains(&format!("{v} 1/s")), "{v} not in {paragraph}");
+    }
+    assert!(paragraph.contains(&format!("standard deviation {sd:.3} 1/s")), "{paragraph}");
+    assert!(paragraph.contains(&format!("Quote λ₁ = {} 1/s", want[0])), "{paragraph}");
     for entry in std::fs::read_dir(dir.path().join("r/runs/stability_double")).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "png") {
@@ -536,6 +591,11 @@ fn study_commands_reject_bad_input() {
         (&["animate", "--out", "a.png"][..], ".gif"),
         (&["animate", "--size", "10x10"][..], "--size"),
         (&["stability", "--max-energy-error", "0"][..], "--max-energy-error"),
+        (
+            &["divergence", "--fit-from", "0.1"][..],
+            "invalid --fit-from 0.1: must be finite, >= 0 and smaller",
+        ),
+        (&["divergence", "--fit-from", "-1"][..], "--fit-from"),
     ] {
         let out = pendula(dir.path(), args).code(2);
         let stderr = String::from_utf8_lossy(&out.get_output().stderr).into_owned();

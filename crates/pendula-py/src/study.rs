@@ -654,7 +654,7 @@ pub(crate) fn convergence<'py>(
                     Err(e) => return Err(e),
                 }
             }
-            let estimate = analysis::estimate_order(&hs, &errors, scale, t_end);
+            let estimate = analysis::estimate_order(&hs, &errors, scale, t_end, reference.accuracy);
             results.push((method.name, hs, errors, estimate, failure));
         }
         Ok((reference, results, first))

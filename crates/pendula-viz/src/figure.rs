@@ -154,6 +154,8 @@ pub struct Figure {
     /// A bar chart drawn instead of the series (see `From<Bars>`), so that every figure
     /// goes through the same writers.
     pub bars: Option<Box<crate::Bars>>,
+    /// A second chart drawn below this one in the same image (see [`Figure::with_panel`]).
+    pub panel: Option<Box<Figure>>,
 }
 
 impl From<crate::Bars> for Figure {
@@ -193,7 +195,16 @@ impl Figure {
             size: (960, 600),
             legend: Legend::Auto,
             bars: None,
+            panel: None,
         }
+    }
+
+    /// With `panel` drawn below the chart, in the same image, with its own title, axes and
+    /// legend: a closer look at part of the data (a run that stopped early, over its own
+    /// time span, where the main chart's axis squeezes it into a streak).
+    pub fn with_panel(mut self, panel: Figure) -> Self {
+        self.panel = Some(Box::new(panel));
+        self
     }
 
     /// With the legend here.
@@ -243,6 +254,25 @@ impl Figure {
         if let Some(bars) = &self.bars {
             return bars.png();
         }
+        let (rgb, w, h) = self.rgb()?;
+        let Some(panel) = &self.panel else {
+            return encode_png(&rgb, w, h);
+        };
+        // The panel below the chart, both left-aligned on a white canvas as wide as the wider.
+        let (prgb, pw, ph) = panel.rgb()?;
+        let width = w.max(pw);
+        let mut canvas = vec![255u8; (width * (h + ph) * 3) as usize];
+        for (rows, (cw, y0)) in [(&rgb, (w, 0)), (&prgb, (pw, h))] {
+            for (k, row) in rows.chunks_exact((cw * 3) as usize).enumerate() {
+                let at = ((y0 as usize + k) * width as usize) * 3;
+                canvas[at..at + row.len()].copy_from_slice(row);
+            }
+        }
+        encode_png(&canvas, width, h + ph)
+    }
+
+    /// The chart alone (without its panel) as RGB bytes, with its width and height.
+    fn rgb(&self) -> Result<(Vec<u8>, u32, u32), Error> {
         let (placement, extra) = self.placement()?;
         let (w, h) = (self.size.0 + extra, self.size.1);
         let mut rgb = vec![255u8; (w * h * 3) as usize];
@@ -251,7 +281,7 @@ impl Figure {
             self.draw(&root, placement)?;
             root.present().map_err(|e| Error::Draw(e.to_string()))?;
         }
-        encode_png(&rgb, w, h)
+        Ok((rgb, w, h))
     }
 
     /// The figure as an SVG document.
@@ -259,6 +289,28 @@ impl Figure {
         if let Some(bars) = &self.bars {
             return bars.svg();
         }
+        let main = self.svg_chart()?;
+        let Some(panel) = &self.panel else {
+            return Ok(main);
+        };
+        // Each chart is an <svg> of its own size; the panel's is nested below the chart's.
+        let size = |svg: &str, attr: &str| -> u32 {
+            svg.split(&format!("{attr}=\""))
+                .nth(1)
+                .and_then(|v| v.split('"').next()?.parse().ok())
+                .unwrap_or(0)
+        };
+        let below = panel.svg_chart()?;
+        let (w, h) = (size(&main, "width"), size(&main, "height"));
+        let (pw, ph) = (size(&below, "width"), size(&below, "height"));
+        let (width, height) = (w.max(pw), h + ph);
+        Ok(format!(
+            "<svg width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" xmlns=\"http://www.w3.org/2000/svg\">\n{main}\n<g transform=\"translate(0,{h})\">\n{below}\n</g>\n</svg>\n"
+        ))
+    }
+
+    /// The chart alone (without its panel) as an SVG document.
+    fn svg_chart(&self) -> Result<String, Error> {
         let (placement, extra) = self.placement()?;
         let mut out = String::new();
         {

@@ -88,3 +88,21 @@ fn reference_state_is_exact_where_possible() {
     let err = r.state.iter().zip(want).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(err < 1e-12, "{err:e}");
 }
+
+/// A separation that stays at 10⁻⁹ for 2 s (not yet turned along the unstable direction)
+/// and then grows as e^(0.9 (t − 2)): fitted from the start the rate comes out low; from
+/// above 10⁻⁸ it is the exponential's, 0.9.
+#[test]
+fn growth_rate_between_leaves_out_the_start() {
+    let t: Vec<f64> = (0..3000).map(|k| k as f64 * 0.01).collect();
+    let distance = t.iter().map(|&t| if t < 2.0 { 1e-9 } else { 1e-9 * (0.9 * (t - 2.0)).exp() }).collect();
+    let d = analysis::Divergence { t, distance };
+    let whole = analysis::growth_rate(&d, 1e-2).unwrap();
+    let window = analysis::growth_rate_between(&d, 1e-8, 1e-2).unwrap();
+    assert!((window.rate - 0.9).abs() < 1e-9, "{}", window.rate);
+    assert!(window.t_start > 2.0 + (10f64).ln() / 0.9 - 0.02, "{}", window.t_start);
+    assert!(whole.rate < window.rate - 0.02 && whole.t_start == 0.0, "{whole:?}");
+    // Both stop before the distance first passes the saturation.
+    assert_eq!(whole.t_end, window.t_end);
+    assert!(window.t_end < 2.0 + (1e7f64).ln() / 0.9);
+}

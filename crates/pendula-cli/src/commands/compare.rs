@@ -94,6 +94,9 @@ pub struct Run {
     /// Rows over the first [`EARLY`] time units, thinned to about [`SAMPLES`]: the trajectory
     /// figure, where the whole run's thinned samples would be too sparse to draw a curve.
     pub early: Vec<f64>,
+    /// (t, |relative error|) of a run stopped early ([`GIVE_UP`]), 2000 to 4000 samples over
+    /// its own span up to the step that stopped it: the energy figure's panel.
+    pub stopped_energy: Vec<(f64, f64)>,
 }
 
 /// The span of the trajectory figure, s (or time units).
@@ -407,16 +410,51 @@ pub fn crossovers(runs: &[Run]) -> Vec<Crossover> {
 struct GiveUp<'a, 'b> {
     series: &'a mut EnergySeries<'b>,
     stopped_at: Option<f64>,
+    /// The error over the run's own span, however short, for the panel of a stopped run.
+    own: OwnSpan,
 }
 
 impl Observer for GiveUp<'_, '_> {
     fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let _ = self.series.observe(s);
+        self.own.push(s.t, self.series.last.abs());
         if self.series.max_abs > GIVE_UP {
+            // The step that stopped it ends the panel's curve, on its stride or not.
+            if self.own.points.last().is_none_or(|p| p.0 < s.t) {
+                self.own.points.push((s.t, self.series.last.abs()));
+            }
             self.stopped_at = Some(s.t);
             return ControlFlow::Break(pendula::observe::Stop::Enough);
         }
         ControlFlow::Continue(())
+    }
+}
+
+/// Samples of a series that keep between [`SAMPLES`] and twice as many, evenly spaced, over
+/// whatever span the run turns out to have: every sample until there are 2 · SAMPLES, then
+/// every other one kept and the stride doubled. (The energy series is thinned for the whole
+/// planned run, which leaves a run stopped early with a handful of samples.)
+#[derive(Default)]
+struct OwnSpan {
+    stride: u64,
+    seen: u64,
+    points: Vec<(f64, f64)>,
+}
+
+impl OwnSpan {
+    fn push(&mut self, t: f64, e: f64) {
+        let stride = self.stride.max(1);
+        if self.seen.is_multiple_of(stride) {
+            if self.points.len() >= 2 * SAMPLES as usize {
+                let kept: Vec<(f64, f64)> = self.points.iter().copied().step_by(2).collect();
+                self.points = kept;
+                self.stride = 2 * stride;
+            }
+            if self.seen.is_multiple_of(self.stride.max(1)) {
+                self.points.push((t, e));
+            }
+        }
+        self.seen += 1;
     }
 }
 
@@ -471,6 +509,7 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         energy: Vec::new(),
         trajectory: Vec::new(),
         early: Vec::new(),
+        stopped_energy: Vec::new(),
     };
     let h = match h {
         Ok(h) => h,
@@ -496,11 +535,13 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         inner: Every { n: (early_steps / SAMPLES).max(1), inner: Recorder::default() },
     };
     let start = Instant::now();
-    let mut guard = GiveUp { series: &mut energy, stopped_at: None };
+    let mut guard = GiveUp { series: &mut energy, stopped_at: None, own: OwnSpan::default() };
     let result =
         model.solve(method, values.initial_state(), &spec, &mut (&mut guard, &mut (&mut traj, &mut early)));
     let wall_s = start.elapsed().as_secs_f64();
     let stopped_at = guard.stopped_at;
+    let stopped_energy =
+        if stopped_at.is_some() { std::mem::take(&mut guard.own.points) } else { Vec::new() };
     let dim = values.initial_state().len();
     let (steps, rhs_evals, cost, failure) = match result {
         Ok(report) => (
@@ -538,6 +579,7 @@ pub fn compare_one(values: &Values, method: &'static Method, steps: Steps, t_end
         energy: energy.t.iter().copied().zip(energy.error.iter().map(|e| e.abs())).collect(),
         trajectory: traj.inner.rows,
         early: early.inner.inner.rows,
+        stopped_energy,
     })
 }
 
@@ -576,6 +618,62 @@ pub fn refusal(e: anyhow::Error) -> Result<String> {
         ) => Ok(e.to_string()),
         _ => Err(e),
     }
+}
+
+/// The energy figure's panel for the runs stopped early for their error (Euler within
+/// seconds at a coarse step): each over its own span, which on the whole run's time axis is
+/// a streak at t ≈ 0. `None` when no run stopped.
+pub fn stopped_panel(system: &str, runs: &[Run], steps: Steps, tu: &str, y_label: &str) -> Option<Figure> {
+    let stopped: Vec<&Run> = runs.iter().filter(|r| r.stopped_energy.len() > 1).collect();
+    let span = stopped.iter().filter_map(|r| r.stopped_energy.last()).map(|p| p.0).fold(0.0, f64::max);
+    if stopped.is_empty() || span <= 0.0 {
+        return None;
+    }
+    let names: Vec<&str> = stopped.iter().map(|r| r.method).collect();
+    let mut panel = Figure::new(
+        format!(
+            "{system}: {} over its own run, to t = {}, where its error reached the energy scale",
+            names.join(", "),
+            with_unit(pendula_viz::number(span), tu)
+        ),
+        axis_label("t", tu),
+        y_label,
+    )
+    .scales(Scale::Linear, Scale::Log);
+    for r in stopped {
+        let label = match steps {
+            Steps::Equal(_) => format!(
+                "{} (stopped at t = {})",
+                r.method,
+                with_unit(pendula_viz::number(r.stopped_energy.last()?.0), tu)
+            ),
+            Steps::EqualCost(_) => format!(
+                "{} (h = {}, stopped at t = {})",
+                r.method,
+                with_unit(pendula_viz::number(r.h), tu),
+                with_unit(pendula_viz::number(r.stopped_energy.last()?.0), tu)
+            ),
+        };
+        let (t, e): (Vec<f64>, Vec<f64>) = r.stopped_energy.iter().copied().unzip();
+        // An envelope over its own span when it has many samples; every sample when few.
+        let points = if t.len() > 2 * WINDOWS {
+            // The envelope's points sit at its windows' centres: from the first sample to the
+            // one that stopped the run, as the curve itself.
+            let mut env = envelope(&t, &e, WINDOWS);
+            env.insert(0, r.stopped_energy[0]);
+            env.push(*r.stopped_energy.last()?);
+            env
+        } else {
+            r.stopped_energy.clone()
+        };
+        panel = panel.with_style(label, method_style(r.method), Kind::Line, points);
+    }
+    Some(panel.with(
+        "error = energy scale: the run is stopped",
+        pendula_viz::GUIDE,
+        Kind::Dashed,
+        vec![(0.0, GIVE_UP), (span, GIVE_UP)],
+    ))
 }
 
 /// Energy error envelope, early trajectories, and one phase portrait per method.
@@ -648,10 +746,63 @@ pub fn figures(values: &Values, runs: &[Run], steps: Steps, t_end: f64) -> Vec<(
         );
         figures.push((format!("phase_{}", r.method), phase));
     }
+    if let Some(panel) = stopped_panel(system, runs, steps, tu, &energy.y_label) {
+        energy = energy.with_panel(panel);
+    }
     // Every method may have failed before its first step (all refused): no curves to draw.
     if !energy.series.is_empty() {
         figures.insert(0, ("trajectory".to_owned(), trajectory));
         figures.insert(0, ("energy".to_owned(), energy));
     }
     figures
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Euler at h = 0.05 s on the pendulum is stopped within seconds of a 500 s run: the
+    /// energy figure's panel draws it over its own span, from its first sample to the step
+    /// that stopped it, with a legend entry; a method that ran to the end is not in it.
+    #[test]
+    fn the_energy_figure_shows_a_stopped_run_over_its_own_span() {
+        let values = crate::study::values("pendulum", &[]).unwrap();
+        let steps = Steps::Equal(0.05);
+        let runs: Vec<Run> = ["euler", "verlet"]
+            .iter()
+            .map(|m| compare_one(&values, pendula::integrator::find(m).unwrap(), steps, 500.0).unwrap())
+            .collect();
+        let (euler, verlet) = (&runs[0], &runs[1]);
+        let stop = euler.stopped_energy.last().unwrap().0;
+        assert!(stop > 1.0 && stop < 10.0, "stopped at {stop}");
+        assert!(euler.failure.as_deref().unwrap().contains("stopped at t = "), "{:?}", euler.failure);
+        assert!(verlet.stopped_energy.is_empty() && verlet.failure.is_none());
+        // Every step of its short run (64 steps, about 13 of them in the thinned series).
+        assert!(euler.stopped_energy.len() as f64 >= stop / 0.05, "{}", euler.stopped_energy.len());
+
+        let figures = figures(&values, &runs, steps, 500.0);
+        let energy = &figures.iter().find(|(n, _)| n == "energy").unwrap().1;
+        // On the main chart Euler's curve covers under 1% of the 500 s axis: the streak.
+        let main = energy.series.iter().find(|s| s.label == "euler").unwrap();
+        assert!(main.points.iter().all(|p| p.0 <= stop + 0.05 && p.0 < 0.01 * 500.0));
+        let panel = energy.panel.as_ref().expect("a panel for the stopped run");
+        assert_eq!(panel.x_label, energy.x_label);
+        assert_eq!(panel.y_label, energy.y_label);
+        let curve = panel.series.iter().find(|s| s.label.starts_with("euler (stopped at t = ")).unwrap();
+        let (x0, x1) =
+            curve.points.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+        assert_eq!(x0, euler.stopped_energy[0].0);
+        assert_eq!(x1, stop);
+        assert!(x0 <= 0.05, "{x0}");
+        // Its error grows over the panel to the energy scale, where the run was stopped.
+        assert!(curve.points[0].1 < 0.1 && curve.points.last().unwrap().1 > GIVE_UP);
+        assert!(panel.series.iter().all(|s| !s.label.starts_with("verlet")));
+        // Nothing stopped, no panel.
+        let figures = figures_of_verlet(&values, &runs[1..], steps);
+        assert!(figures.panel.is_none());
+    }
+
+    fn figures_of_verlet(values: &Values, runs: &[Run], steps: Steps) -> Figure {
+        figures(values, runs, steps, 500.0).into_iter().find(|(n, _)| n == "energy").unwrap().1
+    }
 }

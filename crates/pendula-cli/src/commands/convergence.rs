@@ -188,13 +188,23 @@ pub fn study_orders(
                 }
             }
         }
-        let estimate = estimate_order(&hs, &errors, scale, t_end);
+        let estimate = estimate_order(&hs, &errors, scale, t_end, reference.accuracy);
         results.push(MethodConvergence { method: method.name, hs, errors, estimate, failure });
         bar.inc(1);
     }
     bar.finish_and_clear();
     study::all_failed("convergence", results.iter().any(|r| !r.hs.is_empty()), first_failure)?;
     Ok((results, reference))
+}
+
+/// ", fixed steps" for an embedded pair (dopri5, dop853): a convergence study runs it at
+/// fixed steps, without its error control, so its curve measures the order of the formula it
+/// advances with, not its behaviour at a tolerance (that is work-precision's).
+pub fn fixed_steps(method: &str) -> &'static str {
+    match pendula::integrator::find(method).map(|m| m.scheme) {
+        Ok(pendula::integrator::Scheme::Embedded(_)) => ", fixed steps",
+        _ => "",
+    }
 }
 
 /// Error against step on log-log axes, with guides of slope 1, 2 and 4 (thin, dashed, grey,
@@ -211,10 +221,7 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
     )
     .scales(Scale::Log, Scale::Log);
     for r in results.iter().filter(|r| !r.hs.is_empty()) {
-        let label = match r.order() {
-            Some(o) => format!("{} (order {o:.2})", r.method),
-            None => format!("{} (no order)", r.method),
-        };
+        let label = format!("{}{} ({})", r.method, fixed_steps(r.method), r.estimate.label());
         fig = fig.with_style(
             label,
             method_style(r.method),

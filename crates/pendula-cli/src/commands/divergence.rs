@@ -3,7 +3,7 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
-use pendula::analysis::{divergence, growth_rate};
+use pendula::analysis::{divergence, growth_rate_between};
 use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
@@ -31,6 +31,11 @@ pub struct DivergenceArgs {
     /// The fit uses the distances before they first exceed this [default: 0.01].
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub saturation: Option<String>,
+    /// The fit uses only the distances above this, leaving out the start, where the
+    /// separation has not yet turned along the most unstable direction [default: 0, the
+    /// whole run before saturation].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub fit_from: Option<String>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -53,6 +58,14 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             "invalid --saturation {}: must be finite and larger than |delta| = {}",
             Short(saturation),
             Short(delta.abs())
+        );
+    }
+    let fit_from = f64_arg("--fit-from", args.fit_from.as_deref(), 0.0, "a distance")?;
+    if !(fit_from >= 0.0 && fit_from < saturation) {
+        bail!(
+            "invalid --fit-from {}: must be finite, >= 0 and smaller than --saturation {}",
+            Short(fit_from),
+            Short(saturation)
         );
     }
     let index = match &args.variable {
@@ -94,7 +107,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let model = values.build();
     let every = pendula::analysis::divergence::sample_every(schedule.steps);
     let d = divergence(&*model, method, values.initial_state(), index, delta, &spec, every)?;
-    let fit = growth_rate(&d, saturation);
+    let fit = growth_rate_between(&d, fit_from, saturation);
 
     let rows: Vec<Vec<String>> = d.t.iter().zip(&d.distance).map(|(t, x)| vec![num(*t), num(*x)]).collect();
     out.csv("divergence.csv", &["t", "distance"], &rows)?;
@@ -154,7 +167,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
         summary,
         &json!({
             "system": system, "method": method.name, "dt": h, "t_end": t_end,
-            "delta": delta, "variable": variable, "saturation": saturation,
+            "delta": delta, "variable": variable, "saturation": saturation, "fit_from": fit_from,
             "growth_rate": fit.map(|f| f.rate),
             "fit_window": fit.map(|f| [f.t_start, f.t_end]),
         }),

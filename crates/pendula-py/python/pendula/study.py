@@ -704,7 +704,9 @@ class ConvergenceResult(_Pickled):
         ax = _axes(ax)
         for m in self.methods:
             if len(m.dt):
-                label = f"{m.method} (order {m.order:.2f})" if m.order is not None else f"{m.method} (no order)"
+                # Why there is no order, in the reason's first words, as the CLI's legend.
+                why = (m.reason or m.failure or "no order").split(":")[0]
+                label = f"{m.method} (order {m.order:.2f})" if m.order is not None else f"{m.method} ({why})"
                 ax.loglog(m.dt, m.error, marker="o", markersize=3, label=label)
         ax.set_xlabel("step size h" + _time_unit(self.system))
         ax.set_ylabel("max |y(t) − y_ref(t)|")

@@ -39,6 +39,12 @@ pub struct Reference {
     pub state: Vec<f64>,
     /// How it was obtained, for tables and reports.
     pub source: &'static str,
+    /// Its own error relative to [`Reference::scale`], as far as it is known: a few ulp for
+    /// an exact solution, [`REFERENCE_TOLERANCE`] for the dop853 reference (whose global error
+    /// on the pendulums over a few seconds is 10⁻¹⁴ … 3·10⁻¹⁴ of the state). Errors measured
+    /// against the reference are no smaller than this, whatever the method: part of the floor
+    /// [`estimate_order`] keeps out of its fits.
+    pub accuracy: f64,
 }
 
 impl Reference {
@@ -57,12 +63,12 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-14;
 /// tens of seconds; checked against mpmath in the tests).
 pub fn reference_state(model: &dyn DynModel, y0: &[f64], t_end: f64) -> Result<Reference, Error> {
     if let Some(state) = model.exact(t_end, y0) {
-        return Ok(Reference { state, source: "exact solution" });
+        return Ok(Reference { state, source: "exact solution", accuracy: f64::EPSILON });
     }
     let tol =
         Tolerances { rtol: REFERENCE_TOLERANCE, atol: REFERENCE_TOLERANCE, h_min: 0.0, h_max: f64::INFINITY };
     let state = model.solve_adaptive(&DOP853, y0, t_end, None, &tol, &mut Ignore)?.state;
-    Ok(Reference { state, source: "dop853 reference at tolerance 1e-14" })
+    Ok(Reference { state, source: "dop853 reference at tolerance 1e-14", accuracy: REFERENCE_TOLERANCE })
 }
 
 /// Max-norm error at `t_end` of `method` at each step size in `hs`, against `reference`.
@@ -174,10 +180,17 @@ pub enum OrderEstimate {
     /// Every error is at or above the saturation level: the steps are too large for the
     /// asymptotic range (or chaos has amplified the errors to the size of the motion).
     Saturated,
-    /// Every usable error is at the round-off floor: the method is exact to rounding at
-    /// these steps (a high order, or a problem it solves exactly).
+    /// Every error below saturation is within [`FLOOR_MARGIN`] of the floor (rounding and the
+    /// reference's own error): the method is exact to rounding at these steps (a high order,
+    /// or a problem it solves exactly).
     RoundOff,
-    /// Too few points between saturation and round-off, or no straight stretch of three.
+    /// The errors reach the floor before the log-log curve straightens: the local slopes
+    /// still change at the last error above the floor, so every step that shows truncation
+    /// is still too large for the asymptotic range (a high order whose error falls by orders
+    /// of magnitude a step, from saturation to the floor within a few steps).
+    Preasymptotic,
+    /// No straight stretch of 3 points between saturation and the floor, and no floor
+    /// reached either: a curve that bends or zigzags (cancelling error terms, too few steps).
     Irregular,
 }
 
@@ -190,15 +203,32 @@ impl OrderEstimate {
         }
     }
 
-    /// Why there is no order, in words; `None` when fitted.
+    /// Why there is no order, in a sentence; `None` when fitted. It begins with
+    /// [`OrderEstimate::label`].
     pub fn reason(&self) -> Option<&'static str> {
         match self {
             OrderEstimate::Fitted { .. } => None,
-            OrderEstimate::Saturated => Some("saturated: every error is as large as the motion"),
-            OrderEstimate::RoundOff => Some("round-off floor: the errors are rounding, not truncation"),
-            OrderEstimate::Irregular => {
-                Some("no straight stretch of 3 steps between saturation and round-off")
+            OrderEstimate::Saturated => {
+                Some("step too large: every error is 1% of the state or more, outside the asymptotic range")
             }
+            OrderEstimate::RoundOff => Some(
+                "saturated at round-off: every error is within 10x of the floor (rounding and the reference's accuracy), not truncation",
+            ),
+            OrderEstimate::Preasymptotic => Some(
+                "step too large: the errors reach the round-off floor while the log-log slope still changes; the asymptotic range lies below the floor",
+            ),
+            OrderEstimate::Irregular => {
+                Some("irregular: no straight stretch of 3 steps between saturation and round-off")
+            }
+        }
+    }
+
+    /// A few words for a legend: the order, or why there is none ("step too large",
+    /// "saturated at round-off", "irregular").
+    pub fn label(&self) -> String {
+        match self {
+            OrderEstimate::Fitted { order, .. } => format!("order {order:.2}"),
+            other => other.reason().and_then(|r| r.split(':').next()).unwrap_or_default().to_owned(),
         }
     }
 }
@@ -208,61 +238,108 @@ impl OrderEstimate {
 pub const SATURATION: f64 = 1e-2;
 
 /// The round-off floor of a run of `steps` steps, relative to the state's size: each step
-/// adds rounding errors of a few ulp, which accumulate like a random walk; a hundredfold
-/// margin keeps errors that rounding disturbs out of the fit.
+/// adds rounding errors of about an ulp, which accumulate like a random walk (on the double
+/// pendulum the errors of rk4 and the Gauss–Legendre methods level off at 1–3 times this).
 pub fn roundoff_floor(steps: f64) -> f64 {
-    100.0 * f64::EPSILON * steps.max(1.0).sqrt()
+    f64::EPSILON * steps.max(1.0).sqrt()
 }
 
-/// The largest spread of local slopes (between consecutive points) that still counts as a
-/// straight line in log-log coordinates.
-const STRAIGHT: f64 = 0.2;
+/// How far above the floor (the larger of [`roundoff_floor`] and the reference's accuracy)
+/// an error must lie to enter a fit: there rounding changes it by at most 10%.
+pub const FLOOR_MARGIN: f64 = 10.0;
+
+/// How much the local slopes (between consecutive points) of a stretch may differ, beyond
+/// what rounding explains, for the stretch to count as straight in log-log coordinates:
+/// every local slope lies within this of the fitted order.
+pub const STRAIGHT: f64 = 0.1;
+
+/// The least ratio of the largest to the smallest step of a fitted stretch: 3 points of a
+/// ladder of halvings, 4 of one of √2 steps. Over a shorter stretch a bend of the log-log
+/// curve cannot be told from its slope.
+pub const MIN_SPAN: f64 = 2.0 * std::f64::consts::SQRT_2;
 
 /// Estimates the order of convergence from errors at steps `hs` (largest first, as a
-/// ladder), without reference to the method's declared order: the points between
-/// [`SATURATION`] × `scale` and the round-off floor ([`roundoff_floor`] × `scale`, at each
-/// point's number of steps over `t_end`) are candidates; the longest run of consecutive
-/// candidates that ends at the smallest usable step (the most asymptotic) and reaches up to
-/// larger steps while the local slopes differ by at most 0.2 is fitted by least squares,
-/// when it has at least 3 points.
-pub fn estimate_order(hs: &[f64], errors: &[f64], scale: f64, t_end: f64) -> OrderEstimate {
-    let usable: Vec<bool> = hs
-        .iter()
-        .zip(errors)
-        .map(|(h, e)| *e < SATURATION * scale && *e > roundoff_floor(t_end / h) * scale && e.is_finite())
-        .collect();
+/// ladder), without reference to the method's declared order.
+///
+/// The candidates are the points whose error lies below [`SATURATION`] × `scale` and at
+/// least [`FLOOR_MARGIN`] times above the floor F: the larger of [`roundoff_floor`] (at each
+/// point's number of steps over `t_end`) and `accuracy` (the reference's own relative error,
+/// [`Reference::accuracy`]), times `scale`. Each local slope is known to within what rounding
+/// may do to its two errors (ln(1 + F/e) each, over the ln of the step ratio) plus
+/// [`STRAIGHT`]/2. The asymptotic range is at the small steps: the stretch of consecutive
+/// candidates that ends at the smallest one and reaches up to larger steps while all of its
+/// local slopes agree within those bounds is fitted by least squares, when it has at least
+/// 3 points and spans a factor [`MIN_SPAN`] in step. (A smallest candidate within 100 F whose slope is flatter than the next one's,
+/// beyond both bounds, is touched by the floor and left out: rounding only adds error.)
+/// Without such a stretch, the estimate says why: every error saturated, every error at
+/// the floor, the floor reached while the slope still changes
+/// ([`OrderEstimate::Preasymptotic`]), or an irregular curve.
+pub fn estimate_order(hs: &[f64], errors: &[f64], scale: f64, t_end: f64, accuracy: f64) -> OrderEstimate {
+    let model = |i: usize| roundoff_floor(t_end / hs[i]).max(accuracy) * scale;
+    let small = |e: f64| e < SATURATION * scale;
+    let candidate =
+        |i: usize, floor: f64| errors[i].is_finite() && small(errors[i]) && errors[i] > FLOOR_MARGIN * floor;
+    // Where the errors level off at steps below the last candidate, that level (the lower
+    // median of those errors) is the floor measured: the model's random walk and the reference's
+    // nominal accuracy can fall short of it (a long chain rounds more, and its reference is
+    // less accurate).
+    let observed = match (0..hs.len()).rposition(|i| candidate(i, model(i))) {
+        Some(last) => {
+            let mut below: Vec<f64> =
+                errors[last + 1..].iter().copied().filter(|e| e.is_finite() && small(*e)).collect();
+            below.sort_by(f64::total_cmp);
+            // A level takes two points at least (one may still hold some truncation error).
+            if below.len() >= 2 { below[(below.len() - 1) / 2] } else { 0.0 }
+        }
+        None => 0.0,
+    };
+    let floor = |i: usize| model(i).max(observed);
+    let at_floor = |i: usize| errors[i] <= FLOOR_MARGIN * floor(i);
+    let usable: Vec<bool> = (0..hs.len()).map(|i| candidate(i, floor(i))).collect();
     if !usable.iter().any(|u| *u) {
-        let small = |e: f64| e < SATURATION * scale;
         let saturated = errors.iter().all(|e| !small(*e));
-        let at_floor =
-            hs.iter().zip(errors).all(|(h, e)| *e <= roundoff_floor(t_end / h) * scale || !small(*e));
+        let rounding = (0..hs.len()).all(|i| at_floor(i) || !small(errors[i]));
         return if saturated {
             OrderEstimate::Saturated
-        } else if at_floor {
+        } else if rounding {
             OrderEstimate::RoundOff
         } else {
             OrderEstimate::Irregular
         };
     }
+    // The local slope from point i to i + 1, and the interval it is known to lie in.
     let slope = |i: usize| (errors[i] / errors[i + 1]).ln() / (hs[i] / hs[i + 1]).ln();
+    let noise = |i: usize| (1.0 + floor(i) / errors[i]).ln();
+    let bounds = |i: usize| {
+        let half = (noise(i) + noise(i + 1)) / (hs[i] / hs[i + 1]).ln().abs() + 0.5 * STRAIGHT;
+        (slope(i) - half, slope(i) + half)
+    };
+    let last = usable.iter().rposition(|u| *u).expect("some point is usable");
+    let mut end = last;
+    while end >= 2
+        && usable[end - 1]
+        && usable[end - 2]
+        && errors[end] <= 100.0 * floor(end)
+        && bounds(end - 1).1 < bounds(end - 2).0
+    {
+        end -= 1;
+    }
     // The asymptotic range is at small steps: the stretch ends at the smallest usable step
-    // and grows towards larger ones while it stays straight.
-    let end = usable.iter().rposition(|u| *u).expect("some point is usable");
+    // and grows towards larger ones while its slopes' intervals share a point.
     let mut start = end;
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     while start > 0 && usable[start - 1] {
-        let s = slope(start - 1);
-        let (nlo, nhi) = (lo.min(s), hi.max(s));
-        if nhi - nlo > STRAIGHT {
+        let (a, b) = bounds(start - 1);
+        if a.max(lo) > b.min(hi) {
             break;
         }
-        (lo, hi) = (nlo, nhi);
+        (lo, hi) = (a.max(lo), b.min(hi));
         start -= 1;
     }
-    let best = (end + 1 - start >= 3).then_some((start, end));
-    let Some((start, end)) = best else {
-        return OrderEstimate::Irregular;
-    };
+    if end + 1 - start < 3 || hs[start] / hs[end] < MIN_SPAN * (1.0 - 1e-9) {
+        let reached_floor = last > end || (end + 1..hs.len()).any(at_floor);
+        return if reached_floor { OrderEstimate::Preasymptotic } else { OrderEstimate::Irregular };
+    }
     match fit_order(&hs[start..=end], &errors[start..=end]) {
         Some(fit) => OrderEstimate::Fitted {
             order: fit.order,
@@ -275,12 +352,14 @@ pub fn estimate_order(hs: &[f64], errors: &[f64], scale: f64, t_end: f64) -> Ord
 }
 
 /// The default ladder of steps for a method of `order` on a model of time scale T: halvings
-/// from a start that shrinks with the order's need for accuracy (order 1 from T/64, orders
-/// 2 and 3 from T/32, higher orders from T/16), and no larger than `h_limit` (a method's own
-/// limit, such as Tao's ω h ≤ 1), down to where a run would take more steps over `t_end` than
-/// a cap that grows as the order falls (2·10⁶ for order 1, 10⁶ for order 2, 2·10⁵ above:
-/// low orders need small steps to reach their asymptotic range and are cheap per step), at
-/// most `levels` steps.
+/// (for orders 6 and up, steps √2 apart: their error falls 64-fold or more a halving, and
+/// would cross the range between saturation and the round-off floor in two or three
+/// halvings, too few points for a fit) from a start that shrinks with the order's need for
+/// accuracy (order 1 from T/64, orders 2 and 3 from T/32, higher orders from T/16), and no
+/// larger than `h_limit` (a method's own limit, such as Tao's ω h ≤ 1), down to where a run
+/// would take more steps over `t_end` than a cap that grows as the order falls (2·10⁶ for
+/// order 1, 10⁶ for order 2, 2·10⁵ above: low orders need small steps to reach their
+/// asymptotic range and are cheap per step), at most `levels` steps.
 pub fn default_ladder(time_scale: f64, order: u32, t_end: f64, levels: usize, h_limit: f64) -> Vec<f64> {
     let (divisor, max_steps) = match order {
         0 | 1 => (64.0, 2e6),
@@ -289,7 +368,8 @@ pub fn default_ladder(time_scale: f64, order: u32, t_end: f64, levels: usize, h_
         _ => (16.0, 2e5),
     };
     let start = (time_scale / divisor).min(t_end / 4.0).min(h_limit);
-    (0..levels).map(|k| start / 2f64.powi(k as i32)).take_while(|h| t_end / h <= max_steps).collect()
+    let ratio: f64 = if order >= 6 { std::f64::consts::SQRT_2 } else { 2.0 };
+    (0..levels).map(|k| start / ratio.powi(k as i32)).take_while(|h| t_end / h <= max_steps).collect()
 }
 
 /// Most rungs of a method's default ladder ([`method_ladder`]).

@@ -72,11 +72,19 @@ pub struct GrowthFit {
 /// exceeds `saturation` (where the separation stops growing exponentially); `None` with fewer
 /// than three usable samples.
 pub fn growth_rate(d: &Divergence, saturation: f64) -> Option<GrowthFit> {
+    growth_rate_between(d, 0.0, saturation)
+}
+
+/// [`growth_rate`] over the samples above `from` only (and before the distance first exceeds
+/// `saturation`): a window that leaves out the start, where the separation has not yet
+/// turned along the most unstable direction and grows at other rates (the lab's butterfly
+/// mode fits from 100 times its offset to 0.1).
+pub fn growth_rate_between(d: &Divergence, from: f64, saturation: f64) -> Option<GrowthFit> {
     let end = d.distance.iter().position(|&x| x > saturation).unwrap_or(d.distance.len());
     let (ts, ls): (Vec<f64>, Vec<f64>) = d.t[..end]
         .iter()
         .zip(&d.distance[..end])
-        .filter(|(_, x)| **x > 0.0)
+        .filter(|(_, x)| **x > from.max(0.0))
         .map(|(t, x)| (*t, x.ln()))
         .unzip();
     if ts.len() < 3 {

@@ -156,6 +156,8 @@ pub struct EnergySeries<'a> {
     pub error: Vec<f64>,
     /// max |error| / scale over every step, sampled or not.
     pub max_abs: f64,
+    /// The relative error at the latest step, sampled or not.
+    pub last: f64,
 }
 
 impl<'a> EnergySeries<'a> {
@@ -168,6 +170,7 @@ impl<'a> EnergySeries<'a> {
             t: Vec::new(),
             error: Vec::new(),
             max_abs: 0.0,
+            last: 0.0,
         }
     }
 }
@@ -176,6 +179,7 @@ impl Observer for EnergySeries<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> Flow {
         let err = self.balance.track(s.t, s.y, s.energy) / self.balance.scale;
         self.max_abs = self.max_abs.max(err.abs());
+        self.last = err;
         if s.step.is_multiple_of(self.every) || s.last {
             self.t.push(s.t);
             self.error.push(err);

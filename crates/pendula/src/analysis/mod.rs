@@ -12,11 +12,12 @@ pub mod stability;
 pub mod strobe;
 
 pub use convergence::{
-    DEFAULT_LEVELS, OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference, SATURATION, WorkPoint,
-    convergence_errors, default_ladder, estimate_order, fit_order, method_ladder, reference_state,
-    roundoff_floor, study_horizon, tolerance_ladder, work_precision, work_precision_adaptive,
+    DEFAULT_LEVELS, FLOOR_MARGIN, MIN_SPAN, OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference,
+    SATURATION, STRAIGHT, WorkPoint, convergence_errors, default_ladder, estimate_order, fit_order,
+    method_ladder, reference_state, roundoff_floor, study_horizon, tolerance_ladder, work_precision,
+    work_precision_adaptive,
 };
-pub use divergence::{Divergence, GrowthFit, divergence, growth_rate};
+pub use divergence::{Divergence, GrowthFit, divergence, growth_rate, growth_rate_between};
 pub use energy::{
     EnergyBalance, EnergySeries, GROWTH_FACTOR, Growth, drift_rate, envelope, first_exceeding, growth,
 };

@@ -352,7 +352,10 @@ fn alternatives<M: Model>(method: &Method, model: &M) -> String {
         .filter(|m| m.name != method.name && meets(m.requirement, model).is_ok())
         .collect();
     let better: Vec<&Method> = all.iter().copied().filter(|m| m.order >= 2).collect();
-    let applies = if better.is_empty() { all } else { better };
+    let mut applies = if better.is_empty() { all } else { better };
+    // The workhorses first: fourth order (rk4, gauss-legendre-4, tao-4), then by distance
+    // from it, in the registry's order otherwise.
+    applies.sort_by_key(|m| m.order.abs_diff(4));
     let names = |ms: &[&Method]| ms.iter().map(|m| m.name).collect::<Vec<_>>().join(", ");
     let symplectic: Vec<&Method> = applies.iter().copied().filter(|m| m.symplectic).collect();
     if method.symplectic && model.hamiltonian_form().is_ok() && !symplectic.is_empty() {
