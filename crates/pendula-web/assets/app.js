@@ -387,7 +387,11 @@ function onSimFrame(a) {
   const poincare = [];
   for (let p = 0; p < P && o + 2 < a.length; p++, o += 3) poincare.push([a[o], a[o + 1], a[o + 2]]);
   const frame = { seq: a[1], t: a[2], paused: a[5] === 1, steps: a[6], tracks, poincare };
+  const before = lab.frame;
   lab.frame = frame;
+  // A pause or a play changes the controls and the info line even when the time does not
+  // (the paused frame repeats the last instant, which record() skips).
+  if (!before || before.paused !== frame.paused) st.plotsDirty = true;
   lab.framesReceived++;
   record(frame);
 }
