@@ -31,11 +31,7 @@ pub fn solve_adaptive<M: Model>(
     tol: &Tolerances,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
-    assert_eq!(y0.len(), model.dim(), "initial state of the wrong length");
-    match run(model, method, y0, 0.0, t_end, h0, tol, observer, None, &Pause::NEVER)? {
-        Leg::Done(report) => Ok(report),
-        Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
-    }
+    solve_adaptive_from(model, method, y0, 0.0, t_end, h0, tol, observer)
 }
 
 /// [`solve_adaptive`] from `t0` instead of 0, forward or backward in time: with `t_end`
