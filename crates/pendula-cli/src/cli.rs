@@ -53,6 +53,9 @@ pub enum Command {
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
     #[command(mut_args(|a| crate::commands::animate::DEFAULTS.document(a)))]
     Animate(Box<crate::commands::animate::AnimateArgs>),
+    /// The library's studies (`pendula::study::STUDIES`), one subcommand each.
+    #[command(flatten)]
+    Study(crate::studies::StudyCommand),
     /// Distance between two trajectories started close together, and its growth rate.
     #[command(mut_arg("set", |a| a.help(SET_DIVERGENCE)))]
     #[command(mut_args(|a| crate::commands::divergence::DEFAULTS.document(a)))]

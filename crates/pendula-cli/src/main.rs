@@ -20,6 +20,7 @@ mod run_state;
 mod simulate;
 mod sink;
 mod slurm;
+mod studies;
 mod watch;
 
 use std::io::Write;
@@ -75,6 +76,7 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Bifurcation(args) => commands::bifurcation::run(args),
         Command::Poincare(args) => commands::poincare::run(args),
         Command::Merge(args) => commands::merge::run(args),
+        Command::Study(study) => study.run(),
         Command::Resume(args) => commands::resume::run(args),
         Command::Plot(args) => commands::plot::run(args),
         Command::Serve(args) => commands::serve::run(args),

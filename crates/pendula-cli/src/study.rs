@@ -340,7 +340,16 @@ impl OutDir {
         let created = CreatedDirs::create(&path, "--out-dir")?;
         // Fail now, not after the work, if the directory cannot be written.
         crate::output::probe(&path, "--out-dir")?;
-        let names = FILES.iter().find(|(c, _)| *c == command).map_or(&[][..], |(_, n)| *n);
+        // A registry study's files: its tables' CSV and its plots' PNG and SVG, by stem.
+        let names: Vec<String> = match FILES.iter().find(|(c, _)| *c == command) {
+            Some((_, n)) => n.iter().map(|n| (*n).to_owned()).collect(),
+            None => pendula::study::find(command).map_or_else(
+                |_| Vec::new(),
+                |s| s.files.iter().flat_map(|f| ["csv", "png", "svg"].map(|e| format!("{f}.{e}"))).collect(),
+            ),
+        };
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let names = names.as_slice();
         // A directory in the place of one of the command's files is refused now too.
         if let Ok(entries) = std::fs::read_dir(&path) {
             for entry in entries.flatten() {

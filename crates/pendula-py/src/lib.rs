@@ -24,6 +24,7 @@ use pyo3::types::{PyDict, PyList};
 
 mod animate;
 mod serve;
+mod studies;
 mod study;
 mod sweep;
 
@@ -43,12 +44,16 @@ fn to_py(py: Python<'_>, e: &Error) -> PyErr {
         Error::UnknownSystem { .. }
         | Error::UnknownMethod { .. }
         | Error::UnknownPreset { .. }
-        | Error::UnknownName { .. } => "UnknownNameError",
+        | Error::UnknownName { .. }
+        | Error::UnknownStudy { .. }
+        | Error::UnknownInput { .. } => "UnknownNameError",
         Error::UnmetRequirement { .. } => "UnsuitableMethodError",
         Error::NonFinite { .. } | Error::NonFiniteMember { .. } => "NonFiniteStateError",
         Error::StepSizeTooSmall { .. } => "StepSizeTooSmallError",
         Error::NewtonDidNotConverge { .. } => "NewtonError",
-        Error::InvalidValue { .. } => "InvalidValueError",
+        Error::InvalidValue { .. } | Error::InvalidInput { .. } | Error::TooLarge { .. } => {
+            "InvalidValueError"
+        }
         _ => "PendulaError",
     };
     raise(py, class, e.to_string())
@@ -920,6 +925,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     study::register(m)?;
+    studies::register(m)?;
     sweep::register(m)?;
     serve::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;

@@ -17,6 +17,7 @@ mod bars;
 mod figure;
 mod heatmap;
 mod labels;
+mod plot;
 pub mod ticks;
 
 pub use animate::{Animation, Layout, Snapshot, gif_delays};

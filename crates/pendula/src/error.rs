@@ -129,6 +129,48 @@ pub enum Error {
     /// ([`crate::observe::Stop::Failed`]): its message, and its error as the source.
     #[error(transparent)]
     Observer(ObserverFailure),
+    /// No study of this name is in [`crate::study::STUDIES`].
+    #[error("unknown study `{name}`{}; valid studies: {valid}", did_you_mean(.suggestions))]
+    UnknownStudy {
+        /// The name asked for.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+        /// The valid names closest to `name`; empty when none is close.
+        suggestions: Vec<String>,
+    },
+    /// The study takes no parameter of this name.
+    #[error("unknown parameter `{name}` for study `{study}`{}; valid parameters: {valid}", did_you_mean(.suggestions))]
+    UnknownInput {
+        /// The study.
+        study: &'static str,
+        /// The name given.
+        name: String,
+        /// The valid names, comma-separated.
+        valid: String,
+        /// The valid names closest to `name`; empty when none is close.
+        suggestions: Vec<String>,
+    },
+    /// A value of the wrong kind (a name where a number belongs, a fraction for a count).
+    #[error("invalid value `{value}` for `{name}`: {allowed}")]
+    InvalidInput {
+        /// The parameter.
+        name: String,
+        /// The offending value, as given (clipped).
+        value: String,
+        /// What is allowed, in words.
+        allowed: String,
+    },
+    /// A run would take more steps than its budget ([`crate::study::Budget`]) allows.
+    #[error("{what} would take {} steps, over the limit of {}", Short(*.steps), Short(*.limit))]
+    TooLarge {
+        /// What would run, in words.
+        what: String,
+        /// Its cost in integration steps.
+        steps: f64,
+        /// The limit.
+        limit: f64,
+    },
 }
 
 /// The error with which an observer ended a run ([`Error::Observer`]): shared, so that the

@@ -54,6 +54,7 @@ pub mod num;
 pub mod observe;
 pub mod simulate;
 pub mod special;
+pub mod study;
 pub mod sweep;
 pub mod system;
 

@@ -51,6 +51,10 @@ from .study import (
 )
 
 from .sweep import SweepResult, merge, sweep
+from .studies import FUNCTIONS as _STUDIES, StudyReport, study
+
+# One function per library study (pendula::study::STUDIES): `energy_budget`, ...
+globals().update(_STUDIES)
 from . import distributed  # noqa: E402  (after the names it uses)
 from .view import View, view  # noqa: E402
 
@@ -85,6 +89,9 @@ __all__ = [
     "DivergenceResult",
     "view",
     "View",
+    "study",
+    "StudyReport",
+    *_STUDIES,
     "PendulaError",
     "UnknownNameError",
     "InvalidValueError",

@@ -1,0 +1,206 @@
+//! The library's study registry ([`pendula::study::STUDIES`]) as subcommands: one per
+//! study, its flags and their `[default: …]` derived from the study's parameters, so that a
+//! new study needs no CLI code. Flags are spelled `--t-end` for the parameter `t_end`; the
+//! system is the positional argument; `--set`, `--out-dir`, `--summary` and `--allow-large`
+//! are every study command's. The report is presented as every study's is: its summary
+//! printed, its tables written as CSV and its plots as PNG and SVG in the output directory,
+//! and a JSON summary of what ran and the numbers found.
+
+use anyhow::Result;
+use clap::{Arg, ArgMatches, Args, FromArgMatches};
+use pendula::study::{Budget, Input, Inputs, Kind, Param, Report, STUDIES, Study, Unit};
+use serde_json::{Map, Value, json};
+
+use crate::study::{Common, OutDir, num};
+
+/// A study command as parsed: which study, and its arguments.
+#[derive(Debug, Clone)]
+pub struct StudyCommand {
+    study: &'static Study,
+    matches: ArgMatches,
+}
+
+/// The flag of a parameter: `--t-end` for `t_end`.
+pub fn flag(param: &Param) -> String {
+    format!("--{}", param.name.replace('_', "-"))
+}
+
+/// The help of a parameter: its phrase, its unit, and its default (from the study, so that
+/// it is written once).
+pub fn help(param: &Param) -> String {
+    let unit = match param.kind {
+        Kind::Real { unit: Unit::Time, .. } => ", s (none for a dimensionless system)".to_owned(),
+        Kind::Real { unit: Unit::Fixed(u), .. } => format!(", {u}"),
+        _ => String::new(),
+    };
+    format!("{}{unit} [default: {}]", param.help, param.default_text())
+}
+
+/// The subcommand of `study`.
+pub fn command(study: &'static Study) -> clap::Command {
+    let mut cmd = clap::Command::new(study.name);
+    for p in study.params {
+        let arg = match p.kind {
+            Kind::System { .. } => Arg::new(p.name).value_name("SYSTEM"),
+            Kind::Method { .. } => Arg::new(p.name).long(p.name).value_name("NAME"),
+            Kind::Real { .. } | Kind::Count { .. } => Arg::new(p.name)
+                .long(p.name.replace('_', "-"))
+                .value_name(p.name.to_uppercase())
+                .allow_hyphen_values(true),
+        };
+        cmd = cmd.arg(arg.help(help(p)));
+    }
+    // After the shared arguments, whose own doc would otherwise be the command's about.
+    Common::augment_args(cmd).about(study.about)
+}
+
+impl FromArgMatches for StudyCommand {
+    fn from_arg_matches(matches: &ArgMatches) -> Result<Self, clap::Error> {
+        let Some((name, sub)) = matches.subcommand() else {
+            return Err(clap::Error::new(clap::error::ErrorKind::MissingSubcommand));
+        };
+        let study = STUDIES
+            .iter()
+            .copied()
+            .find(|s| s.name == name)
+            .ok_or_else(|| clap::Error::new(clap::error::ErrorKind::InvalidSubcommand))?;
+        Ok(StudyCommand { study, matches: sub.clone() })
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(matches)?;
+        Ok(())
+    }
+}
+
+impl clap::Subcommand for StudyCommand {
+    fn augment_subcommands(cmd: clap::Command) -> clap::Command {
+        STUDIES.iter().fold(cmd, |cmd, s| cmd.subcommand(command(s)))
+    }
+
+    fn augment_subcommands_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_subcommands(cmd)
+    }
+
+    fn has_subcommand(name: &str) -> bool {
+        STUDIES.iter().any(|s| s.name == name)
+    }
+}
+
+impl StudyCommand {
+    /// The study's name.
+    pub fn name(&self) -> &'static str {
+        self.study.name
+    }
+
+    /// Reads the arguments into the study's inputs, runs it, and writes its report.
+    pub fn run(&self) -> Result<()> {
+        let common = Common::from_arg_matches(&self.matches)?;
+        let inputs = self.inputs(&common)?;
+        let budget =
+            Budget { max_steps: (!common.large.allow_large).then_some(crate::limits::MAX_SCALAR_STEPS) };
+        // Checked before the output directory is touched: bad input leaves no trace.
+        let mut out = OutDir::new(common.out_dir.as_deref(), self.study.name)?;
+        let summary = common.summary.open()?;
+        let report = (self.study.run)(&inputs, &budget).map_err(|e| self.error(e))?;
+        for line in &report.summary {
+            sayln!(summary, "{line}");
+        }
+        for table in &report.tables {
+            let header: Vec<&str> = table.columns.iter().map(|c| c.name).collect();
+            let rows: Vec<Vec<String>> =
+                (0..table.rows()).map(|i| table.columns.iter().map(|c| num(c.values[i])).collect()).collect();
+            out.csv(&format!("{}.csv", table.name), &header, &rows)?;
+        }
+        for plot in &report.plots {
+            out.figure(plot.name, &pendula_viz::Figure::from(plot))?;
+        }
+        out.finish_with(summary, &document(&report))
+    }
+
+    /// The study's inputs: each given flag read with the value syntax (`120deg`, `pi`, `1e-3`),
+    /// `--set` items against the system's quantities.
+    fn inputs(&self, common: &Common) -> Result<Inputs> {
+        let mut inputs = Inputs::default();
+        let mut system = None;
+        for p in self.study.params {
+            let Some(text) = self.matches.get_one::<String>(p.name) else { continue };
+            let value = match p.kind {
+                Kind::System { .. } | Kind::Method { .. } => Input::Name(text.clone()),
+                Kind::Real { .. } | Kind::Count { .. } => {
+                    Input::Number(crate::config::parse_value(&flag(p), text, None)?)
+                }
+            };
+            if let Kind::System { .. } = p.kind {
+                system = Some(text.as_str());
+            }
+            inputs.values.push((p.name.to_owned(), value));
+        }
+        if !common.set.items.is_empty() {
+            let default = self.study.params.iter().find_map(|p| match p.kind {
+                Kind::System { default, .. } => Some(default),
+                _ => None,
+            });
+            let name = system.or(default).ok_or_else(|| {
+                anyhow::anyhow!("invalid --set: {} runs no system whose values it could set", self.study.name)
+            })?;
+            let info = pendula::model::find(name)?;
+            inputs.set = crate::config::parse_settings(info, &common.set.items)?;
+        }
+        Ok(inputs)
+    }
+
+    /// A library error with parameter names spelled as flags.
+    fn error(&self, e: pendula::Error) -> anyhow::Error {
+        let names: Vec<(&str, String)> = self.study.params.iter().map(|p| (p.name, flag(p))).collect();
+        let names: Vec<(&str, &str)> = names.iter().map(|(n, f)| (*n, f.as_str())).collect();
+        match e {
+            pendula::Error::TooLarge { what, steps, limit } => anyhow::anyhow!(
+                "{}: refusing {what} ({} steps), over the limit of {} steps; give --allow-large to run it anyway",
+                self.study.name,
+                crate::limits::sci(steps),
+                crate::limits::sci(limit)
+            ),
+            pendula::Error::InvalidInput { name, value, allowed } => {
+                let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
+                anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
+            }
+            e => crate::config::flag_error(e, &names),
+        }
+    }
+}
+
+/// The JSON summary: every input as the run used it, then every number.
+fn document(report: &Report) -> Value {
+    let mut doc = Map::new();
+    doc.insert("study".into(), json!(report.study));
+    for (name, input) in &report.inputs {
+        let v = match input {
+            Input::Number(x) => json!(x),
+            Input::Name(s) => json!(s),
+        };
+        doc.insert((*name).into(), v);
+    }
+    for n in &report.numbers {
+        doc.insert(n.key.into(), json!(n.value));
+    }
+    Value::Object(doc)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_flag_shows_the_default_its_study_declares() {
+        for study in STUDIES {
+            let cmd = command(study);
+            for p in study.params {
+                let arg =
+                    cmd.get_arguments().find(|a| a.get_id() == p.name).expect("an argument per parameter");
+                let shown = arg.get_help().expect("help").to_string();
+                assert!(shown.ends_with(&format!("[default: {}]", p.default_text())), "{}: {shown}", p.name);
+            }
+        }
+    }
+}

@@ -1,0 +1,128 @@
+"""The library's studies (``pendula::study::STUDIES``), one function each.
+
+Every study the library registers is offered here as ``pendula.<name>`` (``energy-budget``
+as :func:`pendula.energy_budget`) and through :func:`study`; each returns a
+:class:`StudyReport`. The parameters, their defaults, units and checks are the library's:
+this module only spells them as keyword arguments and presents the report (matplotlib for
+its plots). A study added to the library appears here with no Python code.
+"""
+
+from __future__ import annotations
+
+import html
+import inspect
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping, Optional
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["StudyReport", "study", "FUNCTIONS"]
+
+
+@dataclass(frozen=True, eq=False)
+class StudyReport:
+    """What a study found: ``summary`` (sentences), ``numbers`` (by key, with ``units``),
+    ``tables`` (name → column → array, with ``columns_units``), ``plots`` (drawn by
+    :meth:`plot`), and the ``inputs`` as the run used them (defaults filled in)."""
+
+    study: str
+    inputs: Mapping[str, Any]
+    summary: tuple
+    numbers: Mapping[str, float]
+    units: Mapping[str, str]
+    tables: Mapping[str, Mapping[str, np.ndarray]]
+    columns_units: Mapping[str, Mapping[str, str]]
+    plots: tuple
+
+    def __str__(self) -> str:
+        return "\n".join(self.summary)
+
+    def plot(self, name: Optional[str] = None, ax=None):
+        """Draws the plot ``name`` (the first when None) on ``ax`` (a new figure's when None);
+        returns the axes (matplotlib needed)."""
+        plots = {p["name"]: p for p in self.plots}
+        if name is None:
+            name = self.plots[0]["name"]
+        if name not in plots:
+            from .errors import UnknownNameError
+
+            raise UnknownNameError(f"unknown plot `{name}`; valid plots: {', '.join(plots)}")
+        p = plots[name]
+        if ax is None:
+            import matplotlib.pyplot as plt
+
+            ax = plt.figure().gca()
+        styles = {"solid": "-", "dashed": "--", "points": "o"}
+        for s in p["series"]:
+            ax.plot(s["x"], s["y"], styles[s["style"]], label=s["label"])
+        for axis, set_label, set_scale in (("x", ax.set_xlabel, ax.set_xscale), ("y", ax.set_ylabel, ax.set_yscale)):
+            a = p[axis]
+            set_label(a["label"] + (f" ({a['unit']})" if a["unit"] else ""))
+            set_scale("log" if a["log"] else "linear")
+        ax.set_title(p["title"])
+        ax.legend()
+        return ax
+
+    def _repr_html_(self) -> str:
+        rows = "".join(
+            f"<tr><td>{html.escape(k)}</td><td>{v:.6g} {html.escape(self.units[k])}</td></tr>" for k, v in self.numbers.items()
+        )
+        text = "".join(f"<p>{html.escape(s)}</p>" for s in self.summary)
+        return f"<b>{html.escape(self.study)}</b>{text}<table>{rows}</table>"
+
+
+def study(name: str, system: Any = None, *, progress: Any = None, **params: Any) -> StudyReport:
+    """Runs the library study ``name`` (see :data:`FUNCTIONS` for their names) on ``system``
+    (a :class:`pendula.System`, a catalogue name, or None for the study's default) with its
+    parameters as keyword arguments; unknown names raise :class:`UnknownNameError` with the
+    valid ones, values out of range :class:`InvalidValueError`."""
+    values = list(params.items())
+    settings: list = []
+    if system is not None:
+        from . import System
+
+        if isinstance(system, System):
+            settings = [(k, float(v)) for k, v in system.params.items()]
+            system = system.name
+        values.insert(0, ("system", system))
+    raw = _core.run_study(name, values, settings, progress)
+    return StudyReport(
+        study=raw["study"],
+        inputs=raw["inputs"],
+        summary=tuple(raw["summary"]),
+        numbers=raw["numbers"],
+        units=raw["units"],
+        tables=raw["tables"],
+        columns_units=raw["columns_units"],
+        plots=tuple(raw["plots"]),
+    )
+
+
+def _function(entry: Mapping[str, Any]) -> Callable[..., StudyReport]:
+    """The function of one registered study, its signature and docstring from the
+    registry's parameters (defaults and units included)."""
+    name = entry["name"]
+
+    def run(system: Any = None, **params: Any) -> StudyReport:
+        return study(name, system, **params)
+
+    unit = {"time": "s (none for a dimensionless system)", "": ""}
+    lines = [entry["about"] + ".", "", "Parameters (defaults are the library's):"]
+    parameters = []
+    for p in entry["params"]:
+        u = unit.get(p.get("unit", ""), p.get("unit", ""))
+        lines.append(f"    {p['name']}: {p['help']}{', ' + u if u else ''} [default: {p['default_text']}]")
+        kind = inspect.Parameter.POSITIONAL_OR_KEYWORD if p["kind"] == "system" else inspect.Parameter.KEYWORD_ONLY
+        parameters.append(inspect.Parameter(p["name"], kind, default=None))
+    parameters.append(inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None))
+    lines += ["", "Returns a :class:`pendula.StudyReport`; ``pendula study`` and the lab run the same study."]
+    run.__name__ = run.__qualname__ = name.replace("-", "_")
+    run.__doc__ = "\n".join(lines)
+    run.__signature__ = inspect.Signature(parameters, return_annotation=StudyReport)  # type: ignore[attr-defined]
+    return run
+
+
+#: Every registered study's function, by Python name (``energy_budget``).
+FUNCTIONS = {e["name"].replace("-", "_"): _function(e) for e in _core.studies()}

@@ -1,0 +1,173 @@
+//! The library's study registry ([`pendula::study::STUDIES`]) for Python: `studies()`
+//! describes every study and its parameters (from which `pendula` makes one function per
+//! study), `run_study` runs one with the GIL released and returns its report as dicts and
+//! numpy arrays. A new study in the library needs nothing here.
+
+use numpy::IntoPyArray;
+use pendula::study::{self, Budget, Input, Inputs, Kind, Style, Unit};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::{interruptible, to_py};
+
+/// Every study: `name`, `about`, and `params`, each a dict with `name`, `help`, `kind`
+/// (`system`, `method`, `real`, `count`), `default` (the value, or the default system's
+/// name), `default_text` (as documentation shows it) and `unit` (`time` for the system's
+/// time unit).
+#[pyfunction]
+fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = PyList::empty(py);
+    for s in study::STUDIES {
+        let params = PyList::empty(py);
+        for p in s.params {
+            let d = PyDict::new(py);
+            d.set_item("name", p.name)?;
+            d.set_item("help", p.help)?;
+            d.set_item("default_text", p.default_text())?;
+            match p.kind {
+                Kind::System { default, .. } => {
+                    d.set_item("kind", "system")?;
+                    d.set_item("default", default)?;
+                }
+                Kind::Method { default } => {
+                    d.set_item("kind", "method")?;
+                    d.set_item("default", default)?;
+                }
+                Kind::Real { default, unit, .. } => {
+                    d.set_item("kind", "real")?;
+                    d.set_item("default", default)?;
+                    d.set_item(
+                        "unit",
+                        match unit {
+                            Unit::None => "",
+                            Unit::Time => "time",
+                            Unit::Fixed(u) => u,
+                        },
+                    )?;
+                }
+                Kind::Count { default, .. } => {
+                    d.set_item("kind", "count")?;
+                    d.set_item("default", default)?;
+                }
+            }
+            params.append(d)?;
+        }
+        let d = PyDict::new(py);
+        d.set_item("name", s.name)?;
+        d.set_item("about", s.about)?;
+        d.set_item("params", params)?;
+        d.set_item("files", s.files.to_vec())?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+/// Runs the study `name` with `values` ((parameter, value) pairs: a str for a system or a
+/// method, a number otherwise) and `set` ((system quantity, value) pairs). Returns `study`,
+/// `inputs`, `summary` (sentences), `numbers` and `units` (by key), `tables` (name →
+/// column → array), `columns_units` (name → column → unit) and `plots`.
+#[pyfunction]
+#[pyo3(signature = (name, values, set, progress=None))]
+fn run_study<'py>(
+    py: Python<'py>,
+    name: &str,
+    values: Vec<(String, Bound<'py, PyAny>)>,
+    set: Vec<(String, f64)>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let study = study::find(name).map_err(|e| to_py(py, &e))?;
+    let mut inputs = Inputs { values: Vec::new(), set };
+    for (key, v) in values {
+        let input = if let Ok(text) = v.extract::<String>() {
+            Input::Name(text)
+        } else if v.is_instance_of::<pyo3::types::PyBool>() {
+            // True is 1 to Python's float(), never a value anyone meant here.
+            return Err(crate::raise(
+                py,
+                "InvalidValueError",
+                format!("invalid value {v} for `{key}`: a number or a name, not a bool"),
+            ));
+        } else if let Ok(x) = v.extract::<f64>() {
+            Input::Number(x)
+        } else {
+            return Err(crate::raise(
+                py,
+                "InvalidValueError",
+                format!("invalid value {} for `{key}`: a number or a name", v.repr()?),
+            ));
+        };
+        inputs.values.push((key, input));
+    }
+    let report = interruptible(py, false, progress.as_ref(), |_| (study.run)(&inputs, &Budget::UNLIMITED))?
+        .map_err(|e| to_py(py, &e))?;
+    let out = PyDict::new(py);
+    out.set_item("study", report.study)?;
+    let given = PyDict::new(py);
+    for (k, v) in &report.inputs {
+        match v {
+            Input::Number(x) => given.set_item(k, x)?,
+            Input::Name(s) => given.set_item(k, s)?,
+        }
+    }
+    out.set_item("inputs", given)?;
+    out.set_item("summary", report.summary.clone())?;
+    let (numbers, units) = (PyDict::new(py), PyDict::new(py));
+    for n in &report.numbers {
+        numbers.set_item(n.key, n.value)?;
+        units.set_item(n.key, n.unit)?;
+    }
+    out.set_item("numbers", numbers)?;
+    out.set_item("units", units)?;
+    let (tables, columns_units) = (PyDict::new(py), PyDict::new(py));
+    for t in report.tables {
+        let (columns, units) = (PyDict::new(py), PyDict::new(py));
+        for c in t.columns {
+            units.set_item(c.name, c.unit)?;
+            columns.set_item(c.name, c.values.into_pyarray(py))?;
+        }
+        tables.set_item(t.name, columns)?;
+        columns_units.set_item(t.name, units)?;
+    }
+    out.set_item("tables", tables)?;
+    out.set_item("columns_units", columns_units)?;
+    let plots = PyList::empty(py);
+    for p in report.plots {
+        let d = PyDict::new(py);
+        d.set_item("name", p.name)?;
+        d.set_item("title", p.title)?;
+        for (key, axis) in [("x", p.x), ("y", p.y)] {
+            let a = PyDict::new(py);
+            a.set_item("label", axis.label)?;
+            a.set_item("unit", axis.unit)?;
+            a.set_item("log", axis.log)?;
+            d.set_item(key, a)?;
+        }
+        let series = PyList::empty(py);
+        for line in p.series {
+            let l = PyDict::new(py);
+            l.set_item("label", line.label)?;
+            l.set_item(
+                "style",
+                match line.style {
+                    Style::Solid => "solid",
+                    Style::Dashed => "dashed",
+                    Style::Points => "points",
+                },
+            )?;
+            let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().map(|[x, y]| (*x, *y)).unzip();
+            l.set_item("x", x.into_pyarray(py))?;
+            l.set_item("y", y.into_pyarray(py))?;
+            series.append(l)?;
+        }
+        d.set_item("series", series)?;
+        plots.append(d)?;
+    }
+    out.set_item("plots", plots)?;
+    Ok(out)
+}
+
+/// Adds the functions to `_core`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(studies, m)?)?;
+    m.add_function(wrap_pyfunction!(run_study, m)?)
+}

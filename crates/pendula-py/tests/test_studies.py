@@ -1,0 +1,72 @@
+"""The library's study registry in Python: one function per study, its parameters, checks
+and report the library's, and its results the same as the CLI's for the same study."""
+
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import pendula
+from pendula import InvalidValueError, UnknownNameError
+
+
+def test_every_registered_study_is_a_function_with_the_library_defaults_in_its_doc():
+    for entry in pendula._core.studies():
+        f = getattr(pendula, entry["name"].replace("-", "_"))
+        for p in entry["params"]:
+            assert f"{p['name']}:" in f.__doc__ and f"[default: {p['default_text']}]" in f.__doc__
+        assert entry["name"].replace("-", "_") in pendula.__all__
+
+
+def test_energy_budget_balances_work_and_energy():
+    r = pendula.energy_budget("pendulum", t_end=5.0, dt=1e-3)
+    t = r.tables["energy-budget"]["t"]
+    e, w, b = (r.tables["energy-budget"][k] for k in ("energy", "work", "balance"))
+    assert t[-1] == 5.0
+    np.testing.assert_allclose(b, e - e[0] - w, atol=1e-12)
+    assert r.units["work"] == "J" and r.inputs["method"] == "rk4"
+    assert "No damping or drive" in r.summary[1]
+    damped = pendula.energy_budget(pendula.System("pendulum", damping=0.3), t_end=5.0)
+    assert damped.numbers["work"] < -1.0
+    assert damped.numbers["max_balance"] < 1e-9 * abs(damped.numbers["work"])
+
+
+def test_bad_input_names_the_value_and_what_is_allowed():
+    with pytest.raises(InvalidValueError, match=r"invalid value -1 for `dt`: must be finite and > 0"):
+        pendula.energy_budget(dt=-1)
+    with pytest.raises(UnknownNameError, match=r"did you mean `t_end`"):
+        pendula.energy_budget(t_edn=3)
+    with pytest.raises(UnknownNameError, match=r"did you mean `energy-budget`"):
+        pendula.study("energy-budgte")
+    with pytest.raises(InvalidValueError, match=r"`dt`"):
+        pendula.energy_budget(dt="fast")
+    with pytest.raises(InvalidValueError, match=r"not a bool"):
+        pendula.energy_budget(dt=True)
+
+
+def test_the_cli_reports_the_same_numbers(tmp_path):
+    cli = os.environ.get("PENDULA_CLI", "target/debug/pendula")
+    out = subprocess.run(
+        [cli, "energy-budget", "--t-end", "3", "--summary", "-", "--out-dir", str(tmp_path)],
+        capture_output=True, text=True, check=True,
+    )
+    doc = json.loads(out.stdout)
+    r = pendula.energy_budget(t_end=3)
+    for key, value in r.numbers.items():
+        assert doc[key] == value, key
+    assert out.stderr.splitlines()[:2] == list(r.summary)
+    assert math.isclose(doc["t_end"], 3.0)
+
+
+def test_a_report_plots_with_matplotlib():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    r = pendula.energy_budget(t_end=1.0)
+    ax = r.plot("energy-budget")
+    assert [l.get_label() for l in ax.get_lines()] == ["E(t) - E(0)", "W(t)"]
+    assert ax.get_xlabel() == "t (s)"
+    with pytest.raises(UnknownNameError):
+        r.plot("nope")

@@ -1,0 +1,65 @@
+//! A study's [`Plot`] (plain data in the library's report) drawn as a [`Figure`]: every
+//! study's plots reach PNG and SVG through this one conversion, whichever front end asked.
+
+use pendula::study::{Plot, Style};
+
+use crate::{Figure, Kind, Scale, axis_label, palette};
+
+impl From<&Plot> for Figure {
+    /// The plot's axes with their units (catalogue names as symbols), its series in the
+    /// palette's order, solid, dashed or as markers.
+    fn from(plot: &Plot) -> Self {
+        let scale = |log: bool| if log { Scale::Log } else { Scale::Linear };
+        let mut figure = Figure::new(
+            plot.title.clone(),
+            axis_label(&plot.x.label, plot.x.unit),
+            axis_label(&plot.y.label, plot.y.unit),
+        )
+        .scales(scale(plot.x.log), scale(plot.y.log));
+        for (i, line) in plot.series.iter().enumerate() {
+            let kind = match line.style {
+                Style::Solid => Kind::Line,
+                Style::Dashed => Kind::Dashed,
+                Style::Points => Kind::Markers,
+            };
+            figure = figure.with(
+                line.label.clone(),
+                palette(i),
+                kind,
+                line.points.iter().map(|[x, y]| (*x, *y)).collect(),
+            );
+        }
+        figure
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use pendula::study::{Axis, Line, Plot, Style};
+
+    use crate::{Figure, Kind, Scale};
+
+    #[test]
+    fn a_plot_keeps_its_labels_units_scales_and_series() {
+        let plot = Plot {
+            name: "p",
+            title: "a title".into(),
+            x: Axis { label: "t".into(), unit: "s", log: false },
+            y: Axis { label: "theta1".into(), unit: "rad", log: true },
+            series: vec![
+                Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },
+                Line { label: "fit".into(), style: Style::Dashed, points: vec![[0.0, 1.0]] },
+            ],
+        };
+        let f = Figure::from(&plot);
+        assert_eq!(
+            (f.title.as_str(), f.x_label.as_str(), f.y_label.as_str()),
+            ("a title", "t (s)", "θ₁ (rad)")
+        );
+        assert_eq!((f.x_scale, f.y_scale), (Scale::Linear, Scale::Log));
+        assert_eq!(f.series.len(), 2);
+        assert_eq!(f.series[1].kind, Kind::Dashed);
+        assert_eq!(f.series[0].points, vec![(0.0, 1.0), (1.0, 2.0)]);
+        assert!(f.png().is_ok());
+    }
+}

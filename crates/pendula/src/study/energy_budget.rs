@@ -1,0 +1,270 @@
+//! `energy-budget`: the energy balance of one run. Damping and drives change a system's
+//! energy E by the work W(t) = ∫₀ᵗ P dt of its non-conservative forces (P =
+//! [`crate::system::Model::power`]), so E(t) − E(0) − W(t) vanishes along every exact
+//! solution; what a run leaves of it is the integrator's error. The report gives E, W and
+//! the balance against t (about 2000 samples), and the largest |balance| in the system's
+//! energy unit and against its energy scale ([`crate::system::Model::energy_scale`]).
+//!
+//! W is integrated by Simpson's rule on each step, with the midpoint from the step's cubic
+//! Hermite interpolant ([`crate::analysis::EnergyBalance`]).
+
+use std::ops::ControlFlow;
+
+use super::{
+    Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study, Style,
+    Table, Unit, sig,
+};
+use crate::analysis::EnergyBalance;
+use crate::error::Short;
+use crate::observe::{Flow, Observer, Sample};
+use crate::{End, Error, RunSpec};
+
+/// The study's entry in [`super::STUDIES`].
+pub const STUDY: Study = Study {
+    name: "energy-budget",
+    about: "The energy balance E(t) - E(0) - W(t) of one run: the energy, the work of damping and drive, and what the integrator leaves of their balance",
+    params: &[
+        Param {
+            name: "system",
+            help: "The system to run",
+            // A damped double pendulum: the forces do work, so each term of the budget shows.
+            kind: Kind::System { default: "double", preset: &[("damping", 0.1)] },
+        },
+        Param { name: "method", help: "The integration method", kind: Kind::Method { default: "rk4" } },
+        Param {
+            name: "dt",
+            help: "The step size",
+            kind: Kind::Real { default: 1e-3, unit: Unit::Time, domain: Domain::Positive },
+        },
+        Param {
+            name: "t_end",
+            help: "The end time",
+            kind: Kind::Real { default: 20.0, unit: Unit::Time, domain: Domain::Positive },
+        },
+    ],
+    files: &["energy-budget", "energy-balance"],
+    run,
+};
+
+/// About how many rows the table keeps.
+const SAMPLES: u64 = 2000;
+
+fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
+    let args = Args::new(&STUDY, inputs)?;
+    let values = args.system("system")?;
+    let method = args.method("method")?;
+    let dt = args.real("dt")?;
+    let t_end = args.real("t_end")?;
+    let spec = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
+    let schedule = spec.schedule().map_err(|e| match e {
+        Error::InvalidValue { name, value, allowed } if name == "h" => {
+            Error::InvalidValue { name: "dt".into(), value, allowed }
+        }
+        e => e,
+    })?;
+    budget.afford(schedule.steps as f64, format!("a run of {} steps", schedule.steps))?;
+    let model = values.build();
+    let info = values.info();
+
+    let y0 = values.initial_state();
+    let mut watch = Watch {
+        balance: EnergyBalance::new(&*model, y0),
+        every: (schedule.steps / SAMPLES).max(1),
+        rows: [Vec::new(), Vec::new(), Vec::new(), Vec::new()],
+    };
+    model.solve(method, y0, &spec, &mut watch)?;
+    let Watch { balance, rows: [t, energy, work, error], .. } = watch;
+
+    let (eu, tu) = (info.energy_unit(), info.time_unit());
+    let change: Vec<f64> = energy.iter().map(|e| e - balance.initial).collect();
+    let system = describe(&values);
+    let mut summary = vec![format!(
+        "{system}, {} at dt = {}{} to t = {}{}: E went from {} {eu} to {} {eu}; the non-conservative forces did W = {} {eu} of work",
+        method.name,
+        Short(dt),
+        space(tu),
+        Short(t_end),
+        space(tu),
+        sig(balance.initial),
+        sig(balance.last),
+        sig(balance.work),
+    )];
+    summary.push(if balance.forced {
+        format!(
+            "The balance E(t) - E(0) - W(t), zero along exact solutions, stays within {} {eu} ({} of the energy scale {} {eu}): the integrator's error",
+            sig(balance.max_abs),
+            sig(balance.max_rel()),
+            sig(balance.scale)
+        )
+    } else {
+        format!(
+            "No damping or drive: W = 0 and the balance is the energy error, within {} {eu} ({} of the energy scale {} {eu})",
+            sig(balance.max_abs),
+            sig(balance.max_rel()),
+            sig(balance.scale)
+        )
+    });
+    let numbers = vec![
+        Number { key: "initial_energy", value: balance.initial, unit: eu, about: "E(0)" },
+        Number { key: "final_energy", value: balance.last, unit: eu, about: "E at the end" },
+        Number { key: "work", value: balance.work, unit: eu, about: "W at the end" },
+        Number { key: "max_balance", value: balance.max_abs, unit: eu, about: "max |E(t) - E(0) - W(t)|" },
+        Number { key: "energy_scale", value: balance.scale, unit: eu, about: "the energy scale" },
+        Number {
+            key: "max_balance_rel",
+            value: balance.max_rel(),
+            unit: "",
+            about: "max |balance| / energy scale",
+        },
+    ];
+    let points = |ys: &[f64]| -> Vec<[f64; 2]> { t.iter().zip(ys).map(|(t, y)| [*t, *y]).collect() };
+    let time = Axis { label: "t".into(), unit: tu, log: false };
+    let plots = vec![
+        Plot {
+            name: "energy-budget",
+            title: format!("{system}: energy change and work ({})", method.name),
+            x: time.clone(),
+            y: Axis { label: "energy".into(), unit: eu, log: false },
+            series: vec![
+                Line { label: "E(t) - E(0)".into(), style: Style::Solid, points: points(&change) },
+                Line { label: "W(t)".into(), style: Style::Dashed, points: points(&work) },
+            ],
+        },
+        Plot {
+            name: "energy-balance",
+            title: format!(
+                "{system}: balance E(t) - E(0) - W(t) ({}, dt = {}{})",
+                method.name,
+                Short(dt),
+                space(tu)
+            ),
+            x: time,
+            y: Axis { label: "E - E(0) - W".into(), unit: eu, log: false },
+            series: vec![Line { label: "balance".into(), style: Style::Solid, points: points(&error) }],
+        },
+    ];
+    let table = Table {
+        name: "energy-budget",
+        columns: vec![
+            Column { name: "t", unit: tu, values: t },
+            Column { name: "energy", unit: eu, values: energy },
+            Column { name: "work", unit: eu, values: work },
+            Column { name: "balance", unit: eu, values: error },
+        ],
+    };
+    Ok(Report {
+        study: STUDY.name,
+        inputs: vec![
+            ("system", Input::Name(info.name.into())),
+            ("method", Input::Name(method.name.into())),
+            ("dt", Input::Number(dt)),
+            ("t_end", Input::Number(t_end)),
+        ],
+        summary,
+        numbers,
+        tables: vec![table],
+        plots,
+    })
+}
+
+/// The system's name with the settings that differ from its catalogue defaults.
+fn describe(values: &crate::system::Values) -> String {
+    let info = values.info();
+    let changed: Vec<String> = info
+        .parameters
+        .iter()
+        .filter(|q| values.get(q.name) != q.default)
+        .map(|q| format!("{} = {}{}", q.name, Short(values.get(q.name)), space(q.unit)))
+        .collect();
+    if changed.is_empty() { info.name.to_owned() } else { format!("{} ({})", info.name, changed.join(", ")) }
+}
+
+/// " s" for a unit, "" for none.
+fn space(unit: &str) -> String {
+    if unit.is_empty() { String::new() } else { format!(" {unit}") }
+}
+
+/// Tracks the balance at every step and keeps (t, E, W, balance) every `every` steps and at
+/// the end.
+struct Watch<'a> {
+    balance: EnergyBalance<'a>,
+    every: u64,
+    rows: [Vec<f64>; 4],
+}
+
+impl Observer for Watch<'_> {
+    fn observe(&mut self, s: &Sample<'_>) -> Flow {
+        let error = self.balance.track(s.t, s.y, s.energy);
+        if s.step.is_multiple_of(self.every) || s.last {
+            for (row, v) in self.rows.iter_mut().zip([s.t, self.balance.last, self.balance.work, error]) {
+                row.push(v);
+            }
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::{Budget, Inputs};
+
+    /// The damped simple pendulum loses exactly the energy its damping dissipates: for the
+    /// small-angle (linear) form from θ₀ at rest, the exact energy is known in closed form,
+    /// so E(T) − E(0) is checked against it, and W(T) must equal it (the balance is the
+    /// integrator's error, far below the change at this step).
+    #[test]
+    fn work_balances_the_energy_lost_to_damping() {
+        let (b, theta0, t_end) = (0.2, 0.1, 10.0);
+        let inputs = Inputs::default()
+            .name("system", "pendulum")
+            .set("damping", b)
+            .set("linear", 1.0)
+            .set("theta", theta0)
+            .number("t_end", t_end);
+        let report = (STUDY.run)(&inputs, &Budget::UNLIMITED).unwrap();
+        // θ'' + b θ' + ω0² θ = 0 with ω0² = g/l: underdamped closed form.
+        let (g, l, m) = (9.81f64, 1.0f64, 1.0f64);
+        let w0 = (g / l).sqrt();
+        let wd = (w0 * w0 - b * b / 4.0).sqrt();
+        let a = (-b * t_end / 2.0).exp();
+        let theta = theta0 * a * ((wd * t_end).cos() + b / (2.0 * wd) * (wd * t_end).sin());
+        let omega = -theta0 * a * (w0 * w0 / wd) * (wd * t_end).sin();
+        // The linear pendulum's energy: ½ m l² ω² + ½ m g l θ².
+        let energy = |th: f64, om: f64| 0.5 * m * l * l * om * om + 0.5 * m * g * l * th * th;
+        let exact_change = energy(theta, omega) - energy(theta0, 0.0);
+        let change = report.number("final_energy").unwrap() - report.number("initial_energy").unwrap();
+        assert!((change - exact_change).abs() < 1e-6 * exact_change.abs(), "{change} vs {exact_change}");
+        let work = report.number("work").unwrap();
+        assert!((work - exact_change).abs() < 1e-6 * exact_change.abs(), "W {work} vs {exact_change}");
+        assert!(report.number("max_balance").unwrap() < 1e-8, "{:?}", report.number("max_balance"));
+        let table = report.table("energy-budget").unwrap();
+        assert_eq!(table.column("t").unwrap().values.last(), Some(&t_end));
+        assert!(report.summary[1].starts_with("The balance"), "{:?}", report.summary);
+    }
+
+    #[test]
+    fn a_free_system_does_no_work() {
+        let inputs = Inputs::default().name("system", "oscillator").number("t_end", 5.0);
+        let report = (STUDY.run)(&inputs, &Budget::UNLIMITED).unwrap();
+        assert_eq!(report.number("work"), Some(0.0));
+        assert!(report.summary[1].starts_with("No damping or drive"), "{:?}", report.summary);
+        // The preset belongs to the default system only.
+        assert!(report.summary[0].starts_with("oscillator, rk4"), "{:?}", report.summary);
+    }
+
+    #[test]
+    fn the_default_run_shows_each_term_and_refuses_runs_over_budget() {
+        let report = (STUDY.run)(&Inputs::default(), &Budget::UNLIMITED).unwrap();
+        assert!(
+            report.summary[0].starts_with("double (damping = 0.1 N m s), rk4 at dt = 0.001 s to t = 20 s"),
+            "{:?}",
+            report.summary
+        );
+        assert!(report.number("work").unwrap() < -1.0, "damping dissipates: {:?}", report.number("work"));
+        let e = (STUDY.run)(&Inputs::default(), &Budget { max_steps: Some(1000.0) }).unwrap_err();
+        assert!(matches!(e, Error::TooLarge { .. }), "{e}");
+        let e = (STUDY.run)(&Inputs::default().name("method", "verlet"), &Budget::UNLIMITED).unwrap_err();
+        assert!(e.to_string().contains("verlet needs"), "{e}");
+    }
+}

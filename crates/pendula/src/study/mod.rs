@@ -1,0 +1,614 @@
+//! Studies as specs: what a user can ask for, written once for every front end.
+//!
+//! A study ([`Study`]) is data: its name, a sentence about it, its parameters ([`Param`]:
+//! name, help, unit, default and domain, each declared once) and one `run` function that
+//! validates [`Inputs`] against those parameters and returns a [`Report`] — the sentences of
+//! its summary, the numbers a caption quotes, its tables and its plots, as plain values.
+//! The registry [`STUDIES`] is the one list the CLI (one subcommand per entry, flags and
+//! their `[default: …]` derived from the parameters), Python (`pendula.study(name, **kw)`
+//! and one function per entry) and the lab (a form per entry) read; a new study is one file
+//! here and its line in [`STUDIES`], and every front end offers it.
+//!
+//! The shape follows ripgrep's flag registry (`crates/core/flags/defs.rs`: each flag
+//! declared once, everything else derived) and argmin's solvers (a problem, a state, a
+//! result value; presentation elsewhere). Front ends map their spelling onto [`Inputs`]
+//! (`--delta 1e-9`, `delta=1e-9`, `{"delta": 1e-9}`) and present the [`Report`]; parsing
+//! the `120deg`/`pi` value syntax is a front end's (the format crate's) job, so inputs
+//! arrive here as numbers and names.
+
+pub mod energy_budget;
+
+use std::fmt;
+
+use crate::Error;
+use crate::error::{Short, suggestions};
+use crate::integrator::{self, Method};
+use crate::system::Values;
+
+/// `x` to four significant digits, for sentences people read (tables and JSON keep every
+/// digit): `0.1490`, `-25.15`, `1.469e-8`, `2.500e6`.
+pub fn sig(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() {
+        format!("{x}")
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{x:.3e}")
+    } else {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    }
+}
+
+/// Every study, in the order front ends list them.
+pub const STUDIES: &[&Study] = &[&energy_budget::STUDY];
+
+/// The study named `name`.
+///
+/// # Errors
+/// [`Error::UnknownStudy`] with the valid names and the closest ones.
+pub fn find(name: &str) -> Result<&'static Study, Error> {
+    STUDIES.iter().copied().find(|s| s.name == name).ok_or_else(|| Error::UnknownStudy {
+        name: name.to_owned(),
+        valid: STUDIES.iter().map(|s| s.name).collect::<Vec<_>>().join(", "),
+        suggestions: suggestions(name, STUDIES.iter().map(|s| s.name)),
+    })
+}
+
+/// One study: what it is called, what it does, what it takes, and how it runs.
+#[derive(Debug)]
+pub struct Study {
+    /// Its name, as a command and a key (`energy-budget`); Python spells it with `_`.
+    pub name: &'static str,
+    /// One sentence: what it shows.
+    pub about: &'static str,
+    /// Its parameters, in the order they are documented.
+    pub params: &'static [Param],
+    /// The stems of the tables (`.csv`) and plots (`.png`, `.svg`) its report holds, for
+    /// front ends that list what a command writes before running it (a test checks them
+    /// against the report on the defaults).
+    pub files: &'static [&'static str],
+    /// Validates `inputs` against [`Study::params`] (nothing is computed before every input
+    /// is checked) and runs the study within `budget`.
+    pub run: fn(&Inputs, &Budget) -> Result<Report, Error>,
+}
+
+impl Study {
+    /// The parameter named `name`.
+    pub fn param(&self, name: &str) -> Option<&'static Param> {
+        self.params.iter().find(|p| p.name == name)
+    }
+}
+
+/// One parameter of a study.
+#[derive(Debug)]
+pub struct Param {
+    /// Its name: a flag `--name` (with `-` for `_`), a keyword `name`, a JSON field `name`.
+    pub name: &'static str,
+    /// What it sets, in a phrase (without its default, which front ends append).
+    pub help: &'static str,
+    /// What kind of value it takes, with its default and domain.
+    pub kind: Kind,
+}
+
+/// What a parameter takes.
+#[derive(Debug, Clone, Copy)]
+pub enum Kind {
+    /// A catalogued system's name ([`crate::model::find`]); the study's other inputs
+    /// `set` its parameters and initial state.
+    System {
+        /// The system run when none is named.
+        default: &'static str,
+        /// Settings applied before the user's own when the default system runs (a damping
+        /// that makes a budget worth showing, say); shown in the help.
+        preset: &'static [(&'static str, f64)],
+    },
+    /// A method of [`integrator::METHODS`].
+    Method {
+        /// The method run when none is named.
+        default: &'static str,
+    },
+    /// A real number in a unit, within a domain.
+    Real {
+        /// The value when none is given.
+        default: f64,
+        /// Its unit (`s`, `1/s`; empty for a pure number). A time takes the system's time
+        /// unit instead when [`Unit::Time`] is used.
+        unit: Unit,
+        /// The values allowed.
+        domain: Domain,
+    },
+    /// A whole number within bounds.
+    Count {
+        /// The value when none is given.
+        default: u64,
+        /// Smallest allowed.
+        min: u64,
+        /// Largest allowed.
+        max: u64,
+    },
+}
+
+/// The unit of a real parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unit {
+    /// A pure number.
+    None,
+    /// The system's time unit (s, or none for a dimensionless system).
+    Time,
+    /// A fixed unit.
+    Fixed(&'static str),
+}
+
+/// The values a real parameter allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Domain {
+    /// Finite and > 0.
+    Positive,
+    /// Finite and ≥ 0.
+    NonNegative,
+    /// Finite.
+    Finite,
+}
+
+impl Domain {
+    /// What is allowed, in words, for error messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Domain::Positive => "must be finite and > 0",
+            Domain::NonNegative => "must be finite and >= 0",
+            Domain::Finite => "must be finite",
+        }
+    }
+
+    /// Whether `v` is allowed.
+    pub fn contains(self, v: f64) -> bool {
+        v.is_finite()
+            && match self {
+                Domain::Positive => v > 0.0,
+                Domain::NonNegative => v >= 0.0,
+                Domain::Finite => true,
+            }
+    }
+}
+
+impl Param {
+    /// The default, as text for help and documentation (`rk4`, `0.001`, `double with
+    /// damping=0.05`); front ends append it as `[default: …]` so that it is written once.
+    pub fn default_text(&self) -> String {
+        match self.kind {
+            Kind::System { default, preset: [] } => default.to_owned(),
+            Kind::System { default, preset } => {
+                let set: Vec<String> = preset.iter().map(|(n, v)| format!("{n}={}", Short(*v))).collect();
+                format!("{default} with {}", set.join(", "))
+            }
+            Kind::Method { default } => default.to_owned(),
+            Kind::Real { default, .. } => Short(default).to_string(),
+            Kind::Count { default, .. } => default.to_string(),
+        }
+    }
+
+    /// The unit of a real parameter for `system`'s time unit (`""` for none).
+    pub fn unit(&self, time_unit: &'static str) -> &'static str {
+        match self.kind {
+            Kind::Real { unit: Unit::Time, .. } => time_unit,
+            Kind::Real { unit: Unit::Fixed(u), .. } => u,
+            _ => "",
+        }
+    }
+}
+
+/// One input value, as a front end read it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Input {
+    /// A number (a real or a count).
+    Number(f64),
+    /// A name (a system, a method).
+    Name(String),
+}
+
+impl fmt::Display for Input {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Input::Number(v) => write!(f, "{}", Short(*v)),
+            Input::Name(s) => f.write_str(s),
+        }
+    }
+}
+
+/// What a user gave a study: values by parameter name, and settings of the system's
+/// parameters and initial state (`--set m2=2`), applied in order after the study's preset.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Inputs {
+    /// (parameter name, value), in the order given.
+    pub values: Vec<(String, Input)>,
+    /// (system quantity, value), in the order given.
+    pub set: Vec<(String, f64)>,
+}
+
+impl Inputs {
+    /// `self` with `name` set to the number `v`.
+    pub fn number(mut self, name: &str, v: f64) -> Self {
+        self.values.push((name.to_owned(), Input::Number(v)));
+        self
+    }
+
+    /// `self` with `name` set to the name `v`.
+    pub fn name(mut self, name: &str, v: &str) -> Self {
+        self.values.push((name.to_owned(), Input::Name(v.to_owned())));
+        self
+    }
+
+    /// `self` with the system quantity `name` set to `v`.
+    pub fn set(mut self, name: &str, v: f64) -> Self {
+        self.set.push((name.to_owned(), v));
+        self
+    }
+}
+
+/// How much work a run may do: front ends that serve others (the lab) bound every request;
+/// the CLI bounds a run unless `--allow-large`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// The most integration steps (of one system) a run may take; `None` for no limit.
+    pub max_steps: Option<f64>,
+}
+
+impl Budget {
+    /// No limit.
+    pub const UNLIMITED: Budget = Budget { max_steps: None };
+
+    /// Refuses a run of `steps` steps (`what` says what they are) over the limit.
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] naming the cost and the limit.
+    pub fn afford(&self, steps: f64, what: impl Into<String>) -> Result<(), Error> {
+        match self.max_steps {
+            // A NaN cost (from a NaN input that slipped through) is refused too.
+            Some(limit) if steps.is_nan() || steps > limit => {
+                Err(Error::TooLarge { what: what.into(), steps, limit })
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Inputs checked against a study's parameters: each value by name, its default when not
+/// given, every name known.
+#[derive(Debug)]
+pub struct Args<'a> {
+    study: &'static Study,
+    inputs: &'a Inputs,
+}
+
+impl<'a> Args<'a> {
+    /// Checks that every input names a parameter of `study` (else the valid names and the
+    /// closest ones) and that no parameter is given twice.
+    ///
+    /// # Errors
+    /// [`Error::UnknownInput`] for a name `study` does not take.
+    pub fn new(study: &'static Study, inputs: &'a Inputs) -> Result<Self, Error> {
+        for (name, _) in &inputs.values {
+            if study.param(name).is_none() {
+                return Err(Error::UnknownInput {
+                    study: study.name,
+                    name: name.clone(),
+                    valid: study.params.iter().map(|p| p.name).collect::<Vec<_>>().join(", "),
+                    suggestions: suggestions(name, study.params.iter().map(|p| p.name)),
+                });
+            }
+        }
+        Ok(Args { study, inputs })
+    }
+
+    fn given(&self, name: &str) -> Option<&'a Input> {
+        // The last one given wins, as for repeated flags.
+        self.inputs.values.iter().rev().find(|(n, _)| n == name).map(|(_, v)| v)
+    }
+
+    fn param(&self, name: &str) -> &'static Param {
+        self.study.param(name).unwrap_or_else(|| panic!("{} has no parameter {name}", self.study.name))
+    }
+
+    /// The real parameter `name`, checked against its domain.
+    ///
+    /// # Errors
+    /// [`Error::InvalidValue`] outside the domain; [`Error::InvalidInput`] for a name where a
+    /// number belongs.
+    ///
+    /// # Panics
+    /// When `name` is not a real parameter of the study: a programming error in its file.
+    pub fn real(&self, name: &str) -> Result<f64, Error> {
+        let Kind::Real { default, domain, .. } = self.param(name).kind else {
+            panic!("{name} is not a real parameter of {}", self.study.name)
+        };
+        let v = self.number(name)?.unwrap_or(default);
+        if !domain.contains(v) {
+            return Err(Error::InvalidValue { name: name.to_owned(), value: v, allowed: domain.describe() });
+        }
+        Ok(v)
+    }
+
+    /// The count parameter `name`, checked against its bounds.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a value that is not a whole number within the bounds.
+    ///
+    /// # Panics
+    /// When `name` is not a count parameter of the study.
+    pub fn count(&self, name: &str) -> Result<u64, Error> {
+        let Kind::Count { default, min, max } = self.param(name).kind else {
+            panic!("{name} is not a count parameter of {}", self.study.name)
+        };
+        let Some(v) = self.number(name)? else { return Ok(default) };
+        if v.fract() != 0.0 || !(v >= min as f64 && v <= max as f64) {
+            return Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: Short(v).to_string(),
+                allowed: format!("a whole number from {min} to {max}"),
+            });
+        }
+        Ok(v as u64)
+    }
+
+    fn number(&self, name: &str) -> Result<Option<f64>, Error> {
+        match self.given(name) {
+            None => Ok(None),
+            Some(Input::Number(v)) => Ok(Some(*v)),
+            Some(Input::Name(text)) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: crate::error::clip(text, 40),
+                allowed: "a number".to_owned(),
+            }),
+        }
+    }
+
+    fn text(&self, name: &str) -> Result<Option<&'a str>, Error> {
+        match self.given(name) {
+            None => Ok(None),
+            Some(Input::Name(s)) => Ok(Some(s)),
+            Some(Input::Number(v)) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: Short(*v).to_string(),
+                allowed: "a name".to_owned(),
+            }),
+        }
+    }
+
+    /// The method parameter `name`.
+    ///
+    /// # Errors
+    /// [`Error::UnknownMethod`] for a name not in [`integrator::METHODS`].
+    ///
+    /// # Panics
+    /// When `name` is not a method parameter of the study.
+    pub fn method(&self, name: &str) -> Result<&'static Method, Error> {
+        let Kind::Method { default } = self.param(name).kind else {
+            panic!("{name} is not a method parameter of {}", self.study.name)
+        };
+        integrator::find(self.text(name)?.unwrap_or(default))
+    }
+
+    /// The system parameter `name` with the study's preset (for its default system) and the
+    /// user's settings applied, validated, its initial energy finite.
+    ///
+    /// # Errors
+    /// [`Error::UnknownSystem`], and those of [`crate::system::SystemInfo::values`] and
+    /// [`Values::check_energy`].
+    ///
+    /// # Panics
+    /// When `name` is not a system parameter of the study.
+    pub fn system(&self, name: &str) -> Result<Values, Error> {
+        let Kind::System { default, preset } = self.param(name).kind else {
+            panic!("{name} is not a system parameter of {}", self.study.name)
+        };
+        let given = self.text(name)?;
+        let info = crate::model::find(given.unwrap_or(default))?;
+        let mut settings: Vec<(String, f64)> = Vec::new();
+        if given.is_none_or(|g| g == default) {
+            settings.extend(preset.iter().map(|(n, v)| ((*n).to_owned(), *v)));
+        }
+        settings.extend(self.inputs.set.iter().cloned());
+        let values = info.values(&settings)?;
+        values.check_energy()?;
+        Ok(values)
+    }
+}
+
+/// What a study found, as values every front end presents in its own way: the CLI prints
+/// the summary, writes the tables as CSV and the plots as PNG and SVG, and a JSON summary of
+/// the inputs and numbers; Python returns it as arrays and a dict; the lab draws it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// The study's name.
+    pub study: &'static str,
+    /// Every parameter's value as the run used it (defaults filled in), in declaration
+    /// order, for summaries that say what ran.
+    pub inputs: Vec<(&'static str, Input)>,
+    /// The summary, one sentence a line, each checked against [`Report::numbers`].
+    pub summary: Vec<String>,
+    /// The numbers a caption or a summary quotes, by key, with units.
+    pub numbers: Vec<Number>,
+    /// Its tables.
+    pub tables: Vec<Table>,
+    /// Its plots.
+    pub plots: Vec<Plot>,
+}
+
+impl Report {
+    /// The number with key `key`.
+    pub fn number(&self, key: &str) -> Option<f64> {
+        self.numbers.iter().find(|n| n.key == key).map(|n| n.value)
+    }
+
+    /// The table named `name`.
+    pub fn table(&self, name: &str) -> Option<&Table> {
+        self.tables.iter().find(|t| t.name == name)
+    }
+}
+
+/// A number a report quotes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Number {
+    /// Its key (`max_balance`), as JSON and Python name it.
+    pub key: &'static str,
+    /// Its value.
+    pub value: f64,
+    /// Its unit (`J`; empty for a pure number).
+    pub unit: &'static str,
+    /// What it is, in a phrase.
+    pub about: &'static str,
+}
+
+/// A table of equally long columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// Its name, a file stem (`energy-budget` → `energy-budget.csv`).
+    pub name: &'static str,
+    /// Its columns, in order.
+    pub columns: Vec<Column>,
+}
+
+impl Table {
+    /// The number of rows.
+    pub fn rows(&self) -> usize {
+        self.columns.first().map_or(0, |c| c.values.len())
+    }
+
+    /// The column named `name`.
+    pub fn column(&self, name: &str) -> Option<&Column> {
+        self.columns.iter().find(|c| c.name == name)
+    }
+}
+
+/// One column of a table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Its name, a CSV header and a key (`balance`).
+    pub name: &'static str,
+    /// Its unit (`J`, `s`; empty for a pure number).
+    pub unit: &'static str,
+    /// Its values.
+    pub values: Vec<f64>,
+}
+
+/// A plot: lines or points over two axes, as plain data (pendula-viz draws it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plot {
+    /// Its name, a file stem.
+    pub name: &'static str,
+    /// Its title.
+    pub title: String,
+    /// The horizontal axis.
+    pub x: Axis,
+    /// The vertical axis.
+    pub y: Axis,
+    /// The lines and point sets, drawn in order.
+    pub series: Vec<Line>,
+}
+
+/// An axis of a [`Plot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// The quantity, as a catalogue name or symbol (`t`, `E - E(0)`).
+    pub label: String,
+    /// Its unit (empty for a pure number).
+    pub unit: &'static str,
+    /// Whether the axis is logarithmic.
+    pub log: bool,
+}
+
+/// One series of a [`Plot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Line {
+    /// Its legend entry.
+    pub label: String,
+    /// How it is drawn.
+    pub style: Style,
+    /// Its points (x, y).
+    pub points: Vec<[f64; 2]>,
+}
+
+/// How a [`Line`] is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// A solid line.
+    Solid,
+    /// A dashed line (fits, guides, references).
+    Dashed,
+    /// Markers only.
+    Points,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_studies_and_inputs_are_named_with_suggestions() {
+        let e = find("energy-budgte").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown study `energy-budgte`") && e.contains("did you mean `energy-budget`"),
+            "{e}"
+        );
+        let inputs = Inputs::default().number("t_edn", 3.0);
+        let e = Args::new(&energy_budget::STUDY, &inputs).unwrap_err().to_string();
+        assert!(e.contains("`t_edn`") && e.contains("did you mean `t_end`"), "{e}");
+    }
+
+    #[test]
+    fn values_are_checked_against_their_declared_domain() {
+        let args_of = |inputs: &Inputs| Args::new(&energy_budget::STUDY, inputs).map(|a| a.real("dt"));
+        assert_eq!(args_of(&Inputs::default()).unwrap().unwrap(), 1e-3);
+        let e = args_of(&Inputs::default().number("dt", -1.0)).unwrap().unwrap_err().to_string();
+        assert_eq!(e, "invalid value -1 for `dt`: must be finite and > 0");
+        let e = args_of(&Inputs::default().name("dt", "fast")).unwrap().unwrap_err().to_string();
+        assert!(e.contains("`fast`") && e.contains("a number"), "{e}");
+    }
+
+    #[test]
+    fn sentences_quote_four_significant_digits() {
+        let cases = [
+            (0.149035943, "0.1490"),
+            (-25.00145685, "-25.00"),
+            (1.468845978e-8, "1.469e-8"),
+            (29.579, "29.58"),
+            (2.5e6, "2.500e6"),
+            (0.0, "0"),
+            (1234.5678, "1235"),
+        ];
+        for (x, text) in cases {
+            assert_eq!(sig(x), text);
+        }
+    }
+
+    #[test]
+    fn budgets_refuse_runs_over_their_limit() {
+        let b = Budget { max_steps: Some(1e6) };
+        assert!(b.afford(1e6, "a run").is_ok());
+        let e = b.afford(2e6, "a sweep").unwrap_err().to_string();
+        assert_eq!(e, format!("a sweep would take {} steps, over the limit of {}", Short(2e6), Short(1e6)));
+        assert!(b.afford(f64::NAN, "x").is_err());
+        assert!(Budget::UNLIMITED.afford(1e30, "x").is_ok());
+    }
+
+    #[test]
+    fn every_study_runs_on_its_defaults_and_its_report_is_consistent() {
+        for study in STUDIES {
+            let report = (study.run)(&Inputs::default(), &Budget::UNLIMITED).unwrap();
+            assert_eq!(report.study, study.name);
+            assert_eq!(report.inputs.len(), study.params.len(), "{}", study.name);
+            for t in &report.tables {
+                assert!(t.columns.iter().all(|c| c.values.len() == t.rows()), "{}", t.name);
+                assert!(t.rows() > 0, "{}", t.name);
+            }
+            assert!(!report.summary.is_empty());
+            let mut stems: Vec<&str> =
+                report.tables.iter().map(|t| t.name).chain(report.plots.iter().map(|p| p.name)).collect();
+            stems.sort_unstable();
+            stems.dedup();
+            let mut declared = study.files.to_vec();
+            declared.sort_unstable();
+            assert_eq!(stems, declared, "{}: the files it declares", study.name);
+        }
+    }
+}
