@@ -27,6 +27,7 @@ use serde_json::{Value, json};
 mod config;
 mod fractal;
 mod session;
+mod study;
 
 pub use config::Mode;
 pub use fractal::THREAD_NAME as FRACTAL_THREAD_NAME;
@@ -53,6 +54,9 @@ pub struct Limits {
     pub max_t_max: f64,
     /// Largest command accepted, bytes.
     pub max_message_bytes: usize,
+    /// Integration steps of one `study` request (the study's own estimate, checked before
+    /// it runs): about a second of work.
+    pub max_study_steps: u64,
 }
 
 impl Default for Limits {
@@ -67,6 +71,7 @@ impl Default for Limits {
             max_fractal_size: 1024,
             max_t_max: 1000.0,
             max_message_bytes: 64 * 1024,
+            max_study_steps: 2_000_000,
         }
     }
 }
@@ -449,6 +454,7 @@ pub(crate) fn hello(limits: &Limits) -> Value {
         "systems": systems,
         "methods": methods,
         "fractal_methods": fractal_methods,
+        "studies": crate::study::list(),
         "limits": {
             "max_speed": limits.max_speed, "max_fps": limits.max_fps, "max_tracks": limits.max_tracks,
             "max_race": limits.max_race, "max_fractal_size": limits.max_fractal_size, "max_t_max": limits.max_t_max,

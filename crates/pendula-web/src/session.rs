@@ -34,6 +34,7 @@ pub enum Command {
     Speed { value: f64 },
     Fractal(FractalRequest),
     FractalCancel,
+    Study(crate::study::StudyRequest),
 }
 
 /// What the session thread receives: a parsed command, or text that was not one.
@@ -364,6 +365,9 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                     }
                     Err(r) => Err(r),
                 },
+                // Bounded by the limit on its steps, so it holds the live run back briefly.
+                Command::Study(request) => crate::study::run(request, limits.max_study_steps as f64)
+                    .map(|message| shared.text(&message)),
                 Command::FractalCancel => {
                     if let Some(flag) = fractal_cancel.take() {
                         flag.store(true, Ordering::Relaxed);
@@ -448,5 +452,6 @@ fn command_name(cmd: &Command) -> &'static str {
         Command::Speed { .. } => "speed",
         Command::Fractal(_) => "fractal",
         Command::FractalCancel => "fractal_cancel",
+        Command::Study(_) => "study",
     }
 }

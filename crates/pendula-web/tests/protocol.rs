@@ -501,3 +501,41 @@ async fn the_simulation_keeps_the_speed_asked() {
         assert!((rate / speed - 1.0).abs() < 0.08, "speed {speed} ran at {rate}");
     }
 }
+
+/// Every study of the library's registry is offered in `hello`, runs with the library's
+/// result, and refuses bad input and runs over the limit with the library's message.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_librarys_studies_run_in_the_lab_with_the_librarys_results() {
+    let (addr, token) = server(Default::default()).await;
+    let mut ws = connect(&addr, &token).await;
+    let hello = next_text(&mut ws, "hello", 5 * SEC).await;
+    let names: Vec<&str> =
+        hello["studies"].as_array().unwrap().iter().map(|s| s["name"].as_str().unwrap()).collect();
+    let registry: Vec<&str> = pendula::study::STUDIES.iter().map(|s| s.name).collect();
+    assert_eq!(names, registry);
+    send(&mut ws, json!({"cmd": "study", "name": "energy-budget", "inputs": {"t_end": 2, "system": "pendulum"}, "set": {"damping": 0.3}})).await;
+    let got = next_text(&mut ws, "study", 10 * SEC).await;
+    let inputs =
+        pendula::study::Inputs::default().name("system", "pendulum").number("t_end", 2.0).set("damping", 0.3);
+    let report =
+        (pendula::study::find("energy-budget").unwrap().run)(&inputs, &pendula::study::Budget::UNLIMITED)
+            .unwrap();
+    for n in &report.numbers {
+        let shown = got["numbers"].as_array().unwrap().iter().find(|x| x["key"] == n.key).unwrap();
+        assert_eq!(shown["value"].as_f64(), Some(n.value), "{}", n.key);
+    }
+    assert_eq!(got["summary"][0].as_str(), Some(report.summary[0].as_str()));
+    let png = got["plots"][0]["png"].as_str().unwrap();
+    assert!(png.starts_with("iVBORw0KGgo"), "a PNG, base64-encoded");
+    for (request, expected) in [
+        (json!({"cmd": "study", "name": "energy-budgte"}), "did you mean `energy-budget`"),
+        (json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": -1}}), "invalid value -1 for `dt`"),
+        (json!({"cmd": "study", "name": "energy-budget", "inputs": {"t_end": 1e9}}), "over the limit"),
+        (json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": [1]}}), "a number or a name"),
+    ] {
+        send(&mut ws, request.clone()).await;
+        let error = next_text(&mut ws, "error", 5 * SEC).await;
+        let message = error["message"].as_str().unwrap();
+        assert!(message.contains(expected), "{request}: {message:?} should mention {expected:?}");
+    }
+}

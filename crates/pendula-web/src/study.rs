@@ -1,0 +1,112 @@
+//! The library's studies ([`pendula::study::STUDIES`]) in the lab: `hello` lists them with
+//! their parameters (the page builds a form from the list), and the `study` command runs
+//! one within [`crate::Limits::max_study_steps`] and answers with its report — summary,
+//! numbers, tables and its plots drawn by pendula-viz as PNG, the same figures the CLI
+//! writes. A study added to the library appears in the lab with no code here.
+
+use std::collections::BTreeMap;
+
+use base64::Engine as _;
+use pendula::study::{self, Budget, Input, Inputs, Kind, Unit};
+use serde::Deserialize;
+use serde_json::{Value, json};
+
+use crate::config::Refusal;
+
+/// The `study` command: a study's name, its inputs by parameter name (numbers, or names for
+/// a system or a method), and settings of the system's parameters and start state.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyRequest {
+    name: String,
+    #[serde(default)]
+    inputs: BTreeMap<String, Value>,
+    #[serde(default)]
+    set: BTreeMap<String, f64>,
+}
+
+/// The studies for `hello`: name, about, and each parameter's name, help, kind, default
+/// (as documentation shows it) and unit.
+pub fn list() -> Value {
+    let studies: Vec<Value> = study::STUDIES
+        .iter()
+        .map(|s| {
+            let params: Vec<Value> = s
+                .params
+                .iter()
+                .map(|p| {
+                    let (kind, unit) = match p.kind {
+                        Kind::System { .. } => ("system", ""),
+                        Kind::Method { .. } => ("method", ""),
+                        Kind::Real { unit: Unit::Time, .. } => ("real", "time"),
+                        Kind::Real { unit: Unit::Fixed(u), .. } => ("real", u),
+                        Kind::Real { unit: Unit::None, .. } => ("real", ""),
+                        Kind::Count { .. } => ("count", ""),
+                    };
+                    json!({"name": p.name, "help": p.help, "kind": kind, "default": p.default_text(), "unit": unit})
+                })
+                .collect();
+            json!({"name": s.name, "about": s.about, "params": params})
+        })
+        .collect();
+    Value::Array(studies)
+}
+
+/// Runs `request` within `max_steps` and returns the `study` message.
+///
+/// # Errors
+/// A [`Refusal`] with the library's message (bad input, a run over the limit, a failed run).
+pub fn run(request: StudyRequest, max_steps: f64) -> Result<Value, Refusal> {
+    let spec = study::find(&request.name).map_err(|e| Refusal(e.to_string()))?;
+    let mut inputs = Inputs { values: Vec::new(), set: request.set.into_iter().collect() };
+    for (name, value) in request.inputs {
+        let input = match value {
+            Value::String(s) => Input::Name(s),
+            Value::Number(n) => Input::Number(n.as_f64().unwrap_or(f64::NAN)),
+            other => return Err(Refusal(format!("invalid value {other} for `{name}`: a number or a name"))),
+        };
+        inputs.values.push((name, input));
+    }
+    let report =
+        (spec.run)(&inputs, &Budget { max_steps: Some(max_steps) }).map_err(|e| Refusal(e.to_string()))?;
+    let tables: Vec<Value> = report
+        .tables
+        .iter()
+        .map(|t| {
+            let columns: Vec<Value> = t
+                .columns
+                .iter()
+                .map(|c| json!({"name": c.name, "unit": c.unit, "values": c.values}))
+                .collect();
+            json!({"name": t.name, "columns": columns})
+        })
+        .collect();
+    let mut plots = Vec::new();
+    for p in &report.plots {
+        let png = pendula_viz::Figure::from(p).png().map_err(|e| Refusal(e.to_string()))?;
+        plots.push(json!({
+            "name": p.name, "title": p.title,
+            "png": base64::engine::general_purpose::STANDARD.encode(png),
+        }));
+    }
+    let numbers: Vec<Value> = report
+        .numbers
+        .iter()
+        .map(|n| json!({"key": n.key, "value": n.value, "unit": n.unit, "about": n.about}))
+        .collect();
+    let inputs: serde_json::Map<String, Value> = report
+        .inputs
+        .iter()
+        .map(|(k, v)| {
+            let v = match v {
+                Input::Number(x) => json!(x),
+                Input::Name(s) => json!(s),
+            };
+            ((*k).to_owned(), v)
+        })
+        .collect();
+    Ok(json!({
+        "type": "study", "study": report.study, "inputs": inputs, "summary": report.summary,
+        "numbers": numbers, "tables": tables, "plots": plots,
+    }))
+}
