@@ -15,12 +15,14 @@ use serde::Deserialize;
 use crate::cli::SimulateArgs;
 use crate::limits::{self, Cost, Estimate};
 
-/// What simulate runs without arguments or scenario file.
+use pendula::simulate::defaults;
+
+/// What simulate runs without arguments or scenario file: the library's defaults of a run.
 pub const SIMULATE: crate::args::Defaults = crate::args::Defaults {
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: Some(10.0),
+    system: defaults::SYSTEM,
+    method: Some(defaults::METHOD),
+    dt: Some(defaults::DT),
+    t_end: Some(defaults::T_END),
     notes: &[
         (
             "dt",
@@ -711,8 +713,8 @@ pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<S
     let asked = args.rtol.is_some() || args.atol.is_some() || args.h_min.is_some() || args.h_max.is_some();
     let tolerances = if matches!(method.scheme, Scheme::Embedded(_)) || asked {
         let tol = Tolerances {
-            rtol: number("--rtol", &args.rtol, scenario.rtol, 1e-6)?,
-            atol: number("--atol", &args.atol, scenario.atol, 1e-6)?,
+            rtol: number("--rtol", &args.rtol, scenario.rtol, defaults::RTOL)?,
+            atol: number("--atol", &args.atol, scenario.atol, defaults::ATOL)?,
             h_min: number("--h-min", &args.h_min, scenario.h_min, 0.0)?,
             h_max: number("--h-max", &args.h_max, scenario.h_max, f64::INFINITY)?,
         };

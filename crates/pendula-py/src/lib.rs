@@ -626,8 +626,8 @@ fn solve<'py>(
         ));
     }
     let tol = Tolerances {
-        rtol: rtol.unwrap_or(1e-6),
-        atol: atol.unwrap_or(1e-6),
+        rtol: rtol.unwrap_or(pendula::simulate::defaults::RTOL),
+        atol: atol.unwrap_or(pendula::simulate::defaults::ATOL),
         h_min: 0.0,
         h_max: f64::INFINITY,
     };
@@ -636,7 +636,8 @@ fn solve<'py>(
     }
     // Backward when t_end < t0: negative steps of size dt.
     let direction = if t_end < t0 { -1.0 } else { 1.0 };
-    let spec = RunSpec { t0, h: direction * dt.unwrap_or(1e-3), end: End::Time(t_end) };
+    let spec =
+        RunSpec { t0, h: direction * dt.unwrap_or(pendula::simulate::defaults::DT), end: End::Time(t_end) };
     if !adaptive {
         // Checked here, to be named as the arguments are (the library speaks of h and of
         // its binding constant, which Python does not set).
@@ -931,5 +932,17 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The library's defaults of a run, which `pendula.solve` takes when given none.
+    let defaults = PyDict::new(m.py());
+    {
+        use pendula::simulate::defaults as d;
+        defaults.set_item("system", d::SYSTEM)?;
+        defaults.set_item("method", d::METHOD)?;
+        defaults.set_item("dt", d::DT)?;
+        defaults.set_item("t_end", d::T_END)?;
+        defaults.set_item("rtol", d::RTOL)?;
+        defaults.set_item("atol", d::ATOL)?;
+    }
+    m.add("SIMULATE_DEFAULTS", defaults)?;
     Ok(())
 }

@@ -83,15 +83,19 @@ pub const SPEED_RANGE: (f64, f64) = (0.01, 1000.0);
 pub const MAX_DELTA: f64 = 0.1;
 
 impl Config {
-    /// The start of every session: the free double pendulum, RK4 at 0.01 s, at real time.
+    /// The start of every session: the library's default run
+    /// ([`pendula::simulate::defaults`]: the free double pendulum, RK4 at 1 ms), at real
+    /// time, so that the lab's first run is `pendula simulate`'s and `pendula.solve`'s.
     pub fn initial() -> Config {
-        let values = model::find("double").expect("catalogued").values(&[]).expect("defaults are valid");
+        use pendula::simulate::defaults;
+        let values =
+            model::find(defaults::SYSTEM).expect("catalogued").values(&[]).expect("defaults are valid");
         let rk4 = integrator::find("rk4").expect("registered");
         Config {
             values,
             settings: Vec::new(),
-            method: rk4,
-            dt: 0.01,
+            method: integrator::find(defaults::METHOD).expect("registered"),
+            dt: defaults::DT,
             mode: Mode::Single,
             methods: vec![rk4, integrator::find("gauss-legendre-4").expect("registered")],
             count: 8,
@@ -527,7 +531,10 @@ mod tests {
 
     #[test]
     fn a_step_too_large_for_taos_binding_is_refused_before_it_runs() {
+        // At the first run's 1 ms tao-4 runs; at 10 ms its binding is too weak.
         let c = Config::initial();
+        assert!(c.apply(&configure(r#"{"method":"tao-4"}"#), &Limits::default()).is_ok());
+        let (c, _) = c.apply(&configure(r#"{"dt":0.01}"#), &Limits::default()).unwrap();
         let err = c.apply(&configure(r#"{"method":"tao-4"}"#), &Limits::default()).unwrap_err();
         assert!(err.0.contains("w h"), "{}", err.0);
         let err = c

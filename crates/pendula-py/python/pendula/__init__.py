@@ -489,7 +489,7 @@ def solve(
     t_span: Sequence[float],
     y0: Any = None,
     *,
-    method: str = "auto",
+    method: str | None = None,
     dt: float | None = None,
     rtol: float | None = None,
     atol: float | None = None,
@@ -501,9 +501,11 @@ def solve(
 ) -> Solution:
     """Integrates ``system`` over ``t_span = (t0, t_end)`` (s) from ``y0`` (default: the
     system's initial state) with ``method`` (a name from ``catalogue().methods``, or
-    ``"auto"``: see :func:`auto_method`), fixed steps ``dt`` (s; default 1e-3, as the CLI)
-    or, for an embedded pair (dopri5, dop853), adaptive steps with ``rtol``, ``atol``
-    (default 1e-6 each, as the CLI; ``dt`` is then the first step to try).
+    ``"auto"``: see :func:`auto_method`), fixed steps ``dt`` (s) or, for an embedded pair
+    (dopri5, dop853), adaptive steps with ``rtol``, ``atol`` (``dt`` is then the first step
+    to try). What is not given takes the library's defaults of a run
+    (``_core.SIMULATE_DEFAULTS``: rk4, dt = 1e-3 s, rtol = atol = 1e-6), the same as
+    ``pendula simulate``'s and the lab's first run, so all three end in the same state.
 
     With ``t_end < t0`` the run goes backward in time, as scipy's ``solve_ivp`` does:
     ``t_span=(10, 0)`` starts from ``y0`` at t = 10 s and ends at t = 0, every method
@@ -543,6 +545,8 @@ def solve(
     if len(y0) != len(system.names):
         raise InvalidValueError(f"invalid y0 of {len(y0)} values: the `{system.name}` state is {system.names}")
     note = None
+    if method is None:
+        method = _core.SIMULATE_DEFAULTS["method"]
     if method == "auto":
         method, note = auto_method(system)
         if method == "dop853":
