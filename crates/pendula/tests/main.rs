@@ -14,6 +14,7 @@ mod bifurcation;
 mod chain;
 mod checkpoint;
 mod conformance;
+mod docs;
 mod energy;
 mod engine;
 mod ensemble;
