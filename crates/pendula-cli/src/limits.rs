@@ -1,6 +1,6 @@
 //! What a request costs, estimated before any work, and the limits beyond which a command
 //! refuses it (exit 2) unless `--allow-large` is given. Every limit is stated here once; the
-//! README's table and `--help` say the same.
+//! guide's table (docs/GUIDE.md, "Limits and `--allow-large`") and `--help` say the same.
 //!
 //! The unit of work is the pendulum-step: one step of one state (a sweep's cell, a fractal's
 //! pixel, a Lyapunov run's state or tangent vector), whatever the method. Two limits, because

@@ -16,6 +16,19 @@
 //!
 //! Paths in the script are absolute (the jobs may start elsewhere than here), and every
 //! value written into it is single-quoted for the shell.
+//!
+//! # The script, its test, and the engine's other front ends
+//!
+//! `--emit-slurm N` (`crates/pendula-cli/src/slurm.rs`, its flags `SlurmArgs`, for any shardable
+//! command) writes a bash script that submits itself as a Slurm job array of the shards not yet
+//! valid and a merge job with `afterok`; the sweep's flags written into it are parsed again and
+//! must give the same fingerprint. `scripts/test-slurm` runs it on a single-node Slurm cluster
+//! (`scripts/slurm-cluster.sh`: installed when missing, in a network namespace with only loopback;
+//! `scripts/bench-slurm` times it); `fractal` (`crates/pendula-cli/src/commands/fractal.rs`) and
+//! `bifurcation` (`crates/pendula-cli/src/commands/bifurcation.rs`) are the engine's other front
+//! ends. `plot` (`crates/pendula-cli/src/commands/plot.rs`) draws any of these files — trajectory
+//! panels with pendula-viz's `Figure`, grids with its `Heatmap` — and its functions draw `simulate
+//! --plot`.
 
 use std::path::{Path, PathBuf};
 

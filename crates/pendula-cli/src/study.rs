@@ -1,5 +1,14 @@
 //! What the study commands (compare, convergence, stability, period, oscillator-regimes,
 //! report) share: their common arguments, the output directory, tables and progress.
+//!
+//! # Shared parts
+//!
+//! What they share (arguments, output directory, tables, progress bars) is in
+//! `crates/pendula-cli/src/study.rs`: `OutDir` (the directory, with a per-command manifest of the
+//! files written there, so that a re-run removes its previous run's leftovers and nothing else; its
+//! files are staged under temporary names and renamed together, with the summary, by `finish_with`,
+//! so a failed run replaces none of them) and `Summary` (`--summary FILE` or `-`; with `-`,
+//! `say!`/`sayln!` move the command's human output from stdout to stderr).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -6,6 +6,40 @@
 //! pendula concurrently. Library errors reach Python as the package's own exception classes
 //! (`pendula.errors`), chosen here by the error's kind: bad input is a `ValueError` subclass
 //! that names the value and what is allowed, a failed run an `IntegrationError` with the time.
+//!
+//! # How it is built
+//!
+//! The Python package: `crates/pendula-py/src/lib.rs` is `_core` — the catalogue as data, a built
+//! system (`CoreSystem`: its equations over numpy columns), `solve` (one run on the library's
+//! fastest path, `DynModel::solve_fastest`, as `pendula simulate` runs it, with the library's
+//! `EventLocator` for event specs and, on request, what the continuous solution needs: dy/dt at
+//! every state and the method's own dense coefficients where it has them) and `ensemble` (the
+//! library's `ensemble_path`, lanes on all cores); `crates/pendula-py/src/study.rs` wraps the
+//! library's analyses (`pendula::analysis`: Lyapunov exponents, Poincaré sections, the flip
+//! fractal, bifurcation and convergence studies, work–precision, divergence) and
+//! `crates/pendula-py/src/animate.rs` pendula-viz's GIF animation. Each long computation runs on a
+//! worker thread with the GIL released while the calling thread checks Python's signals (and
+//! updates a progress bar) every 20 ms (by default the bar shows itself only where a terminal or a
+//! notebook watches and the run, judged by its progress after 0.5 s, will take 3 s or more:
+//! `dense.show_bar`); a Ctrl-C sets the flag that the run's observer and the engine
+//! (`LaneSpec::cancel`, between lane groups; the double pendulum's kernel through
+//! `ensemble::run_into_cancellable`/`run_values_cancellable` and `flip_times_cancellable`, before
+//! each work item) poll, so that one call over all the members or pixels keeps every thread busy to
+//! the end and still stops within a work item's time. Library errors become the classes of
+//! `crates/pendula-py/python/pendula/errors.py` by their kind. The pure-Python layer
+//! (`crates/pendula-py/python/pendula/`) holds what Python users see: `__init__.py` (`System`,
+//! pickled by name and values, versioned; `Solution`, scipy's shape, `y` a view of `states`;
+//! `EnsembleResult`; `catalogue()`, `solve` with `method="auto"`, `ensemble`), `dense.py` (`sol`:
+//! Hairer's dense polynomials or the cubic Hermite interpolant, scipy-style callable events located
+//! on it, the progress bar), `animation.py` (`Solution.animate()`), `study.py` (the studies' result
+//! objects with `plot()`), `sweep.py` (`sweep`, `merge`, the CLI's file format), `distributed.py`
+//! (sweeps and fractals cut into parts computed on Dask workers: sweep shards then merged, or pixel
+//! ranges of the fractal, `_core.fractal(pixels=…)`, assembled by `_core.fractal(times=…)`; byte
+//! for byte the local result; `sweep_array`, a lazy `dask.array` whose blocks are runs of cells,
+//! `_core.sweep(cells=…)`, computed by `map_blocks`). Its tests are pytest files in
+//! `crates/pendula-py/tests/`, among them one that executes `examples/paper-study.ipynb` with
+//! nbclient; `scripts/test-python` builds the package into target/py-venv with maturin and runs
+//! them, after the Rust suites in `scripts/test`.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 

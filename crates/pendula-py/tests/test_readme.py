@@ -1,22 +1,71 @@
-"""The README's Python example runs as printed, and says what it computes."""
+"""The Python examples of README.md and docs/GUIDE.md run as printed, and say what they compute."""
 
 import os
 import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[3]
+GUIDE = ROOT / "docs" / "GUIDE.md"
 
 
-def test_the_readme_python_example_runs(tmp_path, monkeypatch):
-    readme = (ROOT / "README.md").read_text()
-    section = readme.split("## Python: `import pendula`", 1)[1]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+def section(text, heading):
+    """The part of a Markdown text under `heading` (a `##` or `###` line), up to the next such
+    heading (a shell comment, `# …`, in a block is none)."""
+    return re.split(r"\n##+ ", text.split(heading + "\n", 1)[1], maxsplit=1)[0]
+
+
+def example(path, heading):
+    """The first Python block under `heading` in the document at `path`."""
+    return re.search(r"```python\n(.*?)```", section(path.read_text(), heading), re.S).group(1)
+
+
+# The sections whose first Python block a test of its own runs, checking what it computes.
+CHECKED = {
+    "## Python: `import pendula`": "test_the_guides_python_example_runs",
+    "### Beyond one machine: Slurm and Dask": "test_the_guides_dask_example_runs_and_is_the_local_result",
+    "## The lab in the browser: `pendula serve`": "test_view.py::test_the_guides_view_example_runs",
+}
+
+
+def python_examples():
+    """Every Python block of README.md and the guide: (document, line, code)."""
+    found = []
+    for path in (ROOT / "README.md", GUIDE):
+        text = path.read_text()
+        for match in re.finditer(r"^```python\n(.*?)^```", text, re.S | re.M):
+            found.append((path.relative_to(ROOT).as_posix(), text[: match.start()].count("\n") + 1, match.group(1)))
+    return found
+
+
+@pytest.mark.parametrize("doc, line, code", python_examples(), ids=lambda v: str(v).split("\n")[0][:40])
+def test_every_python_example_runs(doc, line, code, tmp_path, monkeypatch):
+    """Each block runs as printed in a fresh directory (those of CHECKED by their own tests)."""
+    if any(code == example(GUIDE, heading) for heading in CHECKED):
+        pytest.skip("run by its own test, which checks what it computes")
+    if "dask" in code:
+        pytest.importorskip("distributed")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    exec(compile(code, f"{doc}:{line}", "exec"), {})
+
+
+def test_the_checked_examples_are_in_the_guide():
+    """Each section CHECKED names holds a Python block (so none of its tests reads nothing),
+    and the README's quick start has one of its own, run above."""
+    for heading in CHECKED:
+        assert "import pendula" in example(GUIDE, heading), heading
+    assert any(doc == "README.md" for doc, _, _ in python_examples())
+
+
+def test_the_guides_python_example_runs(tmp_path, monkeypatch):
+    code = example(GUIDE, "## Python: `import pendula`")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)
+    exec(compile(code, "docs/GUIDE.md", "exec"), scope)
     sol, r, s = scope["sol"], scope["r"], scope["s"]
     assert sol.t_events[0].size == 1 and len(sol.y_events[1]) > 0
     assert r.kernel.startswith("simd lanes") and np.isfinite(r.flip_time).any()
@@ -25,14 +74,13 @@ def test_the_readme_python_example_runs(tmp_path, monkeypatch):
     assert os.environ["MPLBACKEND"] == "Agg"
 
 
-def test_the_readme_python_comments_say_what_the_lines_compute(tmp_path, monkeypatch):
+def test_the_guides_python_comments_say_what_the_lines_compute(tmp_path, monkeypatch):
     """The first solve's lines, evaluated on that solve: the energy line is the largest
     |E − E₀|/scale (not the maximum of the signed error), the method and evaluation count
     are those printed, and the backward run retraces the steps to the start."""
     import pendula
 
-    readme = (ROOT / "README.md").read_text()
-    code = re.search(r"```python\n(.*?)```", readme.split("## Python: `import pendula`", 1)[1], re.S).group(1)
+    code = example(GUIDE, "## Python: `import pendula`")
     lines = {line.split("#", 1)[0].strip(): line.split("#", 1)[1].strip() for line in code.splitlines() if "#" in line}
     sol = pendula.solve("double", (0, 10))
     scope = {"sol": sol, "np": np, "pendula": pendula}
@@ -56,19 +104,15 @@ def test_the_readme_python_comments_say_what_the_lines_compute(tmp_path, monkeyp
     assert 1e-4 < np.max(np.abs(gap)) < 1e-2, gap
 
 
-def test_the_readme_dask_example_runs_and_is_the_local_result(tmp_path, monkeypatch):
+def test_the_guides_dask_example_runs_and_is_the_local_result(tmp_path, monkeypatch):
     """The Python block of "Beyond one machine", as printed: a LocalCluster on loopback, the
     fractal, the sweep and the lazy sweep array, each equal to the local call's bytes."""
-    import pytest
-
     pytest.importorskip("distributed")
-    readme = (ROOT / "README.md").read_text()
-    section = readme.split("## Beyond one machine: Slurm and Dask", 1)[1].split("\n## ", 1)[0]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    code = example(GUIDE, "### Beyond one machine: Slurm and Dask")
     assert "LocalCluster" in code and 'host="127.0.0.1"' in code
     monkeypatch.chdir(tmp_path)
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)
+    exec(compile(code, "docs/GUIDE.md", "exec"), scope)
     import pendula
 
     turn = scope["turn"]

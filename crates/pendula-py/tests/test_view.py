@@ -53,17 +53,14 @@ def test_a_solution_opens_at_its_own_start():
     assert share["state"] == {"theta": 1.25, "omega": 0.5}
 
 
-def test_the_readme_view_example_runs():
-    import re
-    from pathlib import Path
+def test_the_guides_view_example_runs():
+    from test_readme import GUIDE, example
 
-    readme = (Path(__file__).resolve().parents[3] / "README.md").read_text()
-    section = readme.split("## The lab in the browser: `pendula serve`", 1)[1].split("\n## ", 1)[0]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    code = example(GUIDE, "## The lab in the browser: `pendula serve`")
     # The last line is the notebook cell's value: keep it.
     lines = code.strip().splitlines()
     scope: dict = {}
-    exec(compile("\n".join(lines[:-1]) + f"\nresult = {lines[-1]}", "README.md", "exec"), scope)
+    exec(compile("\n".join(lines[:-1]) + f"\nresult = {lines[-1]}", "docs/GUIDE.md", "exec"), scope)
     share = json.loads(urllib.parse.unquote(scope["result"].url.split("#")[1]))
     assert share["method"] == "gauss-legendre-4" and share["state"]["theta1"] == 2.0
     assert share["params"]["m2"] == 1.5

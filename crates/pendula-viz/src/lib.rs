@@ -11,6 +11,25 @@
 //! [`animate`] draws anti-aliased pendulum frames and encodes them as GIF.
 //!
 //! Nothing here writes files: callers decide where bytes go.
+//!
+//! # The modules
+//!
+//! Figures: `crates/pendula-viz/src/figure.rs` holds `Figure` (title, labelled axes, linear or log
+//! scales, series) rendered by plotters with the embedded DejaVu Sans; its legend goes, by default,
+//! in the first corner where it covers no data, else in a column outside the plot (`Legend::Auto`,
+//! decided by laying the chart out on a scratch canvas). `crates/pendula-viz/src/ticks.rs` makes
+//! the ticks of every axis (a label at each power of ten on log axes, 1-2-5 × 10ᵏ or nice numbers
+//! on shorter spans) and the plotters coordinate that uses them; `crates/pendula-viz/src/bars.rs`
+//! holds `Bars` (a labelled horizontal bar chart with a note per bar, drawn through `Figure::from`
+//! — the stability figure); `crates/pendula-viz/src/heatmap.rs` holds `Heatmap` (a grid of values
+//! in viridis with a colour bar ticked at round values, or discrete categories with a legend);
+//! `method_style` in `crates/pendula-viz/src/lib.rs` gives each method one colour, marker and line
+//! pattern everywhere, from its position in `METHODS`; `crates/pendula-viz/src/labels.rs` turns
+//! catalogue names and units into symbols (`pretty`: theta1 → θ₁; `axis_label`, `with_unit`: no
+//! unit printed for a dimensionless system). `crates/pendula-viz/src/animate.rs` lays each frame
+//! out in bands (title, the pendulum's whole reach, the energy gauges) so that nothing overlaps,
+//! draws anti-aliased frames with tiny-skia and text with plotters, and encodes GIFs with a fixed
+//! palette and alternating whole-centisecond delays that give the stated frame rate (1 to 50 fps).
 
 pub mod animate;
 mod bars;

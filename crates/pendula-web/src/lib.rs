@@ -11,6 +11,40 @@
 //! URL and refuses other origins (and, on loopback, host names that are not loopback ones, so
 //! that a DNS-rebinding page cannot reach it); every request's work is bounded ([`Limits`]);
 //! no request touches the file system.
+//!
+//! # How it is built
+//!
+//! The browser lab, `crates/pendula-web` (protocol: `crates/pendula-web/PROTOCOL.md`):
+//! `crates/pendula-web/src/lib.rs` is the axum server — the page, script and styles
+//! (`crates/pendula-web/assets/`) embedded by `include_str!`, the checks before a WebSocket is
+//! accepted (token, `Origin`, loopback `Host`, the session limit) and one session per socket: a
+//! reader task that parses each JSON command (`session::Command`, serde), a thread that runs the
+//! session, and a writer task that sends what the thread leaves in the session's `Outbox` (texts in
+//! order; the newest simulation frame and fractal level only: latest wins, so a slow page never
+//! queues work). `crates/pendula-web/src/config.rs` validates a `configure` against the catalogue
+//! and the method registry (the library's `SystemInfo::values` and `DynModel::check`, so the page
+//! shows the library's own refusals) and says what the page needs back: quantities with units and
+//! domains, how to draw the system (from the catalogue's naming: each angle a rod of the length and
+//! mass named by its suffix, a position in metres a spring), the share object, the equivalent
+//! `pendula simulate` command and scenario. `crates/pendula-web/src/session.rs` paces the tracks
+//! (one per pendulum: single, race, butterfly) to the wall clock: each frame continues every
+//! track's run with `DynModel::solve_fastest` from its paused `RunState` to the simulated time the
+//! clock asks for (at most `Limits::max_steps_per_frame` steps), bit for bit the uninterrupted run,
+//! with the event locator (flips; the Poincaré section) saved and restored between legs by its
+//! `Snapshot`. `crates/pendula-web/src/fractal.rs` computes the flip map level by level with
+//! `analysis::fractal::flip_times_at` (one step size; the last level also at dt/2 for the
+//! convergence flags), one map at a time across sessions, cancelled by a newer request or a closed
+//! page. `pendula serve` (`crates/pendula-cli/src/commands/serve.rs`: `pendula_web::bind_default`
+//! on `DEFAULT_PORT` 8485 or the next free of its successors when no `--port` is given, `bind` on
+//! an explicit one) and Python's `pendula.view` (`crates/pendula-py/src/serve.rs`,
+//! `crates/pendula-py/python/pendula/view.py`: one lab per process on any free port, an IFrame in
+//! Jupyter) start it. The page (`crates/pendula-web/assets/app.js`) lays out every legend in a band
+//! above its plot's data area and records both boxes (`lab.geometry`), bounds the pendulums' trails
+//! by simulated time, composes the PNG export from the redrawn canvases under a title and captions,
+//! and after a failed WebSocket asks `GET /ws` plainly why (a wrong token ends the retries). Tested
+//! by `crates/pendula-web/tests/protocol.rs` (a real server on a loopback port, a WebSocket client)
+//! and `crates/pendula-web/tests/e2e/` (Playwright driving Debian's headless Chromium,
+//! `scripts/test-web`).
 
 use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -28,6 +28,16 @@
 //! H. Rein, D. S. Tamayo, "A new paradigm for reproducing and analyzing N-body simulations
 //! of planetary systems", MNRAS 467 (2017) 2377 (REBOUND's Simulationarchive: restarts bit
 //! for bit).
+//!
+//! # Who saves what
+//!
+//! `Snapshot` (save and restore as a flat list of 64-bit `Words`, floats as their bit patterns) is
+//! implemented by every stepper — each in its family's file, next to the state it saves: Tao's
+//! copy, the Gauss–Legendre stepper's kept stages, Jacobian, LU factors and flags, the embedded
+//! pairs' first-same-as-last stage, the partitioned methods' cached force — by the PI controller
+//! (`crates/pendula/src/control.rs`) and by the observers with a memory: the event locator
+//! (`crates/pendula/src/events.rs`), the energy balance (`crates/pendula/src/analysis/energy.rs`)
+//! and the resampler (`crates/pendula/src/observe.rs`).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

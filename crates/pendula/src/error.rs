@@ -1,5 +1,13 @@
 //! The library's one error type, and the two helpers its messages use: [`suggestions`] for
 //! names that are close to a misspelt one, and [`Short`] for floats written for people.
+//!
+//! # Messages
+//!
+//! Messages help the user: name lookups in the library (`system::find`, `integrator::find`,
+//! `find_preset`, `SystemInfo::quantity`, `EventSpec::parse`) carry the closest valid names
+//! (`error::suggestions`, Damerau–Levenshtein with strsim), floats in messages are printed to at
+//! most 10 significant digits (`error::Short`: `t = 9.2 s`, not 9.200000000000001), and `config.rs`
+//! warns when a bare angle exceeds a full turn (`theta1=120` is radians; did you mean `120deg`?).
 
 use std::fmt;
 

@@ -9,6 +9,18 @@
 //! # References
 //! E. Hairer, S. P. Nørsett, G. Wanner, *Solving ODEs I*, §II.6 (dense output) and §II.6.4
 //! (event location).
+//!
+//! # In a run
+//!
+//! Event location (`flip`, `zero:NAME`, `section:NAME=VALUE`, periodic in 2π on angles) is an
+//! observer, `crates/pendula/src/events.rs`: it brackets sign changes between steps and bisects on
+//! the step's interpolant — the method's dense output (`Sample::dense`, a `DenseStep` from
+//! `crates/pendula/src/observe.rs`) on adaptive runs, else the cubic Hermite interpolant. Observers
+//! say whether they need dense output (`Observer::wants_dense`), so DOP853 spends its 3 extra
+//! evaluations per step only then. `EndAtEvent` (same file) wraps the locator and another observer,
+//! which at a terminal event sees the event's time and state as the run's last sample, so `simulate
+//! --stop-on-event` ends at the event. `observe::Resample` passes on states on a time grid
+//! (`--output-dt`, `--t-eval`) from the steps' dense output.
 
 use std::ops::ControlFlow;
 

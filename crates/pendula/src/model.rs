@@ -5,6 +5,16 @@
 //! and nothing of the methods that integrate it; the run loop (`crate::simulate`) and the
 //! ensemble engine (`crate::ensemble`) are generic over [`Model`]; here the two meet, for
 //! each catalogued system once.
+//!
+//! # The catalogue
+//!
+//! `CATALOGUE`, `DynModel`: every system, one `Entry` each (its `SystemInfo`: name, parameters and
+//! state with units, defaults and domains; whether it is dimensionless; its energy scale in words;
+//! the horizon of accuracy studies in periods; an entry may be a family, `SystemInfo::variant`: the
+//! chain's `links` picks the member entry), how to build it, and its systems-test-kit check;
+//! `DynModel` is a built system's object-safe face with its runs (`check`, `solve`,
+//! `solve_adaptive`, `solve_resumable`, `solve_fastest`, `ensemble`, `solve_lane`); `ensemble_path`
+//! and `lane_method` decide the engine before any step.
 
 use std::ops::Deref;
 

@@ -13,6 +13,15 @@
 //! Cells are numbered row-major with the *first* axis fastest: cell `i` has index
 //! `i mod n₀` on axis 0, `(i / n₀) mod n₁` on axis 1, and so on; the natural array shape is
 //! therefore the axes slowest first, then the columns ([`Sweep::shape`]).
+//!
+//! # Who runs it
+//!
+//! A sweep's computation is the library's, `crates/pendula/src/sweep.rs` (above `model` and
+//! `ensemble`, which it drives): `SweepSpec` (system, set values, axes, method, step, steps,
+//! until-flip, records, shard) validated into a `Sweep`, whose `compute` fills a range of cells
+//! (rows of the recorded columns) on the engine or, where `ensemble_path` says `Scalar`, with the
+//! scalar integrators per cell (`run_scalar`, also Python's `ensemble` scalar path), bit for bit
+//! the same for any threads, range or cancel flag.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

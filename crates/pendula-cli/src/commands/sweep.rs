@@ -7,6 +7,19 @@
 //! cell otherwise, a cell's result independent of the thread count and the sharding (Python's
 //! `pendula.sweep` runs the same code). This command parses the flags into it, checks the
 //! limits, and writes the array, the shard's description, the summary and the checkpoint.
+//!
+//! # Shards, merge and the checks
+//!
+//! The CLI's `sweep` (`crates/pendula-cli/src/commands/sweep.rs`) parses its flags into it, checks
+//! the limits and writes the array or a shard with its description (format `SHARD_FORMAT`, with the
+//! data's length and CRC-32, the pendula version, and whether the CPU had FMA, which changes the
+//! kernels' rounding: `merge` warns when given both kinds), its checkpoint and summary; Python's
+//! `pendula.sweep` (`crates/pendula-py/src/sweep.rs`, `crates/pendula-py/python/pendula/sweep.py`)
+//! runs the same code and writes the same bytes, so shards of either merge with the other's
+//! `merge`; `merge` (`crates/pendula-cli/src/commands/merge.rs`) checks every shard's description
+//! against the grid and its data against the checksum, then assembles them; `sweep --shard K/N
+//! --check` runs the same checks on one shard against the sweep its flags describe (and the pendula
+//! version).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

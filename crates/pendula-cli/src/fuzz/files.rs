@@ -16,7 +16,7 @@ use super::{claims, ordinary};
 use crate::cli::{Cli, Command};
 use crate::commands::plot::PlotArgs;
 
-/// A valid scenario, as the README shows one.
+/// A valid scenario, as the guide (docs/GUIDE.md) shows one.
 const SCENARIO: &str = "system = \"pendulum\"\nmethod = \"rk4\"\ndt = 0.01\nsteps = 10\nevery = 2\nout = \"t.csv\"\n\n[set]\ntheta = \"30deg\"\nl = 2\n";
 
 /// The files every target may start from, made by the real commands in a temporary

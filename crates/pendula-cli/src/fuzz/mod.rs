@@ -29,7 +29,7 @@
 //!
 //! Inputs are counted and the count printed (on the real stderr, past the test harness's
 //! capture). `PENDULA_FUZZ_CASES` sets the budget: 100 000 in all by default (CI, well under
-//! a minute on 2 cores), 10⁷ for the documented long local run (README, "Fuzzing").
+//! a minute on 2 cores), 10⁷ for the documented long local run (docs/GUIDE.md, "Fuzzing").
 //! `PENDULA_FUZZ_TARGETS=argv,npy` runs only those targets.
 
 mod argv;

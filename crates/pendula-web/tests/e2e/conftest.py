@@ -2,7 +2,7 @@
 
 The server is the CLI the Rust tests built (PENDULA_CLI), started on a free loopback port and
 stopped by the fixture. Screenshots of each view go to PENDULA_SCREENSHOTS (a temporary
-directory unless set: the README's pictures are taken with it set to docs/web).
+directory unless set: the guide's pictures are taken with it set to docs/web).
 """
 
 import os

@@ -8,6 +8,58 @@
 //! A member's bits do not depend on its lane, its lane group, its chunk or the thread count:
 //! lanes never interact. They are the bits of the same member run alone in one lane
 //! (`Lanes<1, …>`, [`solve_one`]): the same operations in the same order.
+//!
+//! # How it is built
+//!
+//! `engine`: the ensemble engine: one run loop (`kernel`: flips, retirement, failures, the fallback
+//! to the exact trigonometry) around a `LaneStep`, what a method does in one step of a lane group —
+//! `RkStep` (every system, every explicit Runge–Kutta method: `Equations` over `Lanes`, the
+//! integrators' own stages `fixed_stages`, `fixed_update`), `KickDrift` (symplectic Euler,
+//! Störmer–Verlet and the Yoshida compositions on separable systems: the integrators' own
+//! `kick_drift`, in the velocities) and Tao's map for the free double pendulum (`TaoStep` in
+//! `crates/pendula/src/ensemble/mod.rs`, on the pendulum's own Hamiltonian gradient, state (q, p)
+//! and the copy (x, y)); `solve_one` is one member alone, bit for bit a lane's result.
+//!
+//! The ensemble engine, `crates/pendula/src/ensemble/engine.rs`, advances 16 members of any
+//! catalogued system at once with any explicit Runge–Kutta method of at most four stages, and of
+//! any separable system (the pendulum and the oscillator, undamped, driven or not) with the
+//! explicit partitioned methods — symplectic Euler, Störmer–Verlet, the Yoshida compositions — as
+//! kick–drift in the velocities (`kick_drift` in `crates/pendula/src/integrator/partitioned.rs`,
+//! generic over the number type: for H = ½ q′ᵀ M q′ + V(t, q) with M constant the same map as the
+//! (q, p) stepper, the accelerations from the equations' own right-hand side and kept in the lane
+//! state from one step to the next, one evaluation per Verlet step; the engine checks each member
+//! for a separable Hamiltonian before any step, and names the first that is not). The methods are
+//! data, `LaneMethod`. The system's own `Equations` over `Lanes<8>` (each lane group's two halves
+//! evaluated one after the other, one AVX-512 vector per value: a whole group at once spilled), the
+//! integrators' own stages (`fixed_stages`, `fixed_update` in
+//! `crates/pendula/src/integrator/explicit_rk.rs`, the tableau copied into fixed-size arrays so
+//! that its loops unroll), and one run loop: a cheap probe per step (0·x is NaN exactly when x is
+//! not finite; an angle beyond its lane's watch of π) sends only the rare step in which something
+//! happens — a flip, a retirement, a non-finite state — to the lane-by-lane bookkeeping. The kernel
+//! is compiled per state dimension and number of stages (`Equations::rhs_sized` hands the dimension
+//! to the equations, for the chain's temporaries), as `kernel_fused` (fused multiply-adds; AVX-512,
+//! AVX2+FMA, NEON) and `kernel_plain` (AVX, the portable fallback), chosen at run time by
+//! `multiversion`; debug builds (the tests) compile only AVX2+FMA and the fallback, the same
+//! arithmetic in a fraction of the build time. rayon spreads chunks of members over the cores;
+//! members are made on demand and results stored into the caller's rows, so memory is the output
+//! plus a few chunks. A lane that flips keeps the state at both ends of the step, and its flip time
+//! is located after the loop on the cubic Hermite interpolant with the event locator's bisection
+//! (so `fractal` and `simulate --event flip` agree); its branch-free sine and cosine are in
+//! `crates/pendula/src/num/trig.rs` (fast for |x| ≤ 2²⁰; the equations' `trig_reach` is tracked as
+//! data flow, and a lane group that may have gone beyond runs again with a copy of its kernel that
+//! reduces such angles exactly, by Payne–Hanek, in `crates/pendula/src/num/trig/exact.rs`).
+//! `engine::solve_one` is one member in the same arithmetic, bit for bit a lane.
+//! `crates/pendula/src/ensemble/mod.rs` is the double pendulum's typed front (`Member`,
+//! `BatchSpec`: the fractal's form; RK4 goes to the engine) and Tao's map on lanes for the free
+//! double pendulum, its gradient the pendulum's own `hamiltonian_gradient` over one lane at a time.
+//! `ensemble::rk4_trajectory` (`crates/pendula/src/ensemble/trajectory.rs`; the pendulum's
+//! `accelerations_from`, one test of the two angles per evaluation picks the fast or the full-range
+//! trigonometry) is one double pendulum with a per-step observer, which `simulate` uses for the
+//! free double pendulum with rk4 (the energy comes with each sample, from the step's trigonometry);
+//! it refuses damped or driven pendulums, which take the general path.
+//! `crates/pendula/src/ensemble/driven.rs` is the same engine for the damped, driven pendulum
+//! (stroboscopic samples, one shared drive-phase table because every lane takes M steps per
+//! period).
 
 use rayon::prelude::*;
 

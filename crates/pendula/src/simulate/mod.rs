@@ -2,6 +2,17 @@
 //! an observer; [`solve`] does the same for a catalogued [`Model`] and a [`Method`] chosen
 //! at run time, and [`crate::simulate::resume::solve_resumable`] also pauses and continues it bit for bit
 //! ([`crate::checkpoint`]). The adaptive loop is in [`crate::simulate::adaptive`].
+//!
+//! # The core types
+//!
+//! `Simulation`: the fixed-step loop: system + stepper + `RunSpec` → `Outcome`, showing every state
+//! to an observer.
+//!
+//! `solve`, `check`: `solve` runs a catalogued model with a method chosen at run time and a
+//! `Stepping` (fixed: a `RunSpec`; adaptive: tolerances), the one entry for a single run
+//! (`solve_adaptive` is its shorthand, `solve_resumable` its resumable form); methods that need (q,
+//! p) run on the Hamiltonian form and show states as (q, q'); `check(method, model)` answers
+//! whether the method applies before any step (`DynModel::check`; the CLI's method lists use it).
 
 pub mod adaptive;
 pub mod resume;

@@ -1,5 +1,22 @@
 //! Runs that pause and continue bit for bit: [`solve_resumable`], the resumable form of
 //! [`crate::solve`] and [`crate::solve_adaptive`] (see [`crate::checkpoint`]).
+//!
+//! # How a run pauses
+//!
+//! `solve_resumable` (`crates/pendula/src/simulate/resume.rs`; `DynModel::solve_resumable`, and
+//! `ensemble::rk4_trajectory_resumable` for the fast path) pauses when a `Pause` says so — at a
+//! simulated time, or when an `AtomicBool` set by another thread is seen at a step boundary — and
+//! returns a `RunState` (step index, time, state in the stepper's coordinates, counters, the
+//! stepper's and the controller's words); started from it, the loops recompute times from the step
+//! index and continue as if never paused (`Simulation::run_from` for fixed steps,
+//! `crates/pendula/src/simulate/adaptive.rs` for adaptive ones). Observers' states are the caller's
+//! to save. `solve` is `solve_resumable` that never pauses: one loop, the one `Simulation::run`
+//! runs, for both; a pausing run wraps its observer in a `Pausing` that checks after each sample,
+//! so that no check sits in the loop itself (one there, and a second copy of the loop, changed how
+//! the compiler optimised the steppers: up to 19% slower steps, measured), and a resumed state is
+//! copied into a vector of the model's own dimension, which the compiler knows and specialises the
+//! steps for. `dispatch` in `crates/pendula/src/simulate/mod.rs` is still the one match on the
+//! family.
 
 use crate::Error;
 use crate::checkpoint::{Leg, Pause, RunState, Snapshot};

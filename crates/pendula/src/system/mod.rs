@@ -8,6 +8,31 @@
 //! system to its parameters and to its Hamiltonian form, and [`DynSystem`] is its
 //! object-safe face for the command line. This layer imports nothing from the integrators,
 //! the run loop, the observers or the ensemble engine: they are built on it.
+//!
+//! # The core types
+//!
+//! `Equations<T>`: a system's right-hand side over any `Num`, written once; `System::rhs` is its
+//! `f64` case, the Jacobian its dual case, the ensemble engine its lanes case.
+//!
+//! `Model`, `DynSystem`: a catalogued system: built from `Values` (and, over any `Num`, by `over`
+//! and `convert`), with its Hamiltonian form and the (q, q') ↔ (q, p) maps; its energy scale
+//! (`energy_scale`, what relative energy errors divide by), the power of its non-conservative
+//! forces (`power`), its time scale (`time_scale`); `DynSystem` is its physics' object-safe face.
+//!
+//! # The systems
+//!
+//! Systems, one file each: `crates/pendula/src/system/oscillator.rs`,
+//! `crates/pendula/src/system/pendulum.rs`, `crates/pendula/src/system/double.rs` (free, or with
+//! joint friction and a drive torque as generalized forces), `crates/pendula/src/system/chain.rs`
+//! (the N-link chain: mass matrix solved by its L D Lᵀ factorisation on the stack, in one matrix
+//! with the pairs' sines, one generic code path for f64, num-dual so the Jacobians are exact, and
+//! the engine's lanes, whose kernels size its temporaries by their compiled dimension through
+//! `Equations::rhs_sized`) and `crates/pendula/src/system/driven.rs` (Baker and Gollub's driven
+//! pendulum, and the `PRESETS` registry of named parameter sets with their sources), each with its
+//! catalogue entry (`INFO`), its Hamiltonian form, and its exact solution where one exists.
+//! `Model::autonomous` and `DynModel::conserves_energy` say whether an energy surface exists
+//! (Poincaré sections need one). Special functions (elliptic K, F, Jacobi sn/cn/dn/am) are in
+//! `crates/pendula/src/special.rs`.
 
 pub mod chain;
 pub mod double;
