@@ -83,6 +83,7 @@ const lab = window.lab = {
   energyHistory: [],
   stateHistory: [],
   separation: [],
+  growth: null,                 // the server's last `growth` message (PROTOCOL.md)
   growthRate: null,
   fractal: null,
   fractalFrames: 0,
@@ -120,7 +121,7 @@ const st = {
   lastT: -Infinity,
   exportHistory: [],            // track 0: [t, ...state, K, V, energyError]
   sepTracks: [],                // butterfly: per track k ≥ 1, [t, |s_k − s_0|]
-  growthFit: null,
+  growthFit: null,              // the server's fit, drawn: {slope, intercept, a, b, final}
   trails: [],                   // per track: [{x, y, t}], the last bob's positions
   trailDrawn: { segments: 0, dots: 0 },
   frameGaps: [],                // simulated time between the last frames
@@ -233,6 +234,7 @@ function handleMessage(msg) {
       showError(`${msg.command ? msg.command + ' refused' : 'refused'}: ${msg.message}`, msg.message);
       onRefused(msg);
       break;
+    case 'growth': onGrowth(msg); break;
     case 'run_failed':
       showError(`Run failed at t = ${fmt(msg.t)} ${timeUnit()}: ${msg.message}`);
       break;
@@ -359,7 +361,7 @@ function resetHistories(K) {
   lab.energyHistory = Array.from({ length: K }, () => []);
   lab.stateHistory = [];
   lab.separation = [];
-  lab.growthRate = null;
+  setGrowth(null);
   st.exportHistory = [];
   st.sepTracks = Array.from({ length: K }, () => []);
   st.trails = Array.from({ length: K }, () => []);
@@ -369,7 +371,20 @@ function resetHistories(K) {
   st.lastT = -Infinity;
   st.frameGaps = [];
   st.springRange = 0;
-  st.growthFit = null;
+  st.plotsDirty = true;
+}
+
+// The butterfly's growth rate is measured by the server with the library's rule, on every
+// step of pendulums 0 and 1 (PROTOCOL.md, `growth`): the page shows it and draws its line.
+function onGrowth(msg) {
+  if (lab.config && lab.config.mode === 'butterfly') setGrowth(msg);
+}
+
+function setGrowth(msg) {
+  lab.growth = msg;
+  lab.growthRate = msg && isNum(msg.rate) ? msg.rate : null;
+  st.growthFit = lab.growthRate === null ? null
+    : { slope: msg.rate, intercept: msg.intercept, a: msg.t_start, b: msg.t_end, final: msg.final };
   st.plotsDirty = true;
 }
 
@@ -406,8 +421,13 @@ function record(f) {
   const K = f.tracks.length;
   // a frame of the previous system, still in flight when its config was replaced
   if (lab.config && f.tracks[0] && f.tracks[0].state.length !== lab.config.state.length) return;
-  // a reset (or any restart we were not told about) shows up as time going backwards
-  if (K !== lab.energyHistory.length || f.t < st.lastT) resetHistories(K);
+  // a reset (or any restart we were not told about) shows up as time going backwards; a
+  // growth fit of the new run (sent just before this frame, at its time) is kept
+  if (K !== lab.energyHistory.length || f.t < st.lastT) {
+    const growth = lab.growth && lab.growth.t <= f.t ? lab.growth : null;
+    resetHistories(K);
+    if (growth) setGrowth(growth);
+  }
   for (const p of f.poincare) st.poincarePts.push(p);
   if (st.poincarePts.length > POINCARE_MAX) st.poincarePts.splice(0, st.poincarePts.length - POINCARE_MAX);
   if (f.poincare.length) st.plotsDirty = true;
@@ -450,7 +470,6 @@ function record(f) {
       if (d > max) max = d;
     }
     lab.separation.push([t, max]);
-    fitGrowth();
   }
   if (lab.stateHistory.length >= HISTORY_MAX) {
     lab.energyHistory.forEach(halve);
@@ -461,33 +480,6 @@ function record(f) {
     st.histStride *= 2;
   }
   st.plotsDirty = true;
-}
-
-// λ: least-squares slope of ln(separation) against t while the separation grows
-// exponentially, i.e. after it has left the initial offset (100 δ) and before it saturates
-// (0.1). Stops at the first point past 0.1 so a later dip does not enter the fit.
-function fitGrowth() {
-  const delta = lab.config.delta || 0;
-  const lo = Math.min(100 * delta, 1e-2), hi = 1e-1;
-  let n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, a = NaN, b = NaN;
-  for (const [t, s] of lab.separation) {
-    if (s >= hi) break;
-    if (!(s > lo)) continue;
-    const y = Math.log(s);
-    if (n === 0) a = t;
-    b = t;
-    n++; sx += t; sy += y; sxx += t * t; sxy += t * y;
-  }
-  const den = n * sxx - sx * sx;
-  // Not before the separation has grown a hundredfold inside the window: over a shorter
-  // stretch the fit measures the start's transient, not the exponential growth (early on
-  // it even came out negative).
-  let yMin = Infinity, yMax = -Infinity;
-  for (const [t, s2] of lab.separation) if (t >= a && t <= b) { const y = Math.log(s2); yMin = Math.min(yMin, y); yMax = Math.max(yMax, y); }
-  if (n < 5 || !(den > 0) || !(yMax - yMin >= Math.log(100))) { lab.growthRate = null; st.growthFit = null; return; }
-  const slope = (n * sxy - sx * sy) / den;
-  lab.growthRate = slope;
-  st.growthFit = { slope, intercept: (sy - slope * sx) / n, a, b, n };
 }
 
 // ======================================================================================
@@ -976,10 +968,14 @@ function drawSeparationPlot() {
       ctx.setLineDash([]);
     }),
   });
-  const tu = timeUnit();
+  const tu = timeUnit(), g = lab.growth;
+  const span = g ? `from ${fmt(g.fit_from, 3)} to ${fmt(g.saturation, 3)}` : 'from min(100 δ, 0.01) to 0.1';
   $('growth-rate').textContent = fit
-    ? `λ ≈ ${fmt(fit.slope, 3)} ${tu ? '1/' + tu : '(per unit time)'} (fit over t = ${fmt(fit.a, 3)}…${fmt(fit.b, 3)}${tu ? ' ' + tu : ''}; dashed line)`
-    : 'λ: not yet measured (the fit waits for the separation to grow a hundredfold between 100 δ and 0.1)';
+    ? `λ ≈ ${fmt(fit.slope, 3)} ${tu ? '1/' + tu : '(per unit time)'}${fit.final ? '' : ' so far'} ` +
+      `(the slope of ln distance of k=1 from k=0 while ${span}, fitted over t = ${fmt(fit.a, 3)}…${fmt(fit.b, 3)}${tu ? ' ' + tu : ''}; dashed line)`
+    : g && g.final
+      ? `λ: not measurable: the distance of k=1 from k=0 passed ${fmt(g.saturation, 3)} with fewer than 3 samples above ${fmt(g.fit_from, 3)}`
+      : `λ: not yet measured (the fit of ln distance of k=1 from k=0 uses it ${span})`;
 }
 
 function stateAxis(i) { const s = lab.config.state[i]; return s ? withUnit(s.name, s.unit) : `s${i}`; }

@@ -357,7 +357,7 @@ async fn serve_session(socket: WebSocket, limits: Limits) {
         loop {
             writer_shared.notify.notified().await;
             loop {
-                let (fractal, texts, frame) = {
+                let (fractal, texts, growth, frame) = {
                     let mut outbox = writer_shared.outbox.lock().expect("outbox");
                     let frame = outbox.frame.take().map(|mut f| {
                         f.push(outbox.poincare.len() as f64);
@@ -366,16 +366,17 @@ async fn serve_session(socket: WebSocket, limits: Limits) {
                         }
                         f
                     });
-                    (outbox.fractal.take(), std::mem::take(&mut outbox.texts), frame)
+                    (outbox.fractal.take(), std::mem::take(&mut outbox.texts), outbox.growth.take(), frame)
                 };
-                if fractal.is_none() && texts.is_empty() && frame.is_none() {
+                if fractal.is_none() && texts.is_empty() && growth.is_none() && frame.is_none() {
                     break;
                 }
                 // The fractal level before the texts (its `fractal_done` follows it); the texts
-                // (a `config`) before the frame computed after them.
+                // (a `config`) before the growth fit and the frame computed after them.
                 let mut messages: Vec<Message> = Vec::new();
                 messages.extend(fractal.map(|f| Message::Binary(bytes(&f).into())));
                 messages.extend(texts.into_iter().map(|t| Message::Text(t.into())));
+                messages.extend(growth.map(|g| Message::Text(g.into())));
                 messages.extend(frame.map(|f| Message::Binary(bytes(&f).into())));
                 for m in messages {
                     if sink.send(m).await.is_err() {
