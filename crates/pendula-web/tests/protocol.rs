@@ -598,3 +598,41 @@ async fn a_single_run_sends_no_growth_rate() {
         }
     }
 }
+
+/// The page's script is ES modules linked by the browser: index.html loads the entry as a
+/// module, and every module it imports, directly or not, is served with a JavaScript type (a
+/// browser refuses a module of any other type); every file under `assets/js/` is one of them.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_script_is_es_modules_each_served_as_javascript() {
+    let (addr, _) = server(Default::default()).await;
+    let (status, page) = plain_get(&addr, "/").await;
+    assert_eq!(status, 200);
+    assert!(page.contains(r#"<script type="module" src="/app.js"></script>"#), "{page}");
+    let mut todo = vec!["/app.js".to_owned()];
+    let mut served = std::collections::BTreeSet::new();
+    while let Some(path) = todo.pop() {
+        if !served.insert(path.clone()) {
+            continue;
+        }
+        let (status, response) = plain_get(&addr, &path).await;
+        assert_eq!(status, 200, "{path}");
+        let (head, body) = response.split_once("\r\n\r\n").unwrap();
+        assert!(head.to_lowercase().contains("content-type: text/javascript"), "{path}: {head}");
+        let dir = &path[..path.rfind('/').unwrap() + 1];
+        for import in body.lines().filter_map(|l| l.strip_prefix("import ")) {
+            let target = import.split(" from '").nth(1).and_then(|t| t.strip_suffix("';")).unwrap();
+            let target =
+                target.strip_prefix("./").unwrap_or_else(|| panic!("{path}: a relative import: {import}"));
+            todo.push(format!("{dir}{target}"));
+        }
+    }
+    let on_disk: std::collections::BTreeSet<String> =
+        std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/js"))
+            .unwrap()
+            .map(|e| format!("/js/{}", e.unwrap().file_name().to_string_lossy()))
+            .collect();
+    let imported: std::collections::BTreeSet<String> =
+        served.iter().filter(|p| p.starts_with("/js/")).cloned().collect();
+    assert_eq!(imported, on_disk, "every module is imported and served");
+    assert!(served.len() > 10, "{served:?}");
+}

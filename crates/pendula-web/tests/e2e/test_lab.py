@@ -107,7 +107,7 @@ def test_butterfly_mode_measures_the_growth_of_the_separation(lab, shots, tmp_pa
     assert g["rate"] == rate and g["every"] == 1, g
     lab.wait_for_timeout(300)
     shown = lab.inner_text("#growth-rate")
-    assert f"λ ≈ {rate:.3g} 1/s (" in shown and f"t = {g['t_start']:.3g}…{g['t_end']:.3g}" in shown, shown
+    assert f"λ ≈ {rate:.3g} 1/s: the slope" in shown and f"t = {g['t_start']:.3g}…{g['t_end']:.3g} s" in shown, shown
     cli = os.environ.get("PENDULA_CLI", "target/debug/pendula")
     run = subprocess.run([cli, "divergence", c["system"], "--method", c["method"], "--dt", str(c["dt"]),
                           "--delta", str(c["delta"]), "--fit-from", repr(g["fit_from"]),
