@@ -4,7 +4,7 @@
 //! the equivalent `pendula simulate` command and scenario file).
 
 use pendula::integrator::{self, Method};
-use pendula::model::{self, DynModel};
+use pendula::model;
 use pendula::system::{Domain, Quantity, SystemInfo, Values};
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
@@ -197,8 +197,8 @@ impl Config {
             return refuse(format!("delta = {delta}: the offset must be > 0 and at most {MAX_DELTA}"));
         }
         let poincare = cmd.poincare.unwrap_or(self.poincare && same_system);
-        if poincare && let Err(why) = poincare_section(&*built) {
-            return refuse(format!("no Poincaré section for {}: {why}", family.name));
+        if poincare {
+            pendula::analysis::poincare::check_system(&*built)?;
         }
         let config = Config { values, settings, method, dt, mode, methods, count, delta, speed, poincare };
         // One step of every track's method: what depends on the step as well as on the system
@@ -277,7 +277,7 @@ impl Config {
                 json!({"name": q.name, "unit": q.unit, "value": v, "default": q.default, "description": q.description})
             })
             .collect();
-        let poincare_available = poincare_section(&*built).is_ok();
+        let poincare_available = pendula::analysis::poincare::check_system(&*built).is_ok();
         let axes: Vec<&str> =
             if info.state.len() == 4 { vec![info.state[1].name, info.state[3].name] } else { vec![] };
         let tracks: Vec<Value> =
@@ -440,15 +440,6 @@ fn bounds(domain: Domain) -> (Option<f64>, Option<f64>) {
     }
 }
 
-/// Whether the live Poincaré section applies: two degrees of freedom and a conserved energy
-/// (the section of the energy surface is then two-dimensional), as `pendula poincare` asks.
-pub fn poincare_section(model: &dyn DynModel) -> Result<(), String> {
-    if model.info().state.len() != 4 {
-        return Err(format!("it has {} degrees of freedom, a section needs 2", model.info().state.len() / 2));
-    }
-    model.conserves_energy()
-}
-
 /// How the page draws the system, from the catalogue's naming: each angle among the positions
 /// is a rod hanging from the end of the one before, of the length and bob mass named by its
 /// suffix (theta2 → l2, m2; theta → l, m; a dimensionless system's rod has length 1); a
@@ -551,6 +542,27 @@ mod tests {
         let (c, _) = c.apply(&configure(race), &Limits::default()).unwrap();
         assert!(c.command().contains("--method euler"), "{}", c.command());
         assert!(c.scenario().contains("method = \"euler\""), "{}", c.scenario());
+    }
+
+    #[test]
+    fn the_poincare_section_is_refused_with_the_librarys_reason() {
+        let c = Config::initial();
+        let limits = Limits::default();
+        let (on, _) = c.apply(&configure(r#"{"poincare":true}"#), &limits).unwrap();
+        assert!(on.poincare);
+        assert_eq!(on.message(false, None)["poincare_available"], true);
+        for (json, system, settings) in [
+            (r#"{"system":"pendulum","poincare":true}"#, "pendulum", vec![]),
+            (r#"{"params":{"damping":0.1},"poincare":true}"#, "double", vec![("damping".to_owned(), 0.1)]),
+        ] {
+            let err = c.apply(&configure(json), &limits).unwrap_err();
+            let model = model::find(system).unwrap().values(&settings).unwrap().build();
+            let library = pendula::analysis::poincare::check_system(&*model).unwrap_err();
+            assert_eq!(err.0, library.to_string(), "{json}");
+            assert!(err.0.contains("two degrees of freedom"), "{}", err.0);
+            let (off, _) = c.apply(&configure(&json.replace("true", "false")), &limits).unwrap();
+            assert_eq!(off.message(false, None)["poincare_available"], false, "{json}");
+        }
     }
 
     #[test]

@@ -1,11 +1,11 @@
 //! `pendula serve`: an interactive pendulum lab in the browser, the physics in Rust.
 //!
-//! A small axum server: the page (HTML, script and styles, embedded in the binary) and one
-//! WebSocket per page, over which the server streams the simulation as binary frames and the
-//! page sends JSON commands (the protocol: `crates/pendula-web/PROTOCOL.md`). Each session
-//! runs its pendulums on a thread of its own with the library's integrators, paced to the wall
-//! clock (`src/session.rs`); the fractal explorer runs the ensemble engine on every core
-//! (`src/fractal.rs`).
+//! A small axum server: the page (HTML, its script as ES modules, and styles, embedded in the
+//! binary) and one WebSocket per page, over which the server streams the simulation as binary
+//! frames and the page sends JSON commands (the protocol: `crates/pendula-web/PROTOCOL.md`).
+//! Each session runs its pendulums on a thread of its own with the library's integrators,
+//! paced to the wall clock (`src/session.rs`); the fractal explorer runs the ensemble engine on
+//! every core (`src/fractal.rs`).
 //!
 //! Safe by default: it binds 127.0.0.1; the WebSocket needs the random token printed in the
 //! URL and refuses other origins (and, on loopback, host names that are not loopback ones, so
@@ -241,11 +241,17 @@ impl Server {
         self,
         shutdown: impl std::future::Future<Output = ()> + Send + 'static,
     ) -> std::io::Result<()> {
-        let router = Router::new()
-            .route("/", get(page))
-            .route("/app.js", get(script))
-            .route("/style.css", get(styles))
-            .route("/ws", get(socket))
+        let mut router =
+            Router::new().route("/", get(page)).route("/style.css", get(styles)).route("/ws", get(socket));
+        for &(path, body) in SCRIPTS {
+            router = router.route(
+                path,
+                get(move |State(app): State<Arc<App>>, headers: HeaderMap| async move {
+                    script(&app, &headers, body)
+                }),
+            );
+        }
+        let router = router
             .fallback(|| async { (StatusCode::NOT_FOUND, "not found: the lab is at /") })
             .with_state(self.app);
         axum::serve(self.listener, router).with_graceful_shutdown(shutdown).await
@@ -253,7 +259,25 @@ impl Server {
 }
 
 const INDEX: &str = include_str!("../assets/index.html");
-const SCRIPT: &str = include_str!("../assets/app.js");
+/// The page's script, ES modules that the browser links itself (no bundler): the entry
+/// `/app.js`, which index.html loads as `<script type="module">`, and the modules it imports
+/// under `/js/` (relative imports, so the paths here are the files' paths under `assets/`).
+const SCRIPTS: &[(&str, &str)] = &[
+    ("/app.js", include_str!("../assets/app.js")),
+    ("/js/connection.js", include_str!("../assets/js/connection.js")),
+    ("/js/drawing.js", include_str!("../assets/js/drawing.js")),
+    ("/js/messages.js", include_str!("../assets/js/messages.js")),
+    ("/js/plots.js", include_str!("../assets/js/plots.js")),
+    ("/js/share.js", include_str!("../assets/js/share.js")),
+    ("/js/state.js", include_str!("../assets/js/state.js")),
+    ("/js/tabs.js", include_str!("../assets/js/tabs.js")),
+    ("/js/util.js", include_str!("../assets/js/util.js")),
+    ("/js/view-export.js", include_str!("../assets/js/view-export.js")),
+    ("/js/view-fractal.js", include_str!("../assets/js/view-fractal.js")),
+    ("/js/view-graphs.js", include_str!("../assets/js/view-graphs.js")),
+    ("/js/view-sim.js", include_str!("../assets/js/view-sim.js")),
+    ("/js/views.js", include_str!("../assets/js/views.js")),
+];
 const STYLES: &str = include_str!("../assets/style.css");
 
 async fn page(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
@@ -264,11 +288,12 @@ async fn page(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
         .into_response()
 }
 
-async fn script(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
-    if let Err(refusal) = check_host(&app, &headers) {
+/// One of [`SCRIPTS`]: a browser runs a module only when it comes with a JavaScript type.
+fn script(app: &App, headers: &HeaderMap, body: &'static str) -> Response {
+    if let Err(refusal) = check_host(app, headers) {
         return refusal.into_response();
     }
-    ([(header::CONTENT_TYPE, "text/javascript; charset=utf-8")], SCRIPT).into_response()
+    ([(header::CONTENT_TYPE, "text/javascript; charset=utf-8")], body).into_response()
 }
 
 async fn styles(State(app): State<Arc<App>>, headers: HeaderMap) -> Response {
@@ -396,7 +421,7 @@ async fn serve_session(socket: WebSocket, limits: Limits) {
         loop {
             writer_shared.notify.notified().await;
             loop {
-                let (fractal, texts, frame) = {
+                let (fractal, texts, growth, frame) = {
                     let mut outbox = writer_shared.outbox.lock().expect("outbox");
                     let frame = outbox.frame.take().map(|mut f| {
                         f.push(outbox.poincare.len() as f64);
@@ -405,16 +430,17 @@ async fn serve_session(socket: WebSocket, limits: Limits) {
                         }
                         f
                     });
-                    (outbox.fractal.take(), std::mem::take(&mut outbox.texts), frame)
+                    (outbox.fractal.take(), std::mem::take(&mut outbox.texts), outbox.growth.take(), frame)
                 };
-                if fractal.is_none() && texts.is_empty() && frame.is_none() {
+                if fractal.is_none() && texts.is_empty() && growth.is_none() && frame.is_none() {
                     break;
                 }
                 // The fractal level before the texts (its `fractal_done` follows it); the texts
-                // (a `config`) before the frame computed after them.
+                // (a `config`) before the growth fit and the frame computed after them.
                 let mut messages: Vec<Message> = Vec::new();
                 messages.extend(fractal.map(|f| Message::Binary(bytes(&f).into())));
                 messages.extend(texts.into_iter().map(|t| Message::Text(t.into())));
+                messages.extend(growth.map(|g| Message::Text(g.into())));
                 messages.extend(frame.map(|f| Message::Binary(bytes(&f).into())));
                 for m in messages {
                     if sink.send(m).await.is_err() {

@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
+use pendula::analysis::divergence::{Divergence, GrowthFit, growth_rate_between, state_distance};
 use pendula::checkpoint::{Leg, Pause, RunState, Snapshot, Words};
 use pendula::events::{EventLocator, EventSpec};
 use pendula::integrator::Method;
@@ -17,7 +18,7 @@ use pendula::{End, RunSpec, Stepping};
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::config::{Config, Configure, Refusal, check_speed};
+use crate::config::{Config, Configure, Mode, Refusal, check_speed};
 use crate::fractal::{self, FractalRequest};
 use crate::{Limits, Shared};
 
@@ -43,13 +44,15 @@ pub enum Inbound {
     Malformed { message: String, command: Option<String> },
 }
 
-/// What waits to be sent: text messages in order, the newest fractal level and the newest
-/// simulation frame (each replaced by a newer one), and the Poincaré points found since the
-/// last frame sent.
+/// What waits to be sent: text messages in order, the newest fractal level, the newest
+/// growth-rate fit and the newest simulation frame (each replaced by a newer one), and the
+/// Poincaré points found since the last frame sent.
 #[derive(Default)]
 pub struct Outbox {
     pub texts: VecDeque<String>,
     pub fractal: Option<Vec<f64>>,
+    /// The newest `growth` message (a newer fit makes an unsent one worthless).
+    pub growth: Option<String>,
     pub frame: Option<Vec<f64>>,
     pub poincare: Vec<[f64; 3]>,
     /// Frames replaced before they were sent (the page was slower than the simulation).
@@ -78,6 +81,21 @@ impl Shared {
     }
 }
 
+/// The butterfly's growth-rate fit (the `growth` message, PROTOCOL.md) uses the distance of
+/// pendulum 1 from pendulum 0 above `FIT_FROM_OFFSETS` times their offset δ (at most
+/// `FIT_FROM_MAX`): below it the separation has not yet turned along the most unstable
+/// direction and grows at other rates (early fits even came out negative).
+const FIT_FROM_OFFSETS: f64 = 100.0;
+/// See [`FIT_FROM_OFFSETS`].
+const FIT_FROM_MAX: f64 = 1e-2;
+/// ... and before the distance first exceeds this, where the separation stops growing
+/// exponentially (the largest swings are a few radians).
+const FIT_SATURATION: f64 = 0.1;
+/// Distance samples kept for the fit; at this many every other one is dropped and the
+/// sampling interval doubled, so that a separation that never saturates (a regular orbit)
+/// costs bounded memory.
+const MAX_GROWTH_SAMPLES: usize = 4096;
+
 /// The time the simulation may run to: no end the page would reach (10⁶ s at the largest speed is
 /// 17 minutes), yet a finite schedule.
 const HORIZON: f64 = 1e6;
@@ -97,13 +115,24 @@ struct Track {
     flip: f64,
     locator: Option<Words>,
     over: bool,
+    /// The states kept for the butterfly's divergence (pendulums 0 and 1, until the fit is
+    /// final), not yet paired with the other pendulum's.
+    kept: Option<Kept>,
 }
 
-/// Keeps the newest state of a leg.
+/// The states of every `every`-th step (steps 0, every, 2·every, …: the samples
+/// `pendula::analysis::divergence` keeps), as (step, t, state).
+struct Kept {
+    every: u64,
+    rows: Vec<(u64, f64, Vec<f64>)>,
+}
+
+/// Keeps the newest state of a leg (and the states `kept` asks for).
 struct Newest<'a> {
     t: &'a mut f64,
     y: &'a mut [f64],
     steps: &'a mut u64,
+    kept: Option<&'a mut Kept>,
 }
 
 impl Observer for Newest<'_> {
@@ -111,6 +140,11 @@ impl Observer for Newest<'_> {
         *self.t = s.t;
         *self.steps = s.step;
         self.y.copy_from_slice(s.y);
+        if let Some(kept) = &mut self.kept
+            && s.step.is_multiple_of(kept.every)
+        {
+            kept.rows.push((s.step, s.t, s.y.to_vec()));
+        }
         Flow::Continue(())
     }
 }
@@ -132,6 +166,7 @@ impl Track {
             flip: f64::NAN,
             locator: None,
             over: false,
+            kept: None,
         }
     }
 
@@ -157,7 +192,8 @@ impl Track {
         }
         let pause = Pause { at: target, flag: None };
         let leg = {
-            let mut newest = Newest { t: &mut self.t, y: &mut self.y, steps: &mut self.steps };
+            let mut newest =
+                Newest { t: &mut self.t, y: &mut self.y, steps: &mut self.steps, kept: self.kept.as_mut() };
             model.solve_fastest(
                 self.method,
                 &self.y0,
@@ -189,6 +225,94 @@ impl Track {
     }
 }
 
+/// The butterfly's measured divergence: the distance of pendulum 1 from pendulum 0, started
+/// δ apart in the first state variable (the two runs of `pendula divergence`), sampled on
+/// whole steps, and the library's fit of its growth rate.
+struct Growth {
+    from: f64,
+    /// The sampling interval, steps (doubled each time [`MAX_GROWTH_SAMPLES`] is reached).
+    every: u64,
+    d: Divergence,
+    fit: Option<GrowthFit>,
+    /// The distance has exceeded [`FIT_SATURATION`]: later samples cannot change the fit.
+    done: bool,
+    /// The fit changed since the last `growth` message.
+    unsent: bool,
+}
+
+impl Growth {
+    fn new(delta: f64) -> Growth {
+        Growth {
+            from: (FIT_FROM_OFFSETS * delta).min(FIT_FROM_MAX),
+            every: 1,
+            d: Divergence { t: Vec::new(), distance: Vec::new() },
+            fit: None,
+            done: false,
+            unsent: false,
+        }
+    }
+
+    /// Pairs the states pendulums 0 and 1 kept on the same steps into distances, and fits
+    /// again.
+    fn take(&mut self, a: &mut Kept, b: &mut Kept) {
+        let (mut i, mut j, before) = (0, 0, self.d.t.len());
+        while i < a.rows.len() && j < b.rows.len() {
+            let ((sa, t, ya), (sb, _, yb)) = (&a.rows[i], &b.rows[j]);
+            match sa.cmp(sb) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    self.d.t.push(*t);
+                    self.d.distance.push(state_distance(ya, yb));
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        a.rows.drain(..i);
+        b.rows.drain(..j);
+        if self.d.t.len() == before {
+            return;
+        }
+        self.fit = growth_rate_between(&self.d, self.from, FIT_SATURATION);
+        self.done = self.d.distance[before..].iter().any(|&x| x > FIT_SATURATION);
+        self.unsent = self.fit.is_some() || self.done;
+        if !self.done && self.d.t.len() >= MAX_GROWTH_SAMPLES {
+            let keep = |v: &mut Vec<f64>| {
+                let mut k = 0;
+                v.retain(|_| {
+                    k += 1;
+                    k % 2 == 1
+                });
+            };
+            keep(&mut self.d.t);
+            keep(&mut self.d.distance);
+            self.every *= 2;
+            for kept in [a, b] {
+                kept.every = self.every;
+                kept.rows.retain(|r| r.0.is_multiple_of(self.every));
+            }
+        }
+    }
+
+    /// The `growth` message (PROTOCOL.md), at the run's time `t`.
+    fn message(&self, t: f64) -> Value {
+        json!({
+            "type": "growth",
+            "t": t,
+            "rate": self.fit.map(|f| f.rate),
+            "t_start": self.fit.map(|f| f.t_start),
+            "t_end": self.fit.map(|f| f.t_end),
+            "intercept": self.fit.map(|f| f.intercept),
+            "final": self.done,
+            "fit_from": self.from,
+            "saturation": FIT_SATURATION,
+            "every": self.every,
+            "samples": self.d.t.len(),
+        })
+    }
+}
+
 /// The running simulation of a configuration.
 struct Sim {
     config: Config,
@@ -202,17 +326,25 @@ struct Sim {
     /// would make the simulation run fast (at 60 frames a second and dt = 0.01 s, speed 1
     /// ran at 1.19).
     target: f64,
+    /// The butterfly's growth rate (None in the other modes).
+    growth: Option<Growth>,
 }
 
 impl Sim {
     fn new(config: Config, paused: bool) -> Sim {
         let model = config.values.build();
-        let tracks = config
+        let mut tracks: Vec<Track> = config
             .tracks()
             .into_iter()
             .enumerate()
             .map(|(i, (_, m, y0))| Track::new(i, &*model, m, y0))
             .collect();
+        let growth = (config.mode == Mode::Butterfly).then(|| Growth::new(config.delta));
+        if growth.is_some() {
+            for track in &mut tracks[..2] {
+                track.kept = Some(Kept { every: 1, rows: Vec::new() });
+            }
+        }
         let mut specs = Vec::new();
         if config.info().state.iter().any(|q| q.is_angle()) {
             specs.push(EventSpec::parse("flip", &*model, false).expect("a system with angles has flips"));
@@ -222,7 +354,7 @@ impl Sim {
             let name = format!("section:{}=0+", config.info().state[0].name);
             specs.push(EventSpec::parse(&name, &*model, false).expect("a 2-DOF system's first position"));
         }
-        Sim { config, model, tracks, specs, paused, failed: false, target: 0.0 }
+        Sim { config, model, tracks, specs, paused, failed: false, target: 0.0, growth }
     }
 
     fn restart(&mut self) {
@@ -242,10 +374,29 @@ impl Sim {
         points: &mut Vec<[f64; 3]>,
     ) -> Result<(), pendula::Error> {
         let per_track = (budget / self.tracks.len() as u64).max(1);
-        for track in &mut self.tracks {
-            track.advance(&*self.model, self.config.dt, target, per_track, &self.specs, points)?;
+        let result = self.tracks.iter_mut().try_for_each(|track| {
+            track.advance(&*self.model, self.config.dt, target, per_track, &self.specs, points)
+        });
+        // The steps both pendulums took, even those before a failure.
+        if let Some(growth) = &mut self.growth
+            && let [a, b, ..] = &mut self.tracks[..]
+            && let (Some(ka), Some(kb)) = (&mut a.kept, &mut b.kept)
+        {
+            growth.take(ka, kb);
+            if growth.done {
+                a.kept = None;
+                b.kept = None;
+            }
         }
-        Ok(())
+        result
+    }
+
+    /// The `growth` message when the fit changed since the last one.
+    fn growth_message(&mut self) -> Option<Value> {
+        let t = self.t();
+        let growth = self.growth.as_mut().filter(|g| g.unsent)?;
+        growth.unsent = false;
+        Some(growth.message(t))
     }
 
     /// The binary frame (see PROTOCOL.md), without its Poincaré points (added when sent).
@@ -312,6 +463,7 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
             let publish = |sim: &mut Sim, config: Config, notice: Option<String>| {
                 sim.config = config;
                 sim.restart();
+                forget_growth(&shared);
                 shared.text(&sim.config.message(sim.paused, notice.as_deref()));
             };
             let result: Result<(), Refusal> = match cmd {
@@ -334,6 +486,7 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                 }
                 Command::Reset => {
                     sim.restart();
+                    forget_growth(&shared);
                     changed = true;
                     Ok(())
                 }
@@ -409,7 +562,11 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
         if changed {
             seq += 1;
             let frame = sim.frame(seq);
+            let growth = sim.growth_message();
             let mut outbox = shared.outbox.lock().expect("outbox");
+            if let Some(g) = growth {
+                outbox.growth = Some(g.to_string());
+            }
             if outbox.frame.replace(frame).is_some() {
                 outbox.skipped += 1;
             }
@@ -420,6 +577,12 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
     if let Some(flag) = fractal_cancel {
         flag.store(true, Ordering::Relaxed);
     }
+}
+
+/// A restarted run's fit starts afresh: an unsent one of the run before must not follow the
+/// new run's `config`.
+fn forget_growth(shared: &Shared) {
+    shared.outbox.lock().expect("outbox").growth = None;
 }
 
 fn queue_points(shared: &Shared, points: Vec<[f64; 3]>) {

@@ -539,3 +539,138 @@ async fn the_librarys_studies_run_in_the_lab_with_the_librarys_results() {
         assert!(message.contains(expected), "{request}: {message:?} should mention {expected:?}");
     }
 }
+
+/// The butterfly's growth rate is the library's: `growth_rate_between` over the distance of
+/// pendulum 1 from pendulum 0 — the same rule `pendula divergence` applies — equal to the bit
+/// to the fit of the two runs replayed here on the lab's integrator path, and to rounding to
+/// `pendula::analysis::divergence` (the reference integrator `pendula divergence` runs).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_butterflys_growth_rate_is_the_librarys_fit_of_the_same_run() {
+    use pendula::analysis::divergence::{divergence, growth_rate_between, state_distance};
+    use pendula::checkpoint::Pause;
+    use pendula::observe::{Every, Recorder};
+    use pendula::{End, RunSpec, Stepping};
+
+    let (addr, token) = server(Default::default()).await;
+    let mut ws = connect(&addr, &token).await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    send(
+        &mut ws,
+        json!({"cmd": "configure", "mode": "butterfly", "count": 3, "delta": 1e-9, "method": "rk4", "dt": 0.01, "speed": 50}),
+    )
+    .await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    let begin = Instant::now();
+    let growth = loop {
+        assert!(begin.elapsed() < 60 * SEC, "the fit is final within a minute");
+        let g = next_text(&mut ws, "growth", 30 * SEC).await;
+        if g["final"] == true {
+            break g;
+        }
+    };
+    let f = |k: &str| growth[k].as_f64().unwrap_or_else(|| panic!("{k} in {growth}"));
+    let (rate, every) = (f("rate"), growth["every"].as_u64().unwrap());
+    assert_eq!((f("fit_from"), f("saturation")), (100.0 * 1e-9, 0.1), "from 100 δ to 0.1");
+    assert!(0.3 < rate && rate < 5.0, "the double pendulum's rate: {rate}");
+
+    let values = pendula::model::find("double").unwrap().values(&[]).unwrap();
+    let model = values.build();
+    let rk4 = pendula::integrator::find("rk4").unwrap();
+    let y0 = values.initial_state().to_vec();
+    let mut y1 = y0.clone();
+    y1[0] += 1e-9;
+    // The lab's runs: its integrator path and schedule, uninterrupted, to past the window.
+    let t_past = f("t_end") + 1.0;
+    let stepping = Stepping::Fixed(RunSpec { t0: 0.0, h: 0.01, end: End::Time(1e6) });
+    let run = |y: &[f64]| {
+        let mut rec = Every { n: every, inner: Recorder::default() };
+        model.solve_fastest(rk4, y, &stepping, &mut rec, None, &Pause { at: t_past, flag: None }).unwrap();
+        rec.inner.rows
+    };
+    let (a, b) = (run(&y0), run(&y1));
+    let (t, distance) = a
+        .chunks_exact(5)
+        .zip(b.chunks_exact(5))
+        .map(|(ra, rb)| (ra[0], state_distance(&ra[1..], &rb[1..])))
+        .unzip();
+    let replay = pendula::analysis::Divergence { t, distance };
+    let fit = growth_rate_between(&replay, f("fit_from"), 0.1).unwrap();
+    assert_eq!(
+        (rate, f("t_start"), f("t_end"), f("intercept")),
+        (fit.rate, fit.t_start, fit.t_end, fit.intercept),
+        "the library's fit of the lab's runs"
+    );
+
+    // `pendula divergence double --method rk4 --dt 0.01 --delta 1e-9 --fit-from 1e-7
+    // --saturation 0.1 --t-end 30`: the reference integrator's rounding differs from the
+    // fast path's by about 1e-16 relative, which the chaos amplifies as it amplifies δ; the
+    // rates agree to about 1e-16/1e-9.
+    let spec = RunSpec { t0: 0.0, h: 0.01, end: End::Time(30.0) };
+    let d = divergence(&*model, rk4, &y0, 0, 1e-9, &spec, every).unwrap();
+    let cli = growth_rate_between(&d, 1e-7, 0.1).unwrap();
+    eprintln!(
+        "lab {rate} over {}..{}; pendula divergence {} over {}..{}",
+        f("t_start"),
+        f("t_end"),
+        cli.rate,
+        cli.t_start,
+        cli.t_end
+    );
+    assert!((rate - cli.rate).abs() <= 1e-6 * cli.rate.abs(), "lab {rate}, pendula divergence {}", cli.rate);
+    assert_eq!((f("t_start"), f("t_end")), (cli.t_start, cli.t_end), "the same window");
+}
+
+/// Only the butterfly measures a growth rate: a single run sends no `growth` message.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_single_run_sends_no_growth_rate() {
+    let (addr, token) = server(Default::default()).await;
+    let mut ws = connect(&addr, &token).await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    send(&mut ws, json!({"cmd": "configure", "speed": 50})).await;
+    next_text(&mut ws, "config", 5 * SEC).await;
+    let until = Instant::now() + 2 * SEC;
+    while Instant::now() < until {
+        if let Ok(Some(Ok(Message::Text(t)))) = tokio::time::timeout(SEC, ws.next()).await {
+            let v: Value = serde_json::from_str(t.as_str()).unwrap();
+            assert_ne!(v["type"], "growth", "{v}");
+        }
+    }
+}
+
+/// The page's script is ES modules linked by the browser: index.html loads the entry as a
+/// module, and every module it imports, directly or not, is served with a JavaScript type (a
+/// browser refuses a module of any other type); every file under `assets/js/` is one of them.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_script_is_es_modules_each_served_as_javascript() {
+    let (addr, _) = server(Default::default()).await;
+    let (status, page) = plain_get(&addr, "/").await;
+    assert_eq!(status, 200);
+    assert!(page.contains(r#"<script type="module" src="/app.js"></script>"#), "{page}");
+    let mut todo = vec!["/app.js".to_owned()];
+    let mut served = std::collections::BTreeSet::new();
+    while let Some(path) = todo.pop() {
+        if !served.insert(path.clone()) {
+            continue;
+        }
+        let (status, response) = plain_get(&addr, &path).await;
+        assert_eq!(status, 200, "{path}");
+        let (head, body) = response.split_once("\r\n\r\n").unwrap();
+        assert!(head.to_lowercase().contains("content-type: text/javascript"), "{path}: {head}");
+        let dir = &path[..path.rfind('/').unwrap() + 1];
+        for import in body.lines().filter_map(|l| l.strip_prefix("import ")) {
+            let target = import.split(" from '").nth(1).and_then(|t| t.strip_suffix("';")).unwrap();
+            let target =
+                target.strip_prefix("./").unwrap_or_else(|| panic!("{path}: a relative import: {import}"));
+            todo.push(format!("{dir}{target}"));
+        }
+    }
+    let on_disk: std::collections::BTreeSet<String> =
+        std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/js"))
+            .unwrap()
+            .map(|e| format!("/js/{}", e.unwrap().file_name().to_string_lossy()))
+            .collect();
+    let imported: std::collections::BTreeSet<String> =
+        served.iter().filter(|p| p.starts_with("/js/")).cloned().collect();
+    assert_eq!(imported, on_disk, "every module is imported and served");
+    assert!(served.len() > 10, "{served:?}");
+}

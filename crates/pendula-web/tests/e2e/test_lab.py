@@ -1,6 +1,8 @@
 """The lab as a person uses it, in headless Chromium: what the issue's "done when" lists."""
 
+import json
 import math
+import os
 import subprocess
 
 from conftest import open_lab
@@ -91,13 +93,32 @@ def test_the_race_shows_rk4_drifting_and_gauss_legendre_bounded_over_1000_s(lab,
     lab.screenshot(path=str(shots / "race.png"))
 
 
-def test_butterfly_mode_measures_the_growth_of_the_separation(lab, shots):
+def test_butterfly_mode_measures_the_growth_of_the_separation(lab, shots, tmp_path):
     lab.evaluate("lab.send({cmd: 'configure', mode: 'butterfly', count: 6, delta: 1e-9, method: 'rk4', speed: 4})")
-    wait_config(lab, "c.mode === 'butterfly' && c.tracks.length === 6")
+    c = wait_config(lab, "c.mode === 'butterfly' && c.tracks.length === 6")
     lab.wait_for_function("lab.frame.t > 25 && lab.growthRate !== null", timeout=30000)
     rate = lab.evaluate("lab.growthRate")
     assert 0.3 < rate < 5, rate
     lab.screenshot(path=str(shots / "butterfly.png"))
+    # The rate shown is the one `pendula divergence` fits to the same run (the same system,
+    # start, method, step and offset, over the window the lab reports): one rule, not two.
+    lab.wait_for_function("lab.growth && lab.growth.final", timeout=30000)
+    g = lab.evaluate("lab.growth")
+    assert g["rate"] == rate and g["every"] == 1, g
+    lab.wait_for_timeout(300)
+    shown = lab.inner_text("#growth-rate")
+    assert f"λ ≈ {rate:.3g} 1/s: the slope" in shown and f"t = {g['t_start']:.3g}…{g['t_end']:.3g} s" in shown, shown
+    cli = os.environ.get("PENDULA_CLI", "target/debug/pendula")
+    run = subprocess.run([cli, "divergence", c["system"], "--method", c["method"], "--dt", str(c["dt"]),
+                          "--delta", str(c["delta"]), "--fit-from", repr(g["fit_from"]),
+                          "--saturation", repr(g["saturation"]), "--t-end", "30",
+                          "--out-dir", str(tmp_path), "--summary", "-"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    summary = json.loads(run.stdout)
+    assert summary["fit_window"] == [g["t_start"], g["t_end"]], (summary, g)
+    # The CLI runs the reference integrator, the lab its fast path: their rounding differs by
+    # about 1e-16, which the chaos amplifies as it amplifies δ = 1e-9.
+    assert abs(summary["growth_rate"] - rate) <= 1e-6 * abs(rate), (summary["growth_rate"], rate)
 
 
 def test_graphs_show_the_time_series_phase_portrait_and_a_live_poincare_section(lab, shots):

@@ -52,9 +52,15 @@ pub fn divergence(
     let (mut t, mut distance) = (Vec::new(), Vec::new());
     for (ra, rb) in a.chunks_exact(n + 1).zip(b.chunks_exact(n + 1)) {
         t.push(ra[0]);
-        distance.push(ra[1..].iter().zip(&rb[1..]).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt());
+        distance.push(state_distance(&ra[1..], &rb[1..]));
     }
     Ok(Divergence { t, distance })
+}
+
+/// The Euclidean distance of two states, as [`Divergence::distance`] measures it (state
+/// units mixed: rad and rad/s for the pendulums).
+pub fn state_distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
 }
 
 /// A fitted exponential rate.
@@ -66,6 +72,9 @@ pub struct GrowthFit {
     pub t_start: f64,
     /// End of the window, s.
     pub t_end: f64,
+    /// The fitted line's ln(distance) at t = 0 (ln of the distance's unit): the line is
+    /// ln d = `intercept` + `rate`·t, which a plot draws over the window.
+    pub intercept: f64,
 }
 
 /// Least-squares slope of ln(distance) against t over the samples before the distance first
@@ -94,5 +103,6 @@ pub fn growth_rate_between(d: &Divergence, from: f64, saturation: f64) -> Option
     let (mt, ml) = (ts.iter().sum::<f64>() / n, ls.iter().sum::<f64>() / n);
     let stt: f64 = ts.iter().map(|t| (t - mt) * (t - mt)).sum();
     let stl: f64 = ts.iter().zip(&ls).map(|(t, l)| (t - mt) * (l - ml)).sum();
-    Some(GrowthFit { rate: stl / stt, t_start: ts[0], t_end: ts[ts.len() - 1] })
+    let rate = stl / stt;
+    Some(GrowthFit { rate, t_start: ts[0], t_end: ts[ts.len() - 1], intercept: ml - rate * mt })
 }
