@@ -100,8 +100,8 @@ def test_the_guides_python_comments_say_what_the_lines_compute(tmp_path, monkeyp
     exec(next(expr for expr in lines if expr.startswith("back = ")), scope)
     end, gap = eval(next(expr for expr in lines if expr.startswith("back.t")), scope)
     assert end == 0.0 and scope["back"].t[0] == 10
-    assert "about 1e-3" in lines[next(expr for expr in lines if expr.startswith("back.t"))]
-    assert 1e-4 < np.max(np.abs(gap)) < 1e-2, gap
+    assert "about 1e-6" in lines[next(expr for expr in lines if expr.startswith("back.t"))]
+    assert 1e-7 < np.max(np.abs(gap)) < 1e-5, gap
 
 
 def test_the_guides_dask_example_runs_and_is_the_local_result(tmp_path, monkeypatch):
