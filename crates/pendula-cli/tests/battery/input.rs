@@ -3,7 +3,7 @@
 //! amplitude a command cannot mean: refused (exit 2) with the text as typed, the flag the
 //! user gave, and what is allowed.
 
-use crate::harness::Case;
+use super::harness::Case;
 
 /// The cases of this class.
 pub fn cases() -> Vec<Case> {
@@ -228,5 +228,5 @@ fn npy(header: &str, data: &[u8]) -> Vec<u8> {
 
 #[test]
 fn input() {
-    crate::harness::run(cases());
+    super::harness::run(cases());
 }

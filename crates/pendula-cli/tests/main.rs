@@ -1,0 +1,22 @@
+//! The CLI's tests: one test binary (one link, one run), a module per subject, the helpers
+//! they share in `util`. Most run the real `pendula` binary (`CARGO_BIN_EXE_pendula`) in a
+//! temporary directory.
+//!
+//! - `cli`: `simulate`, `list`, `plot`, `serve`, completions and man pages, and every
+//!   invalid input with its message, exit code, and no file left behind;
+//! - `study`, `chaos`, `sweep`: the study commands, the chaos commands, sweeps and shards;
+//! - `defaults`: the study commands on their defaults, for every catalogued system;
+//! - `outputs`, `resume`, `full_disk`: interrupts, checkpoints and full disks, on real
+//!   processes and devices;
+//! - `battery`: the hardening battery, hostile requests to every command.
+
+mod battery;
+mod chaos;
+mod cli;
+mod defaults;
+mod full_disk;
+mod outputs;
+mod resume;
+mod study;
+mod sweep;
+mod util;
