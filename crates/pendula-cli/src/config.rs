@@ -78,7 +78,7 @@ pub struct Checkpoints {
 /// A scenario file: the same names as the flags.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct Scenario {
+pub struct Scenario {
     system: Option<String>,
     method: Option<String>,
     dt: Option<f64>,
@@ -112,9 +112,9 @@ fn read_scenario(path: &Path) -> Result<Scenario> {
 }
 
 /// The scenario in `bytes`, the contents of the file `name`: checked for its size, UTF-8 and
-/// nesting before the TOML parser sees it (the fuzz harness, `src/fuzz/`, calls it with
+/// nesting before the TOML parser sees it (the fuzz harness, `tests/fuzz/`, calls it with
 /// generated files).
-pub(crate) fn parse_scenario(bytes: Vec<u8>, name: &str) -> Result<Scenario> {
+pub fn parse_scenario(bytes: Vec<u8>, name: &str) -> Result<Scenario> {
     if bytes.len() as u64 > limits::MAX_SCENARIO_BYTES {
         bail!(
             "scenario file {name} is larger than {}, the limit for a scenario (a few lines of keys and values)",
@@ -420,21 +420,17 @@ pub fn clip(text: &str) -> String {
     }
 }
 
-#[cfg(test)]
 thread_local! {
-    /// Set by the fuzz harness (`src/fuzz/`) on its threads: its millions of generated
+    /// Set by the fuzz harness (`tests/fuzz/`) on its threads: its millions of generated
     /// values would fill the test's captured output with warnings, and the list of values
-    /// warned about once with their texts.
-    pub(crate) static QUIET_WARNINGS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// warned about once with their texts. The binary never sets it.
+    pub static QUIET_WARNINGS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Whether warnings and notes on stderr are silenced: only ever on the fuzz harness's
-/// threads, in the unit tests.
+/// threads.
 pub(crate) fn quiet() -> bool {
-    #[cfg(test)]
-    return QUIET_WARNINGS.get();
-    #[cfg(not(test))]
-    false
+    QUIET_WARNINGS.get()
 }
 
 /// Warns on stderr, once per name and value, when a bare number for an angle exceeds a full
@@ -626,7 +622,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<SimulateConfig> {
 }
 
 /// [`simulate`] with the scenario file already read: the flags override `scenario`.
-pub(crate) fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<SimulateConfig> {
+pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<SimulateConfig> {
     let preset = args.preset.name.as_deref().map(system::driven::find_preset).transpose()?;
     let system_name = args
         .system

@@ -17,8 +17,6 @@ pub mod cli;
 pub mod commands;
 #[doc(hidden)]
 pub mod config;
-#[cfg(test)]
-mod fuzz;
 mod generate;
 #[doc(hidden)]
 pub mod limits;

@@ -547,42 +547,37 @@ fn conflict(old: &Claim, new: &Claim) -> Option<String> {
 
 /// Every first change a run makes outside itself passes here: a claim in the run's list of
 /// outputs, a directory or a temporary file created. Everything a command checks before its
-/// first output has been checked by then, and nothing written. In the unit tests' build a
-/// thread may stop its command here ([`validate_only`]): the fuzz harness (`src/fuzz/`)
-/// so validates millions of generated requests without running them.
+/// first output has been checked by then, and nothing written. A thread may stop its command
+/// here ([`validate_only`]): the fuzz harness (`tests/fuzz/`, which calls the library target)
+/// so validates millions of generated requests without running them. The binary never sets
+/// it: one thread-local read per output.
 fn first_change() -> Result<()> {
-    #[cfg(test)]
     if VALIDATE_ONLY.get() {
         return Err(Validated.into());
     }
     Ok(())
 }
 
-#[cfg(test)]
 thread_local! {
     static VALIDATE_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Stops this thread's commands at their first output ([`first_change`]) with [`Validated`]
 /// (`on`), or lets them run (`!on`). Tests only.
-#[cfg(test)]
-pub(crate) fn validate_only(on: bool) {
+pub fn validate_only(on: bool) {
     VALIDATE_ONLY.set(on);
 }
 
 /// The error of a command stopped by [`validate_only`]: its input was accepted.
-#[cfg(test)]
 #[derive(Debug)]
-pub(crate) struct Validated;
+pub struct Validated;
 
-#[cfg(test)]
 impl std::fmt::Display for Validated {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("validated; stopped before the first output")
     }
 }
 
-#[cfg(test)]
 impl std::error::Error for Validated {}
 
 /// Adds `claim` to the current run's list, or says why it collides with one there.

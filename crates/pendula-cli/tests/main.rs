@@ -8,13 +8,16 @@
 //! - `defaults`: the study commands on their defaults, for every catalogued system;
 //! - `outputs`, `resume`, `full_disk`: interrupts, checkpoints and full disks, on real
 //!   processes and devices;
-//! - `battery`: the hardening battery, hostile requests to every command.
+//! - `battery`: the hardening battery, hostile requests to every command;
+//! - `fuzz`: the fuzz harness, generated and hostile input to every reader of user input, in
+//!   process, through the library target (`pendula_cli`).
 
 mod battery;
 mod chaos;
 mod cli;
 mod defaults;
 mod full_disk;
+mod fuzz;
 mod outputs;
 mod resume;
 mod study;

@@ -30,7 +30,7 @@ pub struct MergeArgs {
 }
 
 /// One shard, as its description states it.
-pub(crate) struct Shard {
+pub struct Shard {
     pub path: PathBuf,
     pub fingerprint: Value,
     pub shape: Vec<usize>,
@@ -50,7 +50,7 @@ fn json_of(path: &Path) -> String {
 
 /// Reads and checks the description of the shard at `path` against itself: a known format,
 /// every field present, an offset and extent that are its shard's of the grid.
-pub(crate) fn describe(path: &Path) -> Result<Shard> {
+pub fn describe(path: &Path) -> Result<Shard> {
     let d = read_description(path)?;
     let json = json_of(path);
     match d.get("pendula_sweep").and_then(Value::as_u64) {

@@ -317,7 +317,7 @@ pub fn draw(panels: &[Figure], path: &Path) -> Result<Vec<u8>> {
 
 /// A grid from `sweep` or `fractal`: axes (from the JSON description beside the file, when
 /// there is one) and the values of each cell.
-pub(crate) struct Grid {
+pub struct Grid {
     /// (name, lo, hi, n) per axis, fastest first.
     axes: Vec<(String, f64, f64, usize)>,
     /// Column names; one unnamed column for a fractal.
@@ -461,7 +461,7 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
 }
 
 /// What a file holds, read.
-pub(crate) enum Contents {
+pub enum Contents {
     Table(Trajectory),
     Grid(Grid),
     Categories(Categories),
@@ -471,7 +471,7 @@ pub(crate) enum Contents {
 /// `convergence`'s and `work-precision`'s tables): its numeric columns are drawn per name —
 /// one bar per name when each has one row, one line per name when names repeat — and its
 /// other text columns are notes.
-pub(crate) struct Categories {
+pub struct Categories {
     title: String,
     /// The first column's name (`method`).
     key: String,
@@ -639,8 +639,8 @@ fn categories(
     Ok(Contents::Categories(Categories { title, key: names[0].clone(), labels, numbers, texts }))
 }
 
-/// Reads `args.file` (the fuzz harness, `src/fuzz/`, calls it on generated files).
-pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
+/// Reads `args.file` (the fuzz harness, `tests/fuzz/`, calls it on generated files).
+pub fn read(args: &PlotArgs) -> Result<Contents> {
     let path = &args.file;
     let title =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
@@ -880,14 +880,14 @@ pub fn run(args: &PlotArgs) -> Result<()> {
 }
 
 /// What `plot` draws: a table's panels, or a grid's heat map.
-pub(crate) enum Picture {
+pub enum Picture {
     Panels(Vec<Figure>),
     Map(Heatmap),
 }
 
 /// The picture of `contents` that the flags ask for, checked and laid out, not yet drawn
 /// into `out`.
-pub(crate) fn picture(args: &PlotArgs, _out: &Path, contents: Contents) -> Result<Picture> {
+pub fn picture(args: &PlotArgs, _out: &Path, contents: Contents) -> Result<Picture> {
     Ok(match contents {
         Contents::Table(t) => {
             let mut panels = Vec::new();

@@ -561,13 +561,13 @@ pub const SHARD_FORMAT: u64 = 2;
 
 /// What [`write_npy`] wrote: the file's length and CRC-32.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Written {
+pub struct Written {
     pub bytes: u64,
     pub crc32: u32,
 }
 
 /// The length and CRC-32 of what `reader` holds, read to its end.
-pub(crate) fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
+pub fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
     let mut sink = Tally::new(std::io::sink());
     std::io::copy(&mut reader, &mut sink)?;
     let (bytes, crc32) = sink.written();

@@ -1,4 +1,4 @@
-//! The fuzz harness's end-to-end part (the in-process part is `src/fuzz/`): command lines
+//! The fuzz harness's end-to-end part (the in-process part is `tests/fuzz/`): command lines
 //! of every command, cheap valid requests mutated by proptest (a fixed seed) with hostile
 //! values and edited input files, run through the real binary, each in a fresh directory.
 //! Every run must end with exit 0, 1 or 2 — or, past its time, end on SIGTERM with 143 —
@@ -26,7 +26,7 @@ const TIME_LIMIT: Duration = Duration::from_secs(2);
 /// How long an interrupted run may take to clean up and exit.
 const GRACE: Duration = Duration::from_secs(10);
 
-/// Cheap valid requests, one or more per command (the in-process harness's, `src/fuzz/argv.rs`).
+/// Cheap valid requests, one or more per command (the in-process harness's, `tests/fuzz/argv.rs`).
 const BASELINES: &[&str] = &[
     "simulate --steps 100 --out t2.csv",
     "simulate pendulum --method dopri5 --t-end 1 --out t2.npy --summary s.json",

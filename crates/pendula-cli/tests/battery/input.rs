@@ -130,7 +130,7 @@ pub fn cases() -> Vec<Case> {
             .says("bytes elided")
             .says("File name too long")
             .brief(4200),
-        // Found by the fuzz harness (src/fuzz): .npy headers that the claim and the reader
+        // Found by the fuzz harness (tests/fuzz): .npy headers that the claim and the reader
         // read differently, or that the reader's parser takes days over.
         Case::new("a .npy header giving its shape twice", "plot x.npy")
             .setup(|d| {

@@ -497,7 +497,7 @@ fn merge() -> Vec<Case> {
                 std::fs::write(path, &text[..text.len() / 2]).unwrap();
             })
             .says("invalid shard description p1.npy.json"),
-        // Found by the fuzz harness (src/fuzz): k x cells overflowed, a panic.
+        // Found by the fuzz harness (tests/fuzz): k x cells overflowed, a panic.
         Case::new("a description of a grid too large to count its slices", ALL)
             .setup(|d| {
                 shards(d);
