@@ -23,7 +23,11 @@ pub mod limits;
 mod list;
 #[doc(hidden)]
 pub mod output;
+#[doc(hidden)]
+pub mod parse;
 mod run_state;
+#[doc(hidden)]
+pub mod shards;
 mod simulate;
 mod sink;
 mod slurm;
@@ -77,7 +81,7 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Period(args) => commands::period::run(args),
         Command::OscillatorRegimes(args) => commands::regimes::run(args),
         Command::Animate(args) => commands::animate::run(args),
-        Command::Report(args) => commands::report::run(args),
+        Command::Report(args) => commands::report::run(args, run_line),
         Command::Sweep(args) => commands::sweep::run(args),
         Command::Divergence(args) => commands::divergence::run(args),
         Command::Lyapunov(args) => commands::lyapunov::run(args),
@@ -92,6 +96,12 @@ pub fn dispatch(command: &Command) -> anyhow::Result<()> {
         Command::Completions { shell } => generate::completions(*shell),
         Command::Man { out_dir } => generate::man(out_dir.as_deref()),
     }
+}
+
+/// `pendula ARGS...` parsed and run (the report runs its commands so); clap's error when the
+/// arguments do not parse.
+fn run_line(args: &[String]) -> anyhow::Result<()> {
+    dispatch(&Cli::try_parse_from(args)?.command)
 }
 
 /// 1 when the computation itself failed or the environment did (a full disk while writing),
@@ -154,7 +164,7 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
             e.downcast_ref::<std::io::Error>().is_some_and(broken)
                 || e.downcast_ref::<csv::Error>()
                     .is_some_and(|e| matches!(e.kind(), csv::ErrorKind::Io(io) if broken(io)))
-                || e.downcast_ref::<watch::RowFailure>().is_some_and(|row| is_broken_pipe(&row.0))
+                || e.downcast_ref::<output::RowFailure>().is_some_and(|row| is_broken_pipe(&row.0))
         })
 }
 

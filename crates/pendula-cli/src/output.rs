@@ -229,6 +229,25 @@ impl Drop for WatchedChild {
     }
 }
 
+/// A row of the trajectory that could not be written: the sink's error, as the cause of the
+/// run's `pendula::Error::Observer`. A type of its own, so that [`WriteError::find`] can
+/// reach the write that failed through it (an `anyhow::Error` made into a boxed error hides
+/// its own type).
+#[derive(Debug)]
+pub(crate) struct RowFailure(pub(crate) anyhow::Error);
+
+impl std::fmt::Display for RowFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for RowFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
 /// A write that failed, named by the option and the path the user gave (never the temporary
 /// file's name), with the operating system's reason: `cannot write --out big.csv: No space
 /// left on device (os error 28)`. Its message is whole: it has no source.
@@ -262,9 +281,7 @@ impl WriteError {
                 .or_else(|| {
                     e.downcast_ref::<io::Error>().and_then(|io| io.get_ref()?.downcast_ref::<WriteError>())
                 })
-                .or_else(|| {
-                    e.downcast_ref::<crate::watch::RowFailure>().and_then(|row| WriteError::find(&row.0))
-                })
+                .or_else(|| e.downcast_ref::<RowFailure>().and_then(|row| WriteError::find(&row.0)))
         })
     }
 

@@ -668,7 +668,7 @@ fn check_npy(bytes: &[u8]) -> Result<(), String> {
     {
         return ordinary(&anyhow::anyhow!(
             "cannot read x.npy as a .npy of float64 or uint8: {}",
-            pendula_cli::config::clip(&e.to_string())
+            pendula_cli::parse::clip(&e.to_string())
         ));
     }
     Ok(())
@@ -754,8 +754,7 @@ impl Shard {
                 ShardEdit::Remove(key) => set(doc.as_mut().expect("a document"), key, None),
                 ShardEdit::Checksum => {
                     if let Some(d) = doc.as_mut() {
-                        let w =
-                            pendula_cli::commands::sweep::checksum(npy.as_slice()).expect("bytes in memory");
+                        let w = pendula_cli::shards::checksum(npy.as_slice()).expect("bytes in memory");
                         d["data"] = json!({"bytes": w.bytes, "crc32": format!("{:08x}", w.crc32)});
                     }
                 }

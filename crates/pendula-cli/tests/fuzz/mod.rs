@@ -205,7 +205,7 @@ fn claims() -> MutexGuard<'static, ()> {
 /// Sets this thread up for fuzzing: warnings silenced (millions of them would fill the
 /// captured output), commands run to the end unless a target stops them.
 fn quiet_thread() {
-    pendula_cli::config::QUIET_WARNINGS.set(true);
+    pendula_cli::parse::QUIET_WARNINGS.set(true);
     pendula_cli::output::validate_only(false);
 }
 
