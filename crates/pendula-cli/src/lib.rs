@@ -137,7 +137,7 @@ pub fn message(err: &anyhow::Error) -> String {
 }
 
 /// The longest message printed. Values are clipped where a message quotes them
-/// (`config::clip`), but paths are quoted whole, and an argument may hold 128 KiB (Linux's
+/// (`parse::clip`), but paths are quoted whole, and an argument may hold 128 KiB (Linux's
 /// limit): a message quoting such a path twice would bury its reason.
 pub const MAX_MESSAGE: usize = 4096;
 
