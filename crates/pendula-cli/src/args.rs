@@ -18,7 +18,7 @@ use clap::Args;
 use pendula::error::Short;
 use pendula::integrator::{self, Method};
 
-use crate::config::{f64_arg, positive_arg};
+use crate::parse::{f64_arg, positive_arg};
 
 /// A command's defaults for the shared arguments it takes; fields it does not take are
 /// not shown (`document` touches only the arguments the command has).
@@ -242,14 +242,6 @@ pub struct SummaryArg {
     #[arg(id = "summary", long = "summary", value_name = "FILE.json")]
     #[serde(rename = "summary")]
     pub path: Option<PathBuf>,
-}
-
-impl SummaryArg {
-    /// Opens it ([`crate::study::Summary::open`]): a path that cannot be written fails
-    /// before the work.
-    pub fn open(&self) -> Result<crate::study::Summary> {
-        crate::study::Summary::open(self.path.as_deref())
-    }
 }
 
 /// Whether to run beyond the limits (`crate::limits`).

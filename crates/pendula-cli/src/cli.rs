@@ -2,9 +2,10 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
 
-use crate::args::{LargeArg, PresetArg, SetArgs, SummaryArg};
+use crate::config::SimulateArgs;
+use crate::list::ListWhat;
 
 /// Simple, double and harmonic pendulums with verified, structure-preserving integrators.
 #[derive(Debug, Parser)]
@@ -141,100 +142,3 @@ const SET_POINCARE: &str = "Set a parameter of the system, e.g. `--set m2=2` (kg
 pendulum; every orbit starts on the energy surface (--energy).";
 const SET_BIFURCATION: &str = "Set a parameter over the preset or the defaults, e.g. `--set q=4` \
 (the driven pendulum's quality factor) or `--set drive_frequency=0.5`.";
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum ListWhat {
-    Systems,
-    Methods,
-    Presets,
-}
-
-#[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
-pub struct SimulateArgs {
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub system: crate::args::SystemArg,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub stepping: crate::args::MethodArgs,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub end: crate::args::EndArg,
-    /// Number of steps, instead of --t-end: 1 to 10^13.
-    #[arg(long, allow_hyphen_values = true, value_name = "N", conflicts_with = "t_end")]
-    pub steps: Option<String>,
-    /// Binding constant ω of tao-2 and tao-4, 1/s [default: 200]: larger holds the two copies
-    /// closer on chaotic orbits; binding * dt must be <= 1.
-    #[arg(long, value_name = "OMEGA", allow_hyphen_values = true)]
-    pub binding: Option<String>,
-    /// Relative tolerance of adaptive methods (dopri5, dop853), from 1e-15 (below that the
-    /// error estimate is round-off) to 1 [default: 1e-6].
-    #[arg(long, value_name = "X", allow_hyphen_values = true)]
-    pub rtol: Option<String>,
-    /// Absolute tolerance of adaptive methods, >= 0 [default: 1e-6]; with 0, a component that
-    /// stays exactly 0 meets it (a state at rest does not stall the controller).
-    #[arg(long, value_name = "X", allow_hyphen_values = true)]
-    pub atol: Option<String>,
-    /// Smallest step an adaptive method may take, s; below it the run fails (exit 1); never
-    /// below 16 ε t_end, which the end time cannot resolve [default: 0].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub h_min: Option<String>,
-    /// Largest step an adaptive method may take, s [default: unbounded].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub h_max: Option<String>,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub set: SetArgs,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub preset: PresetArg,
-    /// TOML scenario with the same names (keys system, method, dt, t_end or steps, every,
-    /// out, summary, and a `[set]` table); flags override it. At most 1 MiB, arrays and
-    /// tables nested at most 16 deep.
-    #[arg(long, value_name = "FILE.toml")]
-    pub scenario: Option<PathBuf>,
-    /// Write every N-th step (and the last); 0 writes no trajectory [default: 1]. The
-    /// trajectory may take at most 1 GiB (--allow-large lifts it).
-    #[arg(long, allow_hyphen_values = true, value_name = "N")]
-    pub every: Option<String>,
-    /// Adaptive methods: write rows at t = 0, H, 2H, … and the last state, from the method's
-    /// dense output, instead of at the irregular steps.
-    #[arg(long, allow_hyphen_values = true, value_name = "H", conflicts_with_all = ["every", "t_eval"])]
-    pub output_dt: Option<String>,
-    /// Adaptive methods: write rows at these increasing times, s (comma-separated), and the
-    /// last state, from the dense output; without --t-end the run ends at the last of them.
-    #[arg(long, allow_hyphen_values = true, value_name = "T1,T2,...", conflicts_with = "every")]
-    pub t_eval: Option<String>,
-    /// Also draw the run: time series of the positions, a phase portrait of the first one
-    /// and the energy error, as FILE.png or FILE.svg (`pendula plot` draws a saved run).
-    #[arg(long, value_name = "FILE.png")]
-    pub plot: Option<PathBuf>,
-    /// Trajectory output: FILE.csv, FILE.npy, or `-` for CSV on stdout
-    /// [default: trajectory.csv].
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub summary: SummaryArg,
-    /// Locate events and list them in the summary: `flip` (an angle passes ±π the first
-    /// time), `zero:NAME` (a state variable crosses 0), `section:NAME=VALUE` (for an angle,
-    /// VALUE + 2 pi k: the angle is on a circle); a trailing `+`
-    /// or `-` keeps only upward or downward crossings (`section:theta1=0+`).
-    #[arg(long = "event", value_name = "SPEC")]
-    pub events: Vec<String>,
-    /// End the run at the first event.
-    #[arg(long)]
-    pub stop_on_event: bool,
-    /// Write the run's whole state to FILE every --checkpoint-every seconds of simulated
-    /// time and when interrupted (SIGINT, SIGTERM, SIGHUP), so that `pendula resume FILE`
-    /// continues it to the same bits; meanwhile the trajectory is written to OUT.partial,
-    /// and both are removed when the run ends.
-    #[arg(long, value_name = "FILE")]
-    pub checkpoint: Option<PathBuf>,
-    /// Simulated seconds between checkpoints [default: only when interrupted].
-    #[arg(long, value_name = "T", allow_hyphen_values = true, requires = "checkpoint")]
-    pub checkpoint_every: Option<String>,
-    #[command(flatten)]
-    #[serde(flatten)]
-    pub large: LargeArg,
-}

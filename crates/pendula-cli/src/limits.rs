@@ -12,6 +12,9 @@
 
 use anyhow::{Result, bail};
 
+// Value formatting, shared with the parsing layer below, where it lives.
+pub use crate::parse::sci;
+
 /// Pendulum-steps on the ensemble engine (fractal, sweep of the free double pendulum with
 /// rk4 or Tao's maps, bifurcation of the driven pendulum).
 pub const MAX_LANE_STEPS: f64 = 1e13;
@@ -162,7 +165,7 @@ pub const THREADS_PER_CORE: usize = 4;
 pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
     let cores = cores();
     let Some(text) = text else { return Ok(cores) };
-    let n = crate::config::parse_count("--threads", text, 1, u64::MAX, "threads")?;
+    let n = crate::parse::parse_count("--threads", text, 1, u64::MAX, "threads")?;
     let most = THREADS_PER_CORE * cores;
     if n > most as u64 && !allow_large {
         bail!(
@@ -176,7 +179,7 @@ pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
             round(n as f64)
         );
     }
-    if n > cores as u64 && !crate::config::quiet() {
+    if n > cores as u64 && !crate::parse::quiet() {
         eprintln!(
             "warning: --threads {n} is more than this machine's {cores} cores: the threads take turns (the results are the same, bit for bit, only not faster)"
         );
@@ -187,18 +190,6 @@ pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
 /// A count for people: whole numbers up to 10⁶ in full, larger ones as `1.2e14`.
 pub fn round(x: f64) -> String {
     if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
-}
-
-/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
-pub fn sci(x: f64) -> String {
-    if !x.is_finite() {
-        return "unboundedly many".to_owned();
-    }
-    let text = format!("{x:.3e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-    let mantissa =
-        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
-    format!("{mantissa}e{exponent}")
 }
 
 /// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
@@ -257,6 +248,8 @@ pub struct NpyClaim {
     pub item: usize,
 }
 
+// Public for the fuzz harness only; a claim is a shape, not a collection to test for emptiness.
+#[allow(clippy::len_without_is_empty)]
 impl NpyClaim {
     /// The number of values.
     pub fn len(&self) -> usize {
@@ -274,8 +267,8 @@ pub fn npy_claim(path: &std::path::Path) -> Result<NpyClaim> {
 }
 
 /// [`npy_claim`] of the .npy `file`, `length` bytes long, named `name` in messages (the fuzz
-/// harness, `src/fuzz/`, reads generated files from memory).
-pub(crate) fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &str) -> Result<NpyClaim> {
+/// harness, `tests/fuzz/`, reads generated files from memory).
+pub fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &str) -> Result<NpyClaim> {
     let bad = |why: &str| anyhow::anyhow!("{name} is not a valid .npy file: {why}");
     let mut head = [0u8; 12];
     file.read_exact(&mut head[..10]).map_err(|_| bad("too short for a header"))?;
@@ -312,18 +305,18 @@ pub(crate) fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &s
     // key inside a string), and pass a file whose reading then allocates 10^15 values.
     let header = ndarray_npy::npy::header::Header::from_reader(&mut header.as_slice()).map_err(|e| {
         let why = e.to_string();
-        bad(&format!("its header: {}", crate::config::clip(why.lines().next().unwrap_or(""))))
+        bad(&format!("its header: {}", crate::parse::clip(why.lines().next().unwrap_or(""))))
     })?;
     let descr = header.type_descriptor.as_string().ok_or_else(|| {
-        bad(&format!("unknown value type `{}`", crate::config::clip(&header.type_descriptor.to_string())))
+        bad(&format!("unknown value type `{}`", crate::parse::clip(&header.type_descriptor.to_string())))
     })?;
     let item: usize = descr
         .trim_start_matches(|c: char| !c.is_ascii_digit())
         .parse()
-        .map_err(|_| bad(&format!("unknown value type `{}`", crate::config::clip(descr))))?;
+        .map_err(|_| bad(&format!("unknown value type `{}`", crate::parse::clip(descr))))?;
     if item == 0 {
         // Any count of them fits in no data: the count could not be checked.
-        return Err(bad(&format!("its values (`{}`) take no bytes", crate::config::clip(descr))));
+        return Err(bad(&format!("its values (`{}`) take no bytes", crate::parse::clip(descr))));
     }
     let shape = header.shape;
     // The array library counts the lengths of the non-empty axes, and refuses (the reader
@@ -332,7 +325,7 @@ pub(crate) fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &s
     if counted.is_none_or(|n| n > isize::MAX as u128) {
         return Err(bad(&format!(
             "its header claims a shape {} beyond counting",
-            crate::config::clip(&format!("{shape:?}"))
+            crate::parse::clip(&format!("{shape:?}"))
         )));
     }
     let values = shape.iter().try_fold(1u128, |n, &d| n.checked_mul(d as u128));
@@ -341,13 +334,13 @@ pub(crate) fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &s
         Some(bytes) if bytes == data as u128 => Ok(NpyClaim { shape, item }),
         Some(bytes) => Err(bad(&format!(
             "its header claims {} values of {item} bytes ({}), but the file holds {} after the header",
-            crate::config::clip(&format!("{shape:?}")),
+            crate::parse::clip(&format!("{shape:?}")),
             self::bytes(bytes as f64),
             self::bytes(data as f64)
         ))),
         None => Err(bad(&format!(
             "its header claims a shape {} beyond counting",
-            crate::config::clip(&format!("{shape:?}"))
+            crate::parse::clip(&format!("{shape:?}"))
         ))),
     }
 }

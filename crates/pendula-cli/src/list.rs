@@ -3,11 +3,18 @@
 use std::io::Write;
 
 use anyhow::Result;
+use clap::ValueEnum;
 use pendula::integrator::METHODS;
 use pendula::model::CATALOGUE;
 use pendula::system::Quantity;
 
-use crate::cli::ListWhat;
+/// What `pendula list` lists.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ListWhat {
+    Systems,
+    Methods,
+    Presets,
+}
 
 fn show_default(q: &Quantity) -> String {
     if q.is_angle() && q.default != 0.0 {

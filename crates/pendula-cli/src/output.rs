@@ -229,6 +229,25 @@ impl Drop for WatchedChild {
     }
 }
 
+/// A row of the trajectory that could not be written: the sink's error, as the cause of the
+/// run's `pendula::Error::Observer`. A type of its own, so that [`WriteError::find`] can
+/// reach the write that failed through it (an `anyhow::Error` made into a boxed error hides
+/// its own type).
+#[derive(Debug)]
+pub(crate) struct RowFailure(pub(crate) anyhow::Error);
+
+impl std::fmt::Display for RowFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for RowFailure {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
 /// A write that failed, named by the option and the path the user gave (never the temporary
 /// file's name), with the operating system's reason: `cannot write --out big.csv: No space
 /// left on device (os error 28)`. Its message is whole: it has no source.
@@ -262,9 +281,7 @@ impl WriteError {
                 .or_else(|| {
                     e.downcast_ref::<io::Error>().and_then(|io| io.get_ref()?.downcast_ref::<WriteError>())
                 })
-                .or_else(|| {
-                    e.downcast_ref::<crate::watch::RowFailure>().and_then(|row| WriteError::find(&row.0))
-                })
+                .or_else(|| e.downcast_ref::<RowFailure>().and_then(|row| WriteError::find(&row.0)))
         })
     }
 
@@ -547,42 +564,37 @@ fn conflict(old: &Claim, new: &Claim) -> Option<String> {
 
 /// Every first change a run makes outside itself passes here: a claim in the run's list of
 /// outputs, a directory or a temporary file created. Everything a command checks before its
-/// first output has been checked by then, and nothing written. In the unit tests' build a
-/// thread may stop its command here ([`validate_only`]): the fuzz harness (`src/fuzz/`)
-/// so validates millions of generated requests without running them.
+/// first output has been checked by then, and nothing written. A thread may stop its command
+/// here ([`validate_only`]): the fuzz harness (`tests/fuzz/`, which calls the library target)
+/// so validates millions of generated requests without running them. The binary never sets
+/// it: one thread-local read per output.
 fn first_change() -> Result<()> {
-    #[cfg(test)]
     if VALIDATE_ONLY.get() {
         return Err(Validated.into());
     }
     Ok(())
 }
 
-#[cfg(test)]
 thread_local! {
     static VALIDATE_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Stops this thread's commands at their first output ([`first_change`]) with [`Validated`]
 /// (`on`), or lets them run (`!on`). Tests only.
-#[cfg(test)]
-pub(crate) fn validate_only(on: bool) {
+pub fn validate_only(on: bool) {
     VALIDATE_ONLY.set(on);
 }
 
 /// The error of a command stopped by [`validate_only`]: its input was accepted.
-#[cfg(test)]
 #[derive(Debug)]
-pub(crate) struct Validated;
+pub struct Validated;
 
-#[cfg(test)]
 impl std::fmt::Display for Validated {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("validated; stopped before the first output")
     }
 }
 
-#[cfg(test)]
 impl std::error::Error for Validated {}
 
 /// Adds `claim` to the current run's list, or says why it collides with one there.

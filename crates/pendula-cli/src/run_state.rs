@@ -16,7 +16,7 @@ use pendula::checkpoint::{RunState, Snapshot};
 use serde_json::{Value, json};
 
 use crate::checkpoint::{Checkpoint, f64_from_hex, hex_f64, hex_words};
-use crate::cli::SimulateArgs;
+use crate::config::SimulateArgs;
 use crate::config::SimulateConfig;
 use crate::output::PartialFile;
 use crate::sink::Position;

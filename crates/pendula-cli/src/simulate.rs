@@ -14,7 +14,7 @@ use pendula::observe::{Every, Observer, Resample};
 use pendula::{Report, Stepping};
 use serde_json::{Map, Value, json};
 
-use crate::cli::SimulateArgs;
+use crate::config::SimulateArgs;
 use crate::config::{self, Output, SimulateConfig};
 use crate::output::{AtomicFile, PartialFile};
 use crate::run_state::{Resumed, Saved};

@@ -34,8 +34,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::config::{clip, parse_count};
 use crate::output::AtomicFile;
+use crate::parse::{clip, parse_count};
 
 /// The Slurm flags of a shardable command.
 #[derive(Debug, Clone, Default, clap::Args, serde::Serialize, serde::Deserialize)]
@@ -108,13 +108,13 @@ impl Argv {
         self
     }
 
-    /// `pendula COMMAND ARGS... EXTRA...` as clap parses it: the script's command line, for
-    /// the caller to compare with the run it was made from.
-    pub fn parse_again(&self, command: &str, extra: &[&str]) -> Result<crate::cli::Command> {
-        use clap::Parser;
-        let argv = ["pendula", command].into_iter().map(str::to_owned).chain(self.0.iter().cloned());
-        crate::cli::Cli::try_parse_from(argv.chain(extra.iter().map(|e| (*e).to_owned())))
-            .map(|cli| cli.command)
+    /// `pendula COMMAND ARGS... EXTRA...` as clap parses it into the command's arguments `A`:
+    /// the script's command line, for the caller to compare with the run it was made from.
+    pub fn parse_again<A: clap::Args>(&self, command: &str, extra: &[&str]) -> Result<A> {
+        let argv = [command].into_iter().map(str::to_owned).chain(self.0.iter().cloned());
+        A::augment_args(clap::Command::new("pendula"))
+            .try_get_matches_from(argv.chain(extra.iter().map(|e| (*e).to_owned())))
+            .and_then(|matches| A::from_arg_matches(&matches))
             .map_err(|e| {
                 anyhow::anyhow!(
                     "internal error: the {command}'s arguments do not parse again for the Slurm script: {e}"

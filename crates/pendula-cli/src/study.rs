@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use pendula::analysis;
 use pendula::integrator::{self, METHODS, Method};
 use pendula::model::DynModel;
 use pendula::system::{self, Values};
@@ -23,7 +24,7 @@ use pendula_viz::Figure;
 
 use pendula::error::Short;
 
-use crate::config::{f64_arg, parse_count, parse_settings, positive_arg};
+use crate::parse::{f64_arg, parse_count, parse_settings, positive_arg};
 
 /// `print!` for a command's human output, through its [`Summary`]: `say!(summary, "...")`.
 macro_rules! say {
@@ -36,6 +37,14 @@ macro_rules! sayln {
 }
 use crate::args::{LargeArg, SetArgs, SummaryArg};
 use crate::output::{AtomicFile, CreatedDirs};
+
+// The summary's opening, beside the summary: `args` declares the flag, below this module.
+impl SummaryArg {
+    /// Opens it ([`Summary::open`]): a path that cannot be written fails before the work.
+    pub fn open(&self) -> Result<Summary> {
+        Summary::open(self.path.as_deref())
+    }
+}
 
 /// Arguments every study command takes.
 #[derive(Debug, Clone, Args)]
@@ -93,7 +102,7 @@ impl StepRange {
             );
         }
         let spec = pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) };
-        crate::config::schedule(&spec, "--dt-min", "--t-end")?;
+        crate::parse::schedule(&spec, "--dt-min", "--t-end")?;
         let hs =
             (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
         Ok((hs, t_end))
@@ -104,15 +113,11 @@ impl StepRange {
     /// The given steps (when any of --dt-min, --dt-max, --levels is given; the others take
     /// [`StepRange::resolve`]'s defaults) or each method's default ladder, and the end time
     /// (`default_t_end` unless --t-end is given).
-    pub fn resolve_or_default(
-        &self,
-        default_t_end: f64,
-    ) -> Result<(crate::commands::convergence::Ladder, f64)> {
-        use crate::commands::convergence::Ladder;
+    pub fn resolve_or_default(&self, default_t_end: f64) -> Result<(Ladder, f64)> {
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
         if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
             let spec = pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) };
-            crate::config::schedule(&spec, "--t-end", "--t-end")?;
+            crate::parse::schedule(&spec, "--t-end", "--t-end")?;
             return Ok((Ladder::PerMethod, t_end));
         }
         // The end time as read (its shortest round-trip text), for `resolve` to read again.
@@ -219,7 +224,7 @@ pub fn preset_settings(
     let name = system.or(preset.map(|p| p.system)).unwrap_or(default);
     let info = pendula::model::find(name)?;
     let mut settings = match preset {
-        Some(p) => crate::config::preset_settings(info, p)?,
+        Some(p) => crate::parse::preset_settings(info, p)?,
         None => Vec::new(),
     };
     settings.extend(parse_settings(info, set)?);
@@ -252,7 +257,7 @@ pub fn methods(list: Option<&str>, model: &dyn DynModel, max_h: Option<f64>) -> 
                 if methods[..i].iter().any(|n| n.name == m.name) {
                     bail!(
                         "invalid --methods `{}`: {} is listed twice; list each method once",
-                        crate::config::clip(text),
+                        crate::parse::clip(text),
                         m.name
                     );
                 }
@@ -675,7 +680,7 @@ impl ProgressLines {
             None => now.duration_since(self.start) >= Self::QUIET,
             Some(t) => now.duration_since(t) >= Self::EVERY,
         };
-        if due && !text.trim().is_empty() && !crate::config::quiet() {
+        if due && !text.trim().is_empty() && !crate::parse::quiet() {
             *last = Some(now);
             use std::io::Write;
             writeln!(std::io::stderr(), "{}", text.trim_end())?;
@@ -761,5 +766,41 @@ pub fn short(v: f64) -> String {
         format!("{v:.3e}")
     } else {
         format!("{v:.4}")
+    }
+}
+
+/// Which steps each method runs.
+#[derive(Debug, Clone)]
+pub enum Ladder {
+    /// The same steps for every method (given on the command line).
+    Given(Vec<f64>),
+    /// Each method's default ladder ([`analysis::method_ladder`]).
+    PerMethod,
+}
+
+/// The horizon on defaults: the system's `study_periods` times its time scale.
+pub fn default_t_end(values: &Values) -> f64 {
+    analysis::study_horizon(values)
+}
+
+/// The steps `method` runs on `values` under `ladder`.
+pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) -> Vec<f64> {
+    match ladder {
+        Ladder::Given(hs) => hs.clone(),
+        Ladder::PerMethod => analysis::method_ladder(method, values.build().time_scale(), t_end),
+    }
+}
+
+/// The library's reason for a failed or refused run, or the error itself when it is not
+/// one a study reports per method.
+pub fn refusal(e: anyhow::Error) -> Result<String> {
+    match e.downcast_ref::<pendula::Error>() {
+        Some(
+            pendula::Error::NonFinite { .. }
+            | pendula::Error::NewtonDidNotConverge { .. }
+            | pendula::Error::InvalidValue { .. }
+            | pendula::Error::UnmetRequirement { .. },
+        ) => Ok(e.to_string()),
+        _ => Err(e),
     }
 }

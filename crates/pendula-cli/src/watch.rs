@@ -10,6 +10,7 @@ use pendula::checkpoint::{Snapshot, Words};
 use pendula::events::EventLocator;
 use pendula::observe::{Every, Flow, Observer, Resample, Sample, Stop};
 
+use crate::output::RowFailure;
 use crate::sink::Sink;
 
 /// Writes the states it is shown as rows (t, state, energy), and keeps them for `--plot`.
@@ -34,27 +35,6 @@ impl Observer for Writer<'_> {
         }
         self.rows += 1;
         ControlFlow::Continue(())
-    }
-}
-
-/// A row of the trajectory that could not be written: the sink's error, as the cause of the
-/// run's `pendula::Error::Observer`. A type of its own, so that [`WriteError::find`] can
-/// reach the write that failed through it (an `anyhow::Error` made into a boxed error hides
-/// its own type).
-///
-/// [`WriteError::find`]: crate::output::WriteError::find
-#[derive(Debug)]
-pub(crate) struct RowFailure(pub(crate) anyhow::Error);
-
-impl std::fmt::Display for RowFailure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        self.0.fmt(f)
-    }
-}
-
-impl std::error::Error for RowFailure {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.0.source()
     }
 }
 

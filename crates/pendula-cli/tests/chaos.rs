@@ -2,25 +2,11 @@
 //! counts, bad input), `lyapunov` (summary keys, spectrum, presets) and bad input, which
 //! must exit with 2 and leave no file.
 
-use std::path::Path;
-
-use assert_cmd::Command;
 use ndarray::{ArrayD, IxDyn};
 use ndarray_npy::ReadNpyExt;
 use tempfile::TempDir;
 
-fn pendula(dir: &Path, args: &[&str]) -> assert_cmd::assert::Assert {
-    Command::cargo_bin("pendula").unwrap().current_dir(dir).args(args).assert()
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
+use crate::util::{files, json, pendula};
 
 /// Runs `args` in an empty directory: exit code 2 and nothing written; returns stderr.
 fn refused(args: &[&str]) -> String {
@@ -28,10 +14,6 @@ fn refused(args: &[&str]) -> String {
     let out = pendula(dir.path(), args).code(2);
     assert!(files(dir.path()).is_empty(), "{args:?} left files");
     String::from_utf8_lossy(&out.get_output().stderr).into_owned()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 #[test]

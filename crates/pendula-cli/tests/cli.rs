@@ -6,25 +6,10 @@
 
 use std::path::Path;
 
-use assert_cmd::Command;
 use predicates::prelude::*;
 use tempfile::TempDir;
 
-fn pendula(dir: &Path) -> Command {
-    let mut cmd = Command::cargo_bin("pendula").unwrap();
-    cmd.current_dir(dir);
-    cmd
-}
-
-/// Files in `dir` (names), to check nothing was left behind.
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
+use crate::util::{files, pendula_in, svg_texts};
 
 /// `simulate double --method rk4` takes the ensemble engine's single-trajectory kernel
 /// (polynomial sine/cosine): at t = 10 s it is within 1e-10 of the bench's C reference (glibc;
@@ -33,7 +18,7 @@ fn files(dir: &Path) -> Vec<String> {
 #[test]
 fn fast_rk4_path_agrees_with_the_c_reference() {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path())
+    let out = pendula_in(dir.path())
         .args(["simulate", "double", "--method", "rk4", "--dt", "1e-3", "--t-end", "10", "--every", "0"])
         .args(["--summary", "-"])
         .assert()
@@ -61,7 +46,7 @@ fn fast_rk4_path_agrees_with_the_c_reference() {
 #[test]
 fn rk4_integrates_a_huge_angle() {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path())
+    let out = pendula_in(dir.path())
         .args(["simulate", "double", "--set", "theta1=1e17", "--method", "rk4", "--steps", "1000"])
         .args(["--dt", "1e-3", "--summary", "-"])
         .assert()
@@ -83,7 +68,7 @@ fn rk4_integrates_a_huge_angle() {
 #[test]
 fn default_run_writes_trajectory_csv() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .arg("simulate")
         .assert()
         .success()
@@ -103,7 +88,7 @@ fn default_run_writes_trajectory_csv() {
 #[test]
 fn summary_json_has_the_documented_keys() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "pendulum", "--method", "verlet", "--dt", "0.01", "--t-end", "2.005"])
         .args(["--set", "theta=170deg", "--every", "0", "--summary", "s.json"])
         .assert()
@@ -130,7 +115,7 @@ fn summary_json_has_the_documented_keys() {
 #[test]
 fn adaptive_run_reports_accepted_and_rejected_steps() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args([
             "simulate", "double", "--method", "dopri5", "--rtol", "1e-10", "--atol", "1e-10", "--t-end", "10",
         ])
@@ -156,7 +141,7 @@ fn adaptive_run_reports_accepted_and_rejected_steps() {
 #[test]
 fn events_are_listed_in_the_summary() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "pendulum", "--set", "theta=170deg", "--t-end", "12", "--event", "zero:theta"])
         .args(["--every", "0", "--summary", "s.json"])
         .assert()
@@ -170,7 +155,7 @@ fn events_are_listed_in_the_summary() {
     assert!((period / 4.893_524_274_105_486 - 1.0).abs() < 1e-9, "{period}");
     assert!(events[0]["state"]["theta"].as_f64().unwrap().abs() < 1e-10);
 
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "double", "--t-end", "30", "--event", "flip", "--stop-on-event"])
         .args(["--every", "0", "--summary", "f.json"])
         .assert()
@@ -189,7 +174,7 @@ fn events_are_listed_in_the_summary() {
 #[test]
 fn tao_binding_is_a_checked_option() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args([
             "simulate",
             "double",
@@ -208,7 +193,7 @@ fn tao_binding_is_a_checked_option() {
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("a.json")).unwrap()).unwrap();
     assert_eq!(a["binding"], 200.0);
     assert!(a["energy"]["max_abs_error"].as_f64().unwrap() < 1e-3);
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "double", "--method", "tao-2", "--binding", "50", "--dt", "0.01", "--t-end", "1"])
         .args(["--every", "0", "--summary", "b.json"])
         .assert()
@@ -228,7 +213,7 @@ fn tao_binding_is_a_checked_option() {
 #[test]
 fn dop853_events_give_the_period_with_the_summary_on_stdout() {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path())
+    let out = pendula_in(dir.path())
         .args(["simulate", "pendulum", "--set", "theta=170deg", "--method", "dop853", "--rtol", "1e-12"])
         .args(["--atol", "1e-12", "--t-end", "12", "--event", "zero:theta", "--every", "0", "--summary", "-"])
         .assert()
@@ -251,7 +236,7 @@ fn dop853_events_give_the_period_with_the_summary_on_stdout() {
 #[test]
 fn npy_output_has_rows_and_columns() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "oscillator", "--steps", "100", "--every", "10", "--out", "x.npy"])
         .assert()
         .success();
@@ -269,7 +254,7 @@ fn stdout_output_and_scenario_with_override() {
         "system = \"double\"\nmethod = \"verlet\"\ndt = 0.01\nsteps = 10\n[set]\ntheta1 = \"90deg\"\nm2 = 2\n",
     )
     .unwrap();
-    let out = pendula(dir.path())
+    let out = pendula_in(dir.path())
         .args([
             "simulate",
             "--scenario",
@@ -301,12 +286,12 @@ fn stdout_output_and_scenario_with_override() {
 #[test]
 fn list_shows_systems_and_methods() {
     let dir = TempDir::new().unwrap();
-    pendula(dir.path()).args(["list", "systems"]).assert().success().stdout(
+    pendula_in(dir.path()).args(["list", "systems"]).assert().success().stdout(
         predicate::str::contains("double")
             .and(predicate::str::contains("m/s^2"))
             .and(predicate::str::contains("120deg")),
     );
-    pendula(dir.path()).args(["list", "methods"]).assert().success().stdout(
+    pendula_in(dir.path()).args(["list", "methods"]).assert().success().stdout(
         predicate::str::contains("symplectic-euler")
             .and(predicate::str::contains("verlet"))
             .and(predicate::str::contains("rk4")),
@@ -325,7 +310,7 @@ fn rejects_with(args: &[&str], needles: &[&str], code: i32, setup: &[(&str, &str
         std::fs::write(dir.path().join(name), text).unwrap();
     }
     let before = files(dir.path());
-    let assert = pendula(dir.path()).args(args).assert().code(code);
+    let assert = pendula_in(dir.path()).args(args).assert().code(code);
     let stderr = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
     for needle in needles {
         assert!(stderr.contains(needle), "{args:?}: `{needle}` not in: {stderr}");
@@ -435,7 +420,7 @@ fn unwritable_output_paths() {
 fn output_path_that_is_a_directory() {
     let dir = TempDir::new().unwrap();
     std::fs::create_dir(dir.path().join("d.csv")).unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "--out", "d.csv"])
         .assert()
         .code(2)
@@ -484,7 +469,7 @@ fn non_finite_state_names_the_time_and_leaves_no_file() {
 fn failed_run_keeps_the_previous_file() {
     let dir = TempDir::new().unwrap();
     std::fs::write(dir.path().join("x.csv"), "precious").unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args([
             "simulate",
             "oscillator",
@@ -506,7 +491,7 @@ fn failed_run_keeps_the_previous_file() {
 /// Stderr of a run that must fail with `code`.
 fn stderr_of(args: &[&str], code: i32) -> String {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path()).args(args).assert().code(code);
+    let out = pendula_in(dir.path()).args(args).assert().code(code);
     String::from_utf8_lossy(&out.get_output().stderr).into_owned()
 }
 
@@ -553,7 +538,7 @@ fn unknown_names_suggest_the_closest_valid_name() {
 fn bare_angle_beyond_a_turn_warns_once() {
     let run = |set: &str| {
         let dir = TempDir::new().unwrap();
-        let out = pendula(dir.path())
+        let out = pendula_in(dir.path())
             .args(["simulate", "double", "--steps", "1", "--every", "0", "--set", set])
             .assert()
             .success();
@@ -568,7 +553,7 @@ fn bare_angle_beyond_a_turn_warns_once() {
     }
     let dir = TempDir::new().unwrap();
     std::fs::write(dir.path().join("s.toml"), "[set]\ntheta2 = -30\n").unwrap();
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "--scenario", "s.toml", "--steps", "1", "--every", "0"])
         .assert()
         .success()
@@ -596,7 +581,7 @@ fn non_finite_time_is_printed_short() {
 #[test]
 fn ref_resonance_peak_is_the_closed_form() {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path())
+    let out = pendula_in(dir.path())
         .args(["oscillator-regimes", "--out-dir", "r", "--summary", "r.json"])
         .assert()
         .success();
@@ -697,7 +682,7 @@ fn set_help_examples_belong_to_the_command() {
     ];
     let dir = TempDir::new().unwrap();
     for (command, examples) in commands {
-        let out = pendula(dir.path()).args([command, "--help"]).assert().success();
+        let out = pendula_in(dir.path()).args([command, "--help"]).assert().success();
         let help = String::from_utf8_lossy(&out.get_output().stdout)
             .split_whitespace()
             .collect::<Vec<_>>()
@@ -712,7 +697,7 @@ fn set_help_examples_belong_to_the_command() {
         for (example, system) in *examples {
             let mut args = vec!["simulate", system, "--steps", "1", "--every", "0"];
             args.extend(example.split(' '));
-            pendula(dir.path()).args(&args).assert().success();
+            pendula_in(dir.path()).args(&args).assert().success();
         }
     }
 }
@@ -722,7 +707,7 @@ fn set_help_examples_belong_to_the_command() {
 fn completions_name_the_subcommands() {
     let dir = TempDir::new().unwrap();
     for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
-        let out = pendula(dir.path()).args(["completions", shell]).assert().success();
+        let out = pendula_in(dir.path()).args(["completions", shell]).assert().success();
         let script = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
         for sub in ["simulate", "oscillator-regimes", "bifurcation", "completions", "method"] {
             assert!(script.contains(sub), "{shell}: no `{sub}`");
@@ -736,11 +721,11 @@ fn completions_name_the_subcommands() {
 #[test]
 fn man_pages_are_roff_for_every_command() {
     let dir = TempDir::new().unwrap();
-    let out = pendula(dir.path()).arg("man").assert().success();
+    let out = pendula_in(dir.path()).arg("man").assert().success();
     let page = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
     assert!(page.starts_with(".ie \\n(.g .ds Aq") || page.contains(".TH pendula 1"), "{page}");
     assert!(page.contains(".TH pendula 1") && page.contains("simulate"), "{page}");
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["man", "--out-dir", "man1"])
         .assert()
         .success()
@@ -752,7 +737,7 @@ fn man_pages_are_roff_for_every_command() {
         assert!(pages.contains(&name.to_owned()), "{name} not in {pages:?}");
     }
     // One page per command and nothing else (no temporary files).
-    let help = pendula(dir.path()).arg("--help").assert().success();
+    let help = pendula_in(dir.path()).arg("--help").assert().success();
     let help = String::from_utf8_lossy(&help.get_output().stdout).into_owned();
     let commands = help
         .split("Commands:")
@@ -772,7 +757,7 @@ fn man_pages_are_roff_for_every_command() {
 /// Runs `pendula` in `dir` with `args`, expecting success, and returns the JSON summary it
 /// printed on stdout (`--summary -`).
 fn summary_of(dir: &Path, args: &[&str]) -> serde_json::Value {
-    let out = pendula(dir).args(args).args(["--summary", "-"]).assert().success();
+    let out = pendula_in(dir).args(args).args(["--summary", "-"]).assert().success();
     serde_json::from_slice(&out.get_output().stdout).unwrap()
 }
 
@@ -822,7 +807,7 @@ fn fractal_flip_times_agree_with_simulate_flip_events() {
     let dir = TempDir::new().unwrap();
     for (a, b) in [(-3.0_f64, -3.0_f64), (3.0, 0.5), (-2.5, 3.0)] {
         let axis = |name: &str, c: f64| format!("{name}={}:{}:1", c - 0.01, c + 0.01);
-        pendula(dir.path())
+        pendula_in(dir.path())
             .args(["fractal", "--grid", &axis("theta1", a), "--grid", &axis("theta2", b), "--t-max", "5"])
             .args(["--out", "f.npy"])
             .assert()
@@ -855,7 +840,7 @@ fn fractal_flip_times_agree_with_simulate_flip_events() {
         assert!((fractal - event).abs() < 1e-9, "({a}, {b}): fractal {fractal} vs simulate {event}");
     }
     // Tao's map too: the lanes' θ' = ∂H/∂p at the ends of the step, as the scalar path shows.
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["fractal", "--method", "tao-4", "--dt", "0.004", "--t-max", "5", "--out", "t.npy"])
         .args(["--grid", "theta1=-3.01:-2.99:1", "--grid", "theta2=-3.01:-2.99:1"])
         .assert()
@@ -893,7 +878,7 @@ fn fractal_flip_times_agree_with_simulate_flip_events() {
 fn output_dt_writes_rows_on_the_grid_from_dense_output() {
     let dir = TempDir::new().unwrap();
     let run = |args: &[&str], out: &str| {
-        pendula(dir.path())
+        pendula_in(dir.path())
             .args(["simulate", "pendulum", "--set", "theta=2", "--t-end", "2.1"])
             .args(args)
             .args(["--out", out])
@@ -963,20 +948,23 @@ fn simulate_plot_and_pendula_plot_write_pictures() {
         let info = decoder.read_info().unwrap();
         (info.info().width, info.info().height)
     };
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["simulate", "double", "--t-end", "3", "--out", "t.csv", "--plot", "run.png"])
         .assert()
         .success();
     assert_eq!(size("run.png"), (960, 3 * 480));
-    pendula(dir.path()).args(["plot", "t.csv", "--phase", "--energy", "--out", "two.png"]).assert().success();
+    pendula_in(dir.path())
+        .args(["plot", "t.csv", "--phase", "--energy", "--out", "two.png"])
+        .assert()
+        .success();
     assert_eq!(size("two.png"), (960, 2 * 480));
-    pendula(dir.path()).args(["plot", "t.csv", "--y", "omega1", "--out", "one.svg"]).assert().success();
+    pendula_in(dir.path()).args(["plot", "t.csv", "--y", "omega1", "--out", "one.svg"]).assert().success();
     let svg = std::fs::read_to_string(dir.path().join("one.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("omega1"));
-    pendula(dir.path()).args(["simulate", "double", "--t-end", "1", "--out", "t.npy"]).assert().success();
-    pendula(dir.path()).args(["plot", "t.npy", "--phase"]).assert().success();
+    pendula_in(dir.path()).args(["simulate", "double", "--t-end", "1", "--out", "t.npy"]).assert().success();
+    pendula_in(dir.path()).args(["plot", "t.npy", "--phase"]).assert().success();
     assert_eq!(size("t-plot.png"), (960, 600));
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args([
             "fractal",
             "--grid",
@@ -990,18 +978,8 @@ fn simulate_plot_and_pendula_plot_write_pictures() {
         ])
         .assert()
         .success();
-    pendula(dir.path()).args(["plot", "f.npy"]).assert().success();
+    pendula_in(dir.path()).args(["plot", "f.npy"]).assert().success();
     assert_eq!(size("f-plot.png"), (900, 760));
-}
-
-/// The texts of an SVG picture (its title, axis labels, tick labels, legend and notes), each
-/// trimmed.
-fn svg_texts(path: &Path) -> Vec<String> {
-    let svg = std::fs::read_to_string(path).unwrap();
-    svg.split("<text")
-        .skip(1)
-        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim().to_owned())
-        .collect()
 }
 
 /// `plot` draws the tables of `compare` and `stability` as one bar per method (the method
@@ -1012,7 +990,7 @@ fn plot_draws_the_method_tables() {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
     let methods = ["euler", "rk4", "verlet", "tao-2"];
-    pendula(d)
+    pendula_in(d)
         .args([
             "compare",
             "pendulum",
@@ -1027,7 +1005,7 @@ fn plot_draws_the_method_tables() {
         ])
         .assert()
         .success();
-    pendula(d).args(["plot", "c/summary.csv", "--out", "compare.svg"]).assert().success();
+    pendula_in(d).args(["plot", "c/summary.csv", "--out", "compare.svg"]).assert().success();
     let texts = svg_texts(&d.join("compare.svg"));
     for m in &methods[..3] {
         assert!(texts.iter().any(|t| t == m), "{m} is a bar label: {texts:?}");
@@ -1038,13 +1016,16 @@ fn plot_draws_the_method_tables() {
         "{texts:?}"
     );
     // Another column on request; a text column is not one to draw.
-    pendula(d).args(["plot", "c/summary.csv", "--y", "drift_rate", "--out", "drift.svg"]).assert().success();
+    pendula_in(d)
+        .args(["plot", "c/summary.csv", "--y", "drift_rate", "--out", "drift.svg"])
+        .assert()
+        .success();
     assert!(svg_texts(&d.join("drift.svg")).iter().any(|t| t == "drift_rate"));
-    pendula(d).args(["plot", "c/summary.csv", "--y", "growth"]).assert().code(2).stderr(
+    pendula_in(d).args(["plot", "c/summary.csv", "--y", "growth"]).assert().code(2).stderr(
         predicate::str::contains("not a numeric column `growth`").and(predicate::str::contains("drift_rate")),
     );
 
-    pendula(d)
+    pendula_in(d)
         .args([
             "stability",
             "double",
@@ -1057,18 +1038,18 @@ fn plot_draws_the_method_tables() {
         ])
         .assert()
         .success();
-    pendula(d).args(["plot", "s/stability.csv", "--out", "stability.svg"]).assert().success();
+    pendula_in(d).args(["plot", "s/stability.csv", "--out", "stability.svg"]).assert().success();
     let texts = svg_texts(&d.join("stability.svg"));
     for m in methods {
         assert!(texts.iter().any(|t| t == m), "{m} is a bar label: {texts:?}");
     }
     assert!(texts.iter().any(|t| t.contains("refused")), "tao-2 is refused above 1/binding: {texts:?}");
 
-    pendula(d)
+    pendula_in(d)
         .args(["convergence", "oscillator", "--methods", "euler,rk4,verlet", "--out-dir", "v"])
         .assert()
         .success();
-    pendula(d).args(["plot", "v/convergence.csv", "--out", "convergence.svg"]).assert().success();
+    pendula_in(d).args(["plot", "v/convergence.csv", "--out", "convergence.svg"]).assert().success();
     let texts = svg_texts(&d.join("convergence.svg"));
     for m in &methods[..3] {
         assert_eq!(texts.iter().filter(|t| t == m).count(), 1, "{m} once in the legend: {texts:?}");
@@ -1082,7 +1063,7 @@ fn plot_draws_the_method_tables() {
 fn plot_names_grids_from_their_descriptions() {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
-    pendula(d)
+    pendula_in(d)
         .args([
             "fractal",
             "--grid",
@@ -1100,19 +1081,19 @@ fn plot_names_grids_from_their_descriptions() {
         serde_json::from_str(&std::fs::read_to_string(d.join("f.npy.json")).unwrap()).unwrap();
     assert_eq!(description["axis_units"], serde_json::json!(["rad", "rad"]));
     assert_eq!(description["units"][0], "s");
-    pendula(d).args(["plot", "f.npy", "--out", "f.svg"]).assert().success();
+    pendula_in(d).args(["plot", "f.npy", "--out", "f.svg"]).assert().success();
     let texts = svg_texts(&d.join("f.svg"));
     for label in ["θ₁ (rad)", "θ₂ (rad)", "time to first flip (s)"] {
         assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
     }
     assert!(!texts.iter().any(|t| t.contains("index")), "{texts:?}");
-    pendula(d).args(["plot", "f-converged.npy", "--out", "c.svg"]).assert().success();
+    pendula_in(d).args(["plot", "f-converged.npy", "--out", "c.svg"]).assert().success();
     let texts = svg_texts(&d.join("c.svg"));
     for label in ["θ₁ (rad)", "θ₂ (rad)", "converged (1) or not (0)"] {
         assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
     }
 
-    pendula(d)
+    pendula_in(d)
         .args([
             "sweep",
             "--grid",
@@ -1126,13 +1107,13 @@ fn plot_names_grids_from_their_descriptions() {
         ])
         .assert()
         .success();
-    pendula(d).args(["plot", "s.npy", "--y", "omega2", "--out", "s.svg"]).assert().success();
+    pendula_in(d).args(["plot", "s.npy", "--y", "omega2", "--out", "s.svg"]).assert().success();
     let texts = svg_texts(&d.join("s.svg"));
     for label in ["θ₁ (rad)", "ω₁ (rad/s)", "ω₂ (rad/s)"] {
         assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
     }
     // A dimensionless system's sweep says so, with the symbol its presets use.
-    pendula(d)
+    pendula_in(d)
         .args([
             "sweep",
             "driven-pendulum",
@@ -1147,7 +1128,7 @@ fn plot_names_grids_from_their_descriptions() {
         ])
         .assert()
         .success();
-    pendula(d).args(["plot", "g.npy", "--out", "g.svg"]).assert().success();
+    pendula_in(d).args(["plot", "g.npy", "--out", "g.svg"]).assert().success();
     let texts = svg_texts(&d.join("g.svg"));
     for label in ["drive amplitude g (dimensionless)", "q (dimensionless)", "θ (rad)"] {
         assert!(texts.iter().any(|t| t == label), "{label}: {texts:?}");
@@ -1209,10 +1190,10 @@ fn serve_prints_its_url_and_serves_the_page() {
     assert!(get("/app.js").contains("WebSocket"));
     assert!(get("/etc/passwd").starts_with("HTTP/1.1 404"), "no files served");
     // A busy port and a bad address: exit 2, named.
-    pendula(dir.path()).args(["serve", "--port", port]).assert().code(2).stderr(
+    pendula_in(dir.path()).args(["serve", "--port", port]).assert().code(2).stderr(
         predicate::str::contains(format!("127.0.0.1:{port}")).and(predicate::str::contains("--port")),
     );
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["serve", "--host", "localhost:80"])
         .assert()
         .code(2)
@@ -1275,7 +1256,7 @@ fn more_threads_than_cores_warn_and_give_the_same_bytes() {
     let mut outputs = Vec::new();
     for threads in [1, 2, cores + 1] {
         let out = format!("s{threads}.npy");
-        let run = pendula(dir.path())
+        let run = pendula_in(dir.path())
             .args(["sweep", "--grid", "theta1=0:3:24", "--grid", "theta2=0:3:16", "--t-end", "3"])
             .args(["--threads", &threads.to_string(), "--out", &out])
             .assert()
@@ -1288,7 +1269,7 @@ fn more_threads_than_cores_warn_and_give_the_same_bytes() {
     }
     assert!(outputs.windows(2).all(|w| w[0] == w[1]), "the same bytes on 1, 2 and {} threads", cores + 1);
     let most = 4 * cores;
-    pendula(dir.path())
+    pendula_in(dir.path())
         .args(["sweep", "--grid", "theta1=0:3:4", "--threads", &(most + 1).to_string()])
         .assert()
         .code(2)
@@ -1302,7 +1283,7 @@ fn warnings_quote_values_briefly() {
     let dir = TempDir::new().unwrap();
     let long = "1".repeat(60);
     for value in ["1e300", long.as_str()] {
-        let run = pendula(dir.path())
+        let run = pendula_in(dir.path())
             .args(["simulate", "pendulum", "--steps", "1", "--every", "0", "--out", "t.csv"])
             .args(["--set", &format!("theta={value}")])
             .output()
@@ -1328,7 +1309,7 @@ fn a_refusal_suggests_only_methods_that_run() {
         ("double", "m2=1", "yoshida-4"),
         ("pendulum", "damping=0.1", "tao-4"),
     ] {
-        let out = pendula(dir.path())
+        let out = pendula_in(dir.path())
             .args(["simulate", system, "--method", refused, "--set", set, "--steps", "10", "--every", "0"])
             .assert()
             .code(2);
@@ -1337,7 +1318,7 @@ fn a_refusal_suggests_only_methods_that_run() {
         let names: Vec<&str> = tried.split(" (").next().unwrap().split(", ").map(str::trim).collect();
         assert!(names.len() >= 2, "{stderr}");
         for name in &names {
-            pendula(dir.path())
+            pendula_in(dir.path())
                 .args(["simulate", system, "--method", name, "--set", set, "--t-end", "0.05", "--every", "0"])
                 .assert()
                 .success();
@@ -1394,7 +1375,7 @@ fn serve_takes_the_next_port_when_the_default_is_busy() {
             && stderr.contains(&format!("serving on port {port} instead")),
         "the move is said: {stderr:?}"
     );
-    pendula(dir.path()).args(["serve", "--port", &DEFAULT.to_string()]).assert().code(2).stderr(
+    pendula_in(dir.path()).args(["serve", "--port", &DEFAULT.to_string()]).assert().code(2).stderr(
         predicate::str::contains(format!("127.0.0.1:{DEFAULT}")).and(predicate::str::contains("--port")),
     );
 }

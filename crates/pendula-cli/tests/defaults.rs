@@ -1,24 +1,11 @@
 //! The study commands on their defaults, for every catalogued system: they finish, and every
 //! order they print is within ±0.3 of the declared one or carries a stated reason.
 
-use std::path::Path;
-
 use assert_cmd::Command;
 use pendula::model::CATALOGUE;
 use tempfile::TempDir;
 
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-/// The legend entries of an SVG figure: the text after each legend sample.
-fn svg_texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| t.split_once('>'))
-        .map(|(_, rest)| rest.split("</text>").next().unwrap_or("").trim().to_owned())
-        .collect()
-}
+use crate::util::{json, svg_texts};
 
 #[test]
 fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
@@ -42,7 +29,7 @@ fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
         } else {
             &["step too large: ", "saturated at round-off: ", "irregular: ", "did not converge", "non-finite"]
         };
-        let legends = svg_texts(&std::fs::read_to_string(dir.path().join("c/convergence.svg")).unwrap());
+        let legends = svg_texts(&dir.path().join("c/convergence.svg"));
         let mut fitted = 0;
         for (method, order) in orders {
             let declared = pendula::integrator::find(method).unwrap().order as f64;

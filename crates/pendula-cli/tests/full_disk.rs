@@ -10,21 +10,12 @@
 //! run. `report` is left out: it writes through the same study directories, but only after
 //! minutes of computation.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use tempfile::TempDir;
 
-/// Whether the tests run as root: geteuid would need unsafe code, which is denied.
-fn is_root() -> bool {
-    Command::new("id").arg("-u").output().is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-}
-
-fn run(command: &mut Command) {
-    let out = command.output().unwrap();
-    assert!(out.status.success(), "{command:?}: {}", String::from_utf8_lossy(&out.stderr));
-}
+use crate::util::{PRECIOUS, is_root, run, snapshot};
 
 /// A 64 KiB tmpfs mounted on `path`, unmounted when dropped (also when a test fails).
 struct Tmpfs(PathBuf);
@@ -65,30 +56,6 @@ impl Drop for Tmpfs {
             let _ = Command::new("umount").arg("-l").arg(&self.0).status();
         }
     }
-}
-
-const PRECIOUS: &[u8] = b"an earlier result, not to be touched\n";
-
-/// Every node under `dir` (relative path → contents, or its kind).
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            let rel = path.strip_prefix(root).unwrap().to_owned();
-            let meta = std::fs::symlink_metadata(&path).unwrap();
-            if meta.is_dir() {
-                out.insert(rel, b"<dir>".to_vec());
-                walk(root, &path, out);
-            } else if meta.is_file() {
-                out.insert(rel, std::fs::read(&path).unwrap());
-            } else {
-                out.insert(rel, b"<special>".to_vec());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
 }
 
 /// Runs `pendula args` in `dir`, expecting a full-disk failure naming `path`; the problems.

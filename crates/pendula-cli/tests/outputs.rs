@@ -4,7 +4,7 @@
 //! puts parseable JSON alone on stdout for every kind of command; a study directory re-run
 //! holds only the new run's files.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -12,9 +12,7 @@ use ndarray::Array2;
 use ndarray_npy::ReadNpyExt;
 use tempfile::TempDir;
 
-fn binary() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pendula"))
-}
+use crate::util::{PRECIOUS, binary, precious};
 
 /// Names of the files under `dir`, recursively, relative to it, sorted.
 fn tree(dir: &Path) -> Vec<String> {
@@ -60,16 +58,6 @@ fn interrupt(dir: &Path, args: &[&str], signal: &str) -> Option<i32> {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains(&format!("interrupted by SIG{signal}")), "{args:?}: {stderr}");
     out.status.code()
-}
-
-const PRECIOUS: &[u8] = b"an earlier result, not to be touched\n";
-
-/// A file `name` under `dir` with earlier content; its path.
-fn precious(dir: &Path, name: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    std::fs::write(&path, PRECIOUS).unwrap();
-    path
 }
 
 // 10^8 rows, some 15 GB of CSV: over the output limit, asked for on purpose (it is

@@ -12,19 +12,7 @@ use std::time::{Duration, Instant};
 
 use tempfile::TempDir;
 
-fn binary() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pendula"))
-}
-
-/// Names of the files in `dir`, sorted.
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
+use crate::util::{binary, files};
 
 /// Runs `pendula args` in `dir` to its end.
 fn run(dir: &Path, args: &[&str]) -> Output {

@@ -3,16 +3,9 @@
 
 use std::path::Path;
 
-use assert_cmd::Command;
 use tempfile::TempDir;
 
-fn pendula(dir: &Path, args: &[&str]) -> assert_cmd::assert::Assert {
-    Command::cargo_bin("pendula").unwrap().current_dir(dir).args(args).assert()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
+use crate::util::{json, pendula, svg_texts};
 
 fn header(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap().lines().next().unwrap().to_owned()
@@ -214,15 +207,6 @@ fn animate_writes_a_gif_with_one_frame_per_sample() {
     }
     // t = 0, 0.1, ..., 1.0 s.
     assert_eq!(frames, 11);
-}
-
-/// The texts of an SVG picture (title, axis labels, ticks, legend, notes), each trimmed.
-fn svg_texts(path: &Path) -> Vec<String> {
-    let svg = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    svg.split("<text")
-        .skip(1)
-        .map(|t| t.split_once('>').unwrap().1.split("</text>").next().unwrap().trim().to_owned())
-        .collect()
 }
 
 /// A table's header and rows.

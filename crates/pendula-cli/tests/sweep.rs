@@ -5,26 +5,14 @@
 
 use std::path::Path;
 
-use assert_cmd::Command;
 use ndarray::ArrayD;
 use ndarray_npy::ReadNpyExt;
 use tempfile::TempDir;
 
-fn pendula(dir: &Path, args: &[&str]) -> assert_cmd::assert::Assert {
-    Command::cargo_bin("pendula").unwrap().current_dir(dir).args(args).assert()
-}
+use crate::util::{files, pendula};
 
 fn load(path: &Path) -> ArrayD<f64> {
     ArrayD::<f64>::read_npy(std::fs::File::open(path).unwrap()).unwrap()
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 /// Two axes: shape (N2, N1, 4), the first axis fastest, at the cell centres; with a step of

@@ -14,8 +14,8 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Animation, Snapshot};
 
 use crate::args::{Defaults, EndArg, LargeArg, MethodArgs, SetArgs, SystemArg};
-use crate::config::parse_value;
 use crate::output::{AtomicFile, CreatedDirs, WatchedChild};
+use crate::parse::parse_value;
 use crate::study;
 
 #[derive(Debug, Clone, Args)]
@@ -68,7 +68,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let t_end = args.end.t_end(&DEFAULTS)?;
     let fps = match &args.fps {
         Some(text) => {
-            crate::config::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32
+            crate::parse::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32
         }
         None => 30,
     };
@@ -101,7 +101,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         bail!("invalid --compare {d}: must be finite");
     }
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
+    let schedule = crate::parse::schedule(&spec, "--dt", "--t-end")?;
     // What it costs: the runs, and the frames' bytes (GIF or MP4 keep the animation in
     // memory until it is written): the default animation's GIF takes 0.03 bytes a pixel,
     // counted here as 0.05.

@@ -14,8 +14,8 @@ use serde_json::json;
 
 use crate::args::{Defaults, PresetArg, SystemArg, ThreadsArg};
 use crate::commands::sweep::{parse_axis, refuse_set_and_swept};
-use crate::config::{f64_arg, parse_count};
 use crate::limits::{self, Cost, Estimate};
+use crate::parse::{f64_arg, parse_count};
 use crate::study::{self, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -76,7 +76,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     if !info.parameters.iter().any(|q| q.name == axis.name) {
         bail!(
             "invalid --param `{}`: `{}` is not a parameter of {system}",
-            crate::config::clip(param_text),
+            crate::parse::clip(param_text),
             axis.name
         );
     }

@@ -24,9 +24,9 @@ use serde_json::json;
 use pendula::error::Short;
 
 use crate::args::{Defaults, SystemArg};
-use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate, round};
-use crate::study::{self, Common, OutDir, num, short};
+use crate::parse::positive_arg;
+use crate::study::{self, Common, OutDir, num, refusal, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct CompareArgs {
@@ -169,7 +169,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     )?;
     match steps {
         Steps::Equal(h) => {
-            crate::config::schedule(&RunSpec { t0: 0.0, h, end: End::Time(t_end) }, "--dt", "--t-end")?;
+            crate::parse::schedule(&RunSpec { t0: 0.0, h, end: End::Time(t_end) }, "--dt", "--t-end")?;
         }
         Steps::EqualCost(n) if per_method > limits::MAX_STEPS as f64 => anyhow::bail!(
             "invalid --t-end {}: at {} evaluations per second it is more than 10^13 steps",
@@ -603,20 +603,6 @@ fn status(e: &anyhow::Error) -> &'static str {
     match e.downcast_ref::<pendula::Error>() {
         Some(pendula::Error::InvalidValue { .. } | pendula::Error::UnmetRequirement { .. }) => "refused",
         _ => "failed",
-    }
-}
-
-/// The library's reason for a failed or refused run, or the error itself when it is not
-/// one a study reports per method.
-pub fn refusal(e: anyhow::Error) -> Result<String> {
-    match e.downcast_ref::<pendula::Error>() {
-        Some(
-            pendula::Error::NonFinite { .. }
-            | pendula::Error::NewtonDidNotConverge { .. }
-            | pendula::Error::InvalidValue { .. }
-            | pendula::Error::UnmetRequirement { .. },
-        ) => Ok(e.to_string()),
-        _ => Err(e),
     }
 }
 

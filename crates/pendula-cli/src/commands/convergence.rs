@@ -17,8 +17,7 @@ use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_uni
 use serde_json::json;
 
 use crate::args::{Defaults, SystemArg};
-use crate::commands::compare::refusal;
-use crate::study::{self, Common, OutDir, StepRange, num, short};
+use crate::study::{self, Common, Ladder, OutDir, StepRange, default_t_end, num, refusal, short, steps_for};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -61,20 +60,6 @@ impl MethodConvergence {
             (e, Some(f)) => format!("{}; {f}", e.reason().unwrap_or_default()),
         }
     }
-}
-
-/// Which steps each method runs.
-#[derive(Debug, Clone)]
-pub enum Ladder {
-    /// The same steps for every method (given on the command line).
-    Given(Vec<f64>),
-    /// Each method's default ladder ([`analysis::method_ladder`]).
-    PerMethod,
-}
-
-/// The horizon on defaults: the system's `study_periods` times its time scale.
-pub fn default_t_end(values: &Values) -> f64 {
-    analysis::study_horizon(values)
 }
 
 /// What convergence runs on without a system named (its methods and steps are its own).
@@ -140,14 +125,6 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
     )?;
     Ok(())
-}
-
-/// The steps `method` runs on `values` under `ladder`.
-pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) -> Vec<f64> {
-    match ladder {
-        Ladder::Given(hs) => hs.clone(),
-        Ladder::PerMethod => analysis::method_ladder(method, values.build().time_scale(), t_end),
-    }
 }
 
 /// Errors and fitted orders of `methods`, against the exact solution or a dop853 reference

@@ -8,7 +8,7 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
-use crate::config::f64_arg;
+use crate::parse::f64_arg;
 use pendula::error::Short;
 
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
@@ -92,7 +92,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let h = args.stepping.dt(&DEFAULTS)?;
     let t_end = args.end.t_end(&DEFAULTS)?;
     let spec = RunSpec { t0: 0.0, h, end: End::Time(t_end) };
-    let schedule = crate::config::schedule(&spec, "--dt", "--t-end")?;
+    let schedule = crate::parse::schedule(&spec, "--dt", "--t-end")?;
     crate::limits::check(
         "divergence",
         args.common.large.allow_large,

@@ -22,12 +22,13 @@ use serde_json::json;
 use crate::args::{Defaults, LargeArg, MethodArgs, SetArgs, SummaryArg, ThreadsArg};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
-use crate::commands::sweep::{parse_axis, write_npy};
+use crate::commands::sweep::parse_axis;
+use crate::shards::write_npy;
 use pendula::error::Short;
 
-use crate::config::{f64_arg, parse_settings, positive_arg};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
+use crate::parse::{f64_arg, parse_settings, positive_arg};
 use crate::study::OutDir;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
@@ -164,7 +165,7 @@ fn write_shard(parsed: &Parsed, (k, n): (usize, usize), out: &Path, threads: usi
     let written = write_npy(&out_file, &[end - start, 2], &rows)?;
     let axis = |name: &str, a: &GridAxis| json!({"name": name, "lo": a.lo, "hi": a.hi, "n": a.n});
     let description = json!({
-        "pendula_sweep": crate::commands::sweep::SHARD_FORMAT,
+        "pendula_sweep": crate::shards::SHARD_FORMAT,
         "pendula": env!("CARGO_PKG_VERSION"),
         "command": "fractal",
         "system": "double",
@@ -185,7 +186,7 @@ fn write_shard(parsed: &Parsed, (k, n): (usize, usize), out: &Path, threads: usi
         "threads": threads,
         "wall_s": wall_s,
     });
-    crate::commands::sweep::write_json(&side_file, &description)?;
+    crate::shards::write_json(&side_file, &description)?;
     crate::study::Summary::open(None)?.write_then(&description, vec![out_file, side_file], |_| Ok(()))?;
     eprintln!(
         "fractal: pixels {start} to {end} (shard {k}/{n} of {pixels}) at dt = {} s and {} s on {threads} threads in {wall_s:.3} s -> {} and {}",
@@ -226,10 +227,7 @@ fn emit_slurm(args: &FractalArgs, parsed: &Parsed) -> Result<()> {
         .each("set", &args.set.items)
         .switch("allow-large", args.large.allow_large);
     // The script must draw this fractal: its arguments, parsed again, give the same one.
-    let again = match run.parse_again("fractal", &[])? {
-        crate::cli::Command::Fractal(a) => parse(&a)?,
-        _ => unreachable!("`pendula fractal` parses as fractal"),
-    };
+    let again = parse(&run.parse_again::<FractalArgs>("fractal", &[])?)?;
     if again.fingerprint() != parsed.fingerprint() || again.spec.tolerance != parsed.spec.tolerance {
         bail!("internal error: the Slurm script's arguments describe another fractal");
     }
@@ -319,7 +317,7 @@ fn parse(args: &FractalArgs) -> Result<Parsed> {
             method.name
         );
     };
-    crate::config::binding_step(method, h, "--dt")?;
+    crate::parse::binding_step(method, h, "--dt")?;
     let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     Ok(Parsed { spec, method, values })
 }
@@ -565,7 +563,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
         },
         "shape": [n2, n1],
     });
-    crate::commands::sweep::write_json(&described, &description)?;
+    crate::shards::write_json(&described, &description)?;
     let doc = json!({
         "system": "double", "method": method.name, "dt": h, "dt_check": h / 2.0, "t_max": t_max,
         "tolerance": tolerance,

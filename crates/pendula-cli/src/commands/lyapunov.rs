@@ -10,7 +10,7 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
 use crate::args::{Defaults, EndArg, MethodArgs, PresetArg, SystemArg};
-use crate::config::{f64_arg, positive_arg};
+use crate::parse::{f64_arg, positive_arg};
 use pendula::error::Short;
 
 use crate::study::{self, Common, OutDir, num};
@@ -93,7 +93,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let names =
         [("h", "--dt"), ("t_end", "--t-end"), ("transient", "--transient"), ("renormalise", "--renormalise")];
     let whole = pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(transient + t_end) };
-    crate::config::schedule(&whole, "--dt", "--t-end")?;
+    crate::parse::schedule(&whole, "--dt", "--t-end")?;
     // What it costs: the state and its `count` tangent vectors over the transient and the
     // averaging time, and the running estimate's rows (one per re-orthonormalisation).
     let steps = crate::limits::steps(transient + t_end, h) * (1 + count) as f64;
@@ -123,7 +123,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let summary = args.common.summary.open()?;
     let model = values.build();
     let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)
-        .map_err(|e| crate::config::flag_error(e, &names))?;
+        .map_err(|e| crate::parse::flag_error(e, &names))?;
 
     let names: Vec<String> = (1..=count).map(|j| format!("lambda{j}")).collect();
     let mut header = vec!["t"];

@@ -14,8 +14,8 @@ use ndarray_npy::ReadNpyExt;
 use serde_json::Value;
 
 use crate::args::LargeArg;
-use crate::commands::sweep::{SHARD_FORMAT, Written, checksum, read_description};
 use crate::output::{AtomicFile, claim_input};
+use crate::shards::{SHARD_FORMAT, Written, checksum, read_description};
 
 #[derive(Debug, Clone, Args)]
 pub struct MergeArgs {
@@ -30,7 +30,7 @@ pub struct MergeArgs {
 }
 
 /// One shard, as its description states it.
-pub(crate) struct Shard {
+pub struct Shard {
     pub path: PathBuf,
     pub fingerprint: Value,
     pub shape: Vec<usize>,
@@ -50,7 +50,7 @@ fn json_of(path: &Path) -> String {
 
 /// Reads and checks the description of the shard at `path` against itself: a known format,
 /// every field present, an offset and extent that are its shard's of the grid.
-pub(crate) fn describe(path: &Path) -> Result<Shard> {
+pub fn describe(path: &Path) -> Result<Shard> {
     let d = read_description(path)?;
     let json = json_of(path);
     match d.get("pendula_sweep").and_then(Value::as_u64) {
@@ -161,7 +161,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     }
     let out = AtomicFile::create(&args.out, "--out")?;
     let (shape, data, parts, _) = gather(&args.shards, args.large.allow_large)?;
-    crate::commands::sweep::write_npy(&out, &shape, &data)?;
+    crate::shards::write_npy(&out, &shape, &data)?;
     out.commit()?;
     eprintln!("merged {parts} shards into {} {:?}", args.out.display(), shape);
     Ok(())
@@ -311,7 +311,7 @@ pub(crate) fn check(out: &Path, fingerprint: &str, shape: &[usize], (k, n): (usi
     }
     // Another pendula may round differently in the last bits: its shard is computed again, so
     // that the merged array is one build's.
-    let version = crate::commands::sweep::read_description(out)?
+    let version = crate::shards::read_description(out)?
         .get("pendula")
         .and_then(serde_json::Value::as_str)
         .map(str::to_owned);

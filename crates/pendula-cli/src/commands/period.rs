@@ -11,7 +11,7 @@ use pendula_viz::{Figure, Kind, REFERENCE, Scale, method_style, palette};
 use serde_json::json;
 
 use crate::args::{Defaults, MethodArgs};
-use crate::config::f64_arg;
+use crate::parse::f64_arg;
 use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -52,15 +52,15 @@ pub fn run(args: &PeriodArgs) -> Result<()> {
     if !(5.0..180.0).contains(&max) {
         anyhow::bail!(
             "invalid --max-amplitude {}: must be from 5 (the first amplitude) to below 180 degrees; the period is of a libration, and at 180 the pendulum balances upright and never swings back",
-            crate::config::clip(text)
+            crate::parse::clip(text)
         );
     }
-    crate::config::refuse_settings(
+    crate::parse::refuse_settings(
         &args.common.set.items,
         &["theta", "omega"],
         "period releases the pendulum from rest at each amplitude (--max-amplitude); set its parameters only",
     )?;
-    crate::config::schedule(&pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }, "--dt", "--dt")?;
+    crate::parse::schedule(&pendula::RunSpec { t0: 0.0, h, end: pendula::End::Time(1.0) }, "--dt", "--dt")?;
     let amplitudes: Vec<f64> = (1..).map(|k| 5.0 * k as f64).take_while(|a| *a <= max + 1e-9).collect();
     // What it costs: each amplitude runs 2.5 of its exact periods.
     let pendulum = Pendulum::from_values(&study::values("pendulum", &args.common.set.items)?);

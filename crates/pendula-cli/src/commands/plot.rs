@@ -43,17 +43,6 @@ pub struct PlotArgs {
     pub large: LargeArg,
 }
 
-/// Checks that `path` names a PNG or SVG file; `flag` names the option.
-pub fn check_image_path(path: &Path, flag: &str) -> Result<()> {
-    if path == Path::new("-") {
-        bail!("invalid {flag} -: a picture is written to a file, not stdout; give FILE.png or FILE.svg");
-    }
-    match path.extension().and_then(|e| e.to_str()) {
-        Some("png" | "svg") => Ok(()),
-        _ => bail!("invalid {flag} `{}`: the format follows the extension; use .png or .svg", path.display()),
-    }
-}
-
 /// Rows of named columns, with what is known of them: units, which are angles, which
 /// position has which velocity, where time and energy are.
 #[derive(Debug, Clone)]
@@ -317,7 +306,7 @@ pub fn draw(panels: &[Figure], path: &Path) -> Result<Vec<u8>> {
 
 /// A grid from `sweep` or `fractal`: axes (from the JSON description beside the file, when
 /// there is one) and the values of each cell.
-pub(crate) struct Grid {
+pub struct Grid {
     /// (name, lo, hi, n) per axis, fastest first.
     axes: Vec<(String, f64, f64, usize)>,
     /// Column names; one unnamed column for a fractal.
@@ -345,7 +334,7 @@ fn description(path: &Path) -> Option<serde_json::Value> {
     }
     candidates.iter().find_map(|p| {
         // Larger than a description: not one of ours.
-        let text = crate::commands::sweep::read_capped(p, crate::limits::MAX_DESCRIPTION_BYTES).ok()?;
+        let text = crate::shards::read_capped(p, crate::limits::MAX_DESCRIPTION_BYTES).ok()?;
         let doc: serde_json::Value = serde_json::from_slice(&text).ok()?;
         doc.get("axes").and_then(|a| a.as_array()).is_some().then_some(doc)
     })
@@ -461,7 +450,7 @@ fn heatmap(grid: &Grid, column: usize, title: String) -> Result<Heatmap> {
 }
 
 /// What a file holds, read.
-pub(crate) enum Contents {
+pub enum Contents {
     Table(Trajectory),
     Grid(Grid),
     Categories(Categories),
@@ -471,7 +460,7 @@ pub(crate) enum Contents {
 /// `convergence`'s and `work-precision`'s tables): its numeric columns are drawn per name —
 /// one bar per name when each has one row, one line per name when names repeat — and its
 /// other text columns are notes.
-pub(crate) struct Categories {
+pub struct Categories {
     title: String,
     /// The first column's name (`method`).
     key: String,
@@ -632,15 +621,15 @@ fn categories(
     if numbers.is_empty() {
         bail!(
             "{title}: no numeric column to draw (the columns are {}, all text)",
-            names.iter().map(|n| crate::config::clip(n)).collect::<Vec<_>>().join(", ")
+            names.iter().map(|n| crate::parse::clip(n)).collect::<Vec<_>>().join(", ")
         );
     }
     let labels = records.iter().map(|r| field(r, 0)).collect();
     Ok(Contents::Categories(Categories { title, key: names[0].clone(), labels, numbers, texts }))
 }
 
-/// Reads `args.file` (the fuzz harness, `src/fuzz/`, calls it on generated files).
-pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
+/// Reads `args.file` (the fuzz harness, `tests/fuzz/`, calls it on generated files).
+pub fn read(args: &PlotArgs) -> Result<Contents> {
     let path = &args.file;
     let title =
         path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
@@ -677,8 +666,8 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                                 "{} row {} column {}: `{}` is not a number (plot draws numeric columns)",
                                 path.display(),
                                 r + 1,
-                                crate::config::clip(names.get(c).map_or("?", String::as_str)),
-                                crate::config::clip(f)
+                                crate::parse::clip(names.get(c).map_or("?", String::as_str)),
+                                crate::parse::clip(f)
                             )
                         })?,
                     };
@@ -808,7 +797,7 @@ pub(crate) fn read(args: &PlotArgs) -> Result<Contents> {
                         .chain((1..c - 1).map(|k| format!("y{k}")))
                         .chain(std::iter::once("energy".to_owned()))
                         .collect();
-                    if !crate::config::quiet() {
+                    if !crate::parse::quiet() {
                         eprintln!(
                             "note: {} has {c} columns, taken as t, y1 … y{}, energy; give --system NAME for names and units",
                             path.display(),
@@ -843,7 +832,7 @@ pub fn run(args: &PlotArgs) -> Result<()> {
         let stem = args.file.file_stem().map_or_else(|| "plot".into(), |s| s.to_string_lossy().into_owned());
         args.file.with_file_name(format!("{stem}-plot.png"))
     });
-    check_image_path(&out, "--out")?;
+    crate::parse::check_image_path(&out, "--out")?;
     if !args.file.exists() {
         bail!("cannot read {}: no such file", args.file.display());
     }
@@ -880,14 +869,14 @@ pub fn run(args: &PlotArgs) -> Result<()> {
 }
 
 /// What `plot` draws: a table's panels, or a grid's heat map.
-pub(crate) enum Picture {
+pub enum Picture {
     Panels(Vec<Figure>),
     Map(Heatmap),
 }
 
 /// The picture of `contents` that the flags ask for, checked and laid out, not yet drawn
 /// into `out`.
-pub(crate) fn picture(args: &PlotArgs, _out: &Path, contents: Contents) -> Result<Picture> {
+pub fn picture(args: &PlotArgs, _out: &Path, contents: Contents) -> Result<Picture> {
     Ok(match contents {
         Contents::Table(t) => {
             let mut panels = Vec::new();

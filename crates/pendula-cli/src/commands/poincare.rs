@@ -13,8 +13,8 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with
 use serde_json::json;
 
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
-use crate::config::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
 use crate::limits::{self, Cost, Estimate};
+use crate::parse::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
 use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -118,7 +118,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
             let tol = f64_arg("--tol", args.tol.as_deref(), 1e-10, "a tolerance")?;
             let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
             tol.validate()
-                .map_err(|e| crate::config::flag_error(e, &[("rtol", "--tol"), ("atol", "--tol")]))?;
+                .map_err(|e| crate::parse::flag_error(e, &[("rtol", "--tol"), ("atol", "--tol")]))?;
             Stepping::Adaptive(tol)
         }
         (None, _) => bail!("--method {} takes fixed steps: give --dt", method.name),

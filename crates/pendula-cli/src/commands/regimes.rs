@@ -57,7 +57,7 @@ const MAX_NATURAL_FREQUENCY: f64 = 0.1 / H;
 /// step, and the runs (each waits 25 e-folds of its transient, 500/ω₀ s at ζ = 0.05) within
 /// the limits.
 fn check(args: &RegimesArgs) -> Result<()> {
-    crate::config::refuse_settings(
+    crate::parse::refuse_settings(
         &args.common.set.items,
         &["x", "v", "c", "drive_amplitude", "drive_frequency"],
         "oscillator-regimes sets the start, the damping and the drive itself; set k and m only",

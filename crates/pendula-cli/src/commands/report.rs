@@ -14,10 +14,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use base64::Engine as _;
-use clap::{Args, Parser};
+use clap::Args;
 use serde_json::Value;
 
-use crate::cli::Cli;
 use crate::study::{OutDir, QUIET, short};
 
 #[derive(Debug, Clone, Args)]
@@ -74,9 +73,13 @@ pub static GALLERY: &[GalleryEntry] = &[
     GalleryEntry { name: "chaos.gif", command: "animate double --compare 1e-3 --t-end 12 --fps 20 --size 400x400", file: "animation.gif" },
 ];
 
+/// Parses and runs one command line (`pendula ARGS...`) as the binary would. The dispatcher
+/// above the commands passes it in: the report is one of the commands it runs.
+pub type RunLine = fn(&[String]) -> Result<()>;
+
 /// Runs `command` (after `pendula`) with its outputs in `dir`; returns its summary, if it
 /// writes one.
-fn run_in(command: &str, dir: &Path) -> Result<Option<Value>> {
+fn run_in(run_line: RunLine, command: &str, dir: &Path) -> Result<Option<Value>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut args: Vec<String> =
         std::iter::once("pendula".to_owned()).chain(command.split_whitespace().map(str::to_owned)).collect();
@@ -88,8 +91,7 @@ fn run_in(command: &str, dir: &Path) -> Result<Option<Value>> {
         args.extend(["--out-dir".into(), dir.display().to_string()]);
         args.extend(["--summary".into(), summary.display().to_string()]);
     }
-    let cli = Cli::try_parse_from(&args).map_err(|e| anyhow::anyhow!("report: `pendula {command}`: {e}"))?;
-    crate::dispatch(&cli.command).with_context(|| format!("report: `pendula {command}`"))?;
+    run_line(&args).with_context(|| format!("report: `pendula {command}`"))?;
     if animate {
         return Ok(None);
     }
@@ -115,6 +117,8 @@ struct Page {
     runs: Vec<(String, Option<Value>)>,
     /// The caption of the next table: it holds the data of the figure just shown.
     next_caption: Option<String>,
+    /// How a command is run.
+    run_line: RunLine,
 }
 
 /// The table that belongs to a figure: the numbers it is drawn from or that it shows.
@@ -178,7 +182,7 @@ impl Page {
         if let Some((_, s)) = self.runs.iter().find(|(c, _)| c == command) {
             return Ok(s.clone());
         }
-        let s = run_in(command, &self.dir.join(slug(command)))?;
+        let s = run_in(self.run_line, command, &self.dir.join(slug(command)))?;
         self.runs.push((command.to_owned(), s.clone()));
         Ok(s)
     }
@@ -276,7 +280,7 @@ impl Drop for Quiet {
     }
 }
 
-pub fn run(args: &ReportArgs) -> Result<()> {
+pub fn run(args: &ReportArgs, run_line: RunLine) -> Result<()> {
     if args.gallery_list {
         for entry in GALLERY {
             println!("{}\tpendula {}", entry.name, entry.command);
@@ -284,7 +288,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         return Ok(());
     }
     if let Some(dir) = &args.gallery {
-        return gallery(dir);
+        return gallery(dir, run_line);
     }
     let start = Instant::now();
     let mut out = OutDir::new(args.out_dir.as_deref(), "report")?;
@@ -297,6 +301,7 @@ pub fn run(args: &ReportArgs) -> Result<()> {
         figures: 0,
         runs: Vec::new(),
         next_caption: None,
+        run_line,
     };
     build(&mut page)?;
     drop(_quiet);
@@ -1111,7 +1116,7 @@ fn growth_rates(page: &mut Page, divergence_figure: usize) -> Result<()> {
 }
 
 /// Regenerates the README gallery into `dir`.
-fn gallery(dir: &Path) -> Result<()> {
+fn gallery(dir: &Path, run_line: RunLine) -> Result<()> {
     let created = crate::output::CreatedDirs::create(dir, "--gallery")?;
     crate::output::probe(dir, "--gallery")?;
     let work = tempfile::tempdir()?;
@@ -1120,7 +1125,7 @@ fn gallery(dir: &Path) -> Result<()> {
     for entry in GALLERY {
         let sub = work.path().join(slug(entry.command));
         if !done.contains(&entry.command) {
-            run_in(entry.command, &sub)?;
+            run_in(run_line, entry.command, &sub)?;
             done.push(entry.command);
         }
         let from = sub.join(entry.file);

@@ -41,7 +41,7 @@ pub fn run(args: &ResumeArgs) -> Result<()> {
     let path = checkpoint.path.clone();
     match command.as_str() {
         "simulate" => {
-            let mut a: crate::cli::SimulateArgs = checkpoint.get("args")?;
+            let mut a: crate::config::SimulateArgs = checkpoint.get("args")?;
             a.checkpoint = Some(path);
             a.summary.path = summary.or(a.summary.path);
             a.large.allow_large |= args.allow_large;

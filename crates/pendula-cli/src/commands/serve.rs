@@ -32,7 +32,7 @@ pub fn options(args: &ServeArgs) -> Result<pendula_web::Options> {
     let host: IpAddr = args.host.parse().map_err(|_| {
         anyhow::anyhow!(
             "invalid value {:?} for --host: an IP address, e.g. 127.0.0.1 or ::1",
-            crate::config::clip(&args.host)
+            crate::parse::clip(&args.host)
         )
     })?;
     if !(1..=10_000).contains(&args.max_sessions) {

@@ -7,8 +7,8 @@ use pendula_viz::{Bar, Bars, Figure, Scale, axis_label, method_color, with_unit}
 use serde_json::json;
 
 use crate::args::{Defaults, EndArg, SystemArg};
-use crate::config::positive_arg;
 use crate::limits::{self, Cost, Estimate};
+use crate::parse::positive_arg;
 use crate::study::{self, Common, OutDir, num, short};
 
 #[derive(Debug, Clone, Args)]
@@ -43,7 +43,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let bound =
         positive_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
-    crate::config::schedule(&spec, "--t-end", "--t-end")?;
+    crate::parse::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     // What it costs, at most: per method, the bisection's runs (both ends of the range, then

@@ -9,9 +9,8 @@ use pendula_viz::{Figure, Kind, Scale, method_style, with_unit};
 use serde_json::json;
 
 use crate::args::{Defaults, SystemArg};
-use crate::commands::compare::refusal;
-use crate::config::{f64_arg, parse_count};
-use crate::study::{self, Common, OutDir, StepRange, num, short};
+use crate::parse::{f64_arg, parse_count};
+use crate::study::{self, Common, OutDir, StepRange, num, refusal, short};
 use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
@@ -70,8 +69,7 @@ pub const DEFAULTS: Defaults =
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
-    let (ladder, t_end) =
-        args.steps.resolve_or_default(crate::commands::convergence::default_t_end(&values))?;
+    let (ladder, t_end) = args.steps.resolve_or_default(crate::study::default_t_end(&values))?;
     let tols = tolerances(args)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, None)?;
@@ -83,7 +81,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
             Scheme::Embedded(_) => {
                 tols.len() as f64 * crate::limits::adaptive_steps(t_end, period, f64::INFINITY)
             }
-            _ => crate::commands::convergence::steps_for(&values, m, &ladder, t_end)
+            _ => crate::study::steps_for(&values, m, &ladder, t_end)
                 .iter()
                 .map(|h| crate::limits::steps(t_end, *h))
                 .sum(),
@@ -91,7 +89,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         .sum();
     let any = methods.iter().any(|m| {
         matches!(m.scheme, Scheme::Embedded(_))
-            || !crate::commands::convergence::steps_for(&values, m, &ladder, t_end).is_empty()
+            || !crate::study::steps_for(&values, m, &ladder, t_end).is_empty()
     });
     if !any {
         bail!(
@@ -124,10 +122,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         let runs: Vec<(f64, bool)> = if let Scheme::Embedded(_) = method.scheme {
             tols.iter().map(|t| (*t, true)).collect()
         } else {
-            crate::commands::convergence::steps_for(&values, method, &ladder, t_end)
-                .into_iter()
-                .map(|h| (h, false))
-                .collect()
+            crate::study::steps_for(&values, method, &ladder, t_end).into_iter().map(|h| (h, false)).collect()
         };
         for (x, adaptive) in runs {
             let point = if adaptive {

@@ -3,7 +3,7 @@
 //! numbers that read as a result; parameters that make a study's numbers meaningless are
 //! refused with the reason (exit 2).
 
-use crate::harness::Case;
+use super::harness::Case;
 
 /// The files a study writes into `dir`, with the directory and its manifest.
 fn study_files(case: Case, dir: &str, command: &str, files: &[&str]) -> Case {
@@ -135,5 +135,5 @@ pub fn cases() -> Vec<Case> {
 
 #[test]
 fn failures() {
-    crate::harness::run(cases());
+    super::harness::run(cases());
 }

@@ -1,4 +1,4 @@
-//! The fuzz harness's end-to-end part (the in-process part is `src/fuzz/`): command lines
+//! The fuzz harness's end-to-end part (the in-process part is `tests/fuzz/`): command lines
 //! of every command, cheap valid requests mutated by proptest (a fixed seed) with hostile
 //! values and edited input files, run through the real binary, each in a fresh directory.
 //! Every run must end with exit 0, 1 or 2 — or, past its time, end on SIGTERM with 143 —
@@ -17,6 +17,8 @@ use proptest::prelude::*;
 use proptest::sample::{Index, select};
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 
+use crate::util::binary;
+
 /// How long a run may take before it is interrupted (SIGTERM): valid requests are cheap,
 /// but a mutation may make one long.
 const TIME_LIMIT: Duration = Duration::from_secs(2);
@@ -24,7 +26,7 @@ const TIME_LIMIT: Duration = Duration::from_secs(2);
 /// How long an interrupted run may take to clean up and exit.
 const GRACE: Duration = Duration::from_secs(10);
 
-/// Cheap valid requests, one or more per command (the in-process harness's, `src/fuzz/argv.rs`).
+/// Cheap valid requests, one or more per command (the in-process harness's, `tests/fuzz/argv.rs`).
 const BASELINES: &[&str] = &[
     "simulate --steps 100 --out t2.csv",
     "simulate pendulum --method dopri5 --t-end 1 --out t2.npy --summary s.json",
@@ -177,7 +179,7 @@ fn mutation(flags: Vec<String>) -> BoxedStrategy<Mutation> {
 fn flags() -> Vec<String> {
     let mut flags = Vec::new();
     for sub in BASELINES.iter().map(|b| b.split_whitespace().next().unwrap()) {
-        let out = Command::new(env!("CARGO_BIN_EXE_pendula")).args([sub, "--help"]).output().unwrap();
+        let out = binary().args([sub, "--help"]).output().unwrap();
         for word in String::from_utf8_lossy(&out.stdout).split_whitespace() {
             let word = word.trim_end_matches([',', '=']);
             if word.starts_with("--")
@@ -259,7 +261,7 @@ struct Ran {
 }
 
 fn run(argv: &[String], dir: &Path) -> Ran {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pendula"))
+    let mut child = binary()
         .args(argv)
         .current_dir(dir)
         .env("NO_COLOR", "1")
@@ -312,11 +314,7 @@ fn template() -> tempfile::TempDir {
         "sweep --grid theta1=0:1:4 --steps 10 --shard 1/2 --out s1.npy",
         "sweep --grid theta1=0:1:4 --steps 10 --shard 2/2 --out s2.npy",
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_pendula"))
-            .args(args.split_whitespace())
-            .current_dir(d)
-            .output()
-            .unwrap();
+        let out = binary().args(args.split_whitespace()).current_dir(d).output().unwrap();
         assert!(out.status.success(), "{args}: {}", String::from_utf8_lossy(&out.stderr));
     }
     dir

@@ -4,11 +4,12 @@
 //! state afterwards — by default exactly what the case's setup left there, byte for byte (no
 //! partial file, no temporary file, nothing lost).
 
-use std::collections::BTreeMap;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::path::Path;
+use std::process::Stdio;
 use std::time::{Duration, Instant};
+
+use crate::util::{binary, is_root, panic_text, snapshot};
 
 /// Wall-clock limit of one case.
 pub const TIME_LIMIT: Duration = Duration::from_secs(5);
@@ -123,39 +124,6 @@ impl Case {
     }
 }
 
-/// Every regular file under `dir` (relative path → contents); other kinds of node by kind.
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
-        let Ok(entries) = std::fs::read_dir(dir) else { return };
-        for entry in entries.flatten() {
-            let path = entry.path();
-            let rel = path.strip_prefix(root).unwrap().to_owned();
-            let Ok(meta) = std::fs::symlink_metadata(&path) else { continue };
-            if meta.is_dir() {
-                out.insert(rel, b"<dir>".to_vec());
-                walk(root, &path, out);
-            } else if meta.is_file() {
-                out.insert(rel, std::fs::read(&path).unwrap_or_default());
-            } else if meta.file_type().is_symlink() {
-                out.insert(rel, format!("<link {:?}>", std::fs::read_link(&path).ok()).into_bytes());
-            } else {
-                out.insert(rel, b"<special>".to_vec());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
-
-/// A failed check's message.
-fn panic_text(e: &(dyn std::any::Any + Send)) -> String {
-    e.downcast_ref::<String>()
-        .cloned()
-        .or_else(|| e.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-        .unwrap_or_default()
-}
-
 /// Whether `creates` (a path, or a directory ending in `/`) allows `path`.
 fn created(creates: &str, path: &Path) -> bool {
     match creates.strip_suffix('/') {
@@ -174,14 +142,6 @@ fn peak_kb(pid: u32) -> u64 {
                 .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
         })
         .unwrap_or(0)
-}
-
-/// Whether the tests run as root (`id -u` is 0): unsafe code, which geteuid needs, is denied.
-pub fn is_root() -> bool {
-    static ROOT: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ROOT.get_or_init(|| {
-        Command::new("id").arg("-u").output().is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-    })
 }
 
 /// A reader of a FIFO: opened read-write, so that neither the case's open nor this one
@@ -232,7 +192,7 @@ pub fn run_one(case: &Case) -> Option<String> {
     let before = snapshot(dir.path());
     let readers: Vec<FifoReader> =
         case.fifos.iter().map(|(p, _)| FifoReader::open(&dir.path().join(p))).collect();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_pendula"))
+    let mut child = binary()
         .args(&case.args)
         .current_dir(dir.path())
         .env("NO_COLOR", "1")

@@ -3,7 +3,7 @@
 //! amplitude a command cannot mean: refused (exit 2) with the text as typed, the flag the
 //! user gave, and what is allowed.
 
-use crate::harness::Case;
+use super::harness::Case;
 
 /// The cases of this class.
 pub fn cases() -> Vec<Case> {
@@ -130,7 +130,7 @@ pub fn cases() -> Vec<Case> {
             .says("bytes elided")
             .says("File name too long")
             .brief(4200),
-        // Found by the fuzz harness (src/fuzz): .npy headers that the claim and the reader
+        // Found by the fuzz harness (tests/fuzz): .npy headers that the claim and the reader
         // read differently, or that the reader's parser takes days over.
         Case::new("a .npy header giving its shape twice", "plot x.npy")
             .setup(|d| {
@@ -228,5 +228,5 @@ fn npy(header: &str, data: &[u8]) -> Vec<u8> {
 
 #[test]
 fn input() {
-    crate::harness::run(cases());
+    super::harness::run(cases());
 }

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::harness::Case;
+use super::harness::Case;
 
 /// A shard description (FILE.npy.json, as `sweep --shard` writes) with these fields.
 fn description(dir: &Path, name: &str, shape: &str, count: &str, shards: &str) {
@@ -219,5 +219,5 @@ pub fn cases() -> Vec<Case> {
 
 #[test]
 fn limits() {
-    crate::harness::run(cases());
+    super::harness::run(cases());
 }

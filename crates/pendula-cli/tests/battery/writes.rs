@@ -12,20 +12,13 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::harness::Case;
-
-/// An earlier result that a refused or failed run must leave as it was.
-const PRECIOUS: &[u8] = b"an earlier result, not to be touched\n";
+use super::harness::Case;
+use crate::util::{PRECIOUS, binary, run};
 
 fn precious(dir: &Path, name: &str) {
     let path = dir.join(name);
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
     std::fs::write(path, PRECIOUS).unwrap();
-}
-
-fn run(command: &mut Command) {
-    let out = command.output().unwrap();
-    assert!(out.status.success(), "{command:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
 /// A character device `name` (major, minor) in `dir`.
@@ -49,7 +42,7 @@ fn mkfifo(dir: &Path, name: &str) {
 
 /// `pendula ARGS` in `dir`, for a case's setup; it must succeed.
 fn pendula(dir: &Path, args: &str) {
-    run(Command::new(env!("CARGO_BIN_EXE_pendula")).args(args.split_whitespace()).current_dir(dir));
+    run(binary().args(args.split_whitespace()).current_dir(dir));
 }
 
 /// A small sweep of 6 cells, whole (`whole.npy`) and in three shards of 2 cells each
@@ -504,7 +497,7 @@ fn merge() -> Vec<Case> {
                 std::fs::write(path, &text[..text.len() / 2]).unwrap();
             })
             .says("invalid shard description p1.npy.json"),
-        // Found by the fuzz harness (src/fuzz): k x cells overflowed, a panic.
+        // Found by the fuzz harness (tests/fuzz): k x cells overflowed, a panic.
         Case::new("a description of a grid too large to count its slices", ALL)
             .setup(|d| {
                 shards(d);
@@ -629,5 +622,5 @@ fn checkpoints() -> Vec<Case> {
 
 #[test]
 fn writes() {
-    crate::harness::run(cases());
+    super::harness::run(cases());
 }

@@ -13,8 +13,8 @@ use serde_json::{Value, json};
 
 use super::argv::{COUNTS, NUMBERS, wild};
 use super::{claims, ordinary};
-use crate::cli::{Cli, Command};
-use crate::commands::plot::PlotArgs;
+use pendula_cli::cli::{Cli, Command};
+use pendula_cli::commands::plot::PlotArgs;
 
 /// A valid scenario, as the guide (docs/GUIDE.md) shows one.
 const SCENARIO: &str = "system = \"pendulum\"\nmethod = \"rk4\"\ndt = 0.01\nsteps = 10\nevery = 2\nout = \"t.csv\"\n\n[set]\ntheta = \"30deg\"\nl = 2\n";
@@ -150,9 +150,10 @@ impl Env {
 fn run_real(args: &[&str]) {
     let cli = Cli::try_parse_from(std::iter::once("pendula").chain(args.iter().copied()))
         .unwrap_or_else(|e| panic!("the setup `{}` does not parse: {e}", args.join(" ")));
-    crate::output::validate_only(false);
+    pendula_cli::output::validate_only(false);
     let _claims = claims();
-    crate::dispatch(&cli.command).unwrap_or_else(|e| panic!("the setup `{}` failed: {e:#}", args.join(" ")));
+    pendula_cli::dispatch(&cli.command)
+        .unwrap_or_else(|e| panic!("the setup `{}` failed: {e:#}", args.join(" ")));
 }
 
 /// An array as .npy bytes.
@@ -471,9 +472,9 @@ pub(super) fn scenario(cases: u32) -> Result<(), String> {
         unreachable!("simulate parses as simulate")
     };
     super::fuzz("scenario", cases, scenario_files(), |bytes| {
-        match crate::config::parse_scenario(bytes.clone(), "s.toml") {
+        match pendula_cli::config::parse_scenario(bytes.clone(), "s.toml") {
             Err(e) => ordinary(&e),
-            Ok(scenario) => match crate::config::simulate_with(&args, scenario) {
+            Ok(scenario) => match pendula_cli::config::simulate_with(&args, scenario) {
                 Ok(_) => Ok(()),
                 Err(e) => ordinary(&e),
             },
@@ -645,7 +646,7 @@ pub(super) fn npy(cases: u32) -> Result<(), String> {
 
 fn check_npy(bytes: &[u8]) -> Result<(), String> {
     use ndarray_npy::ReadNpyExt;
-    let claim = match crate::limits::npy_claim_from(Cursor::new(bytes), bytes.len() as u64, "x.npy") {
+    let claim = match pendula_cli::limits::npy_claim_from(Cursor::new(bytes), bytes.len() as u64, "x.npy") {
         Ok(claim) => claim,
         Err(e) => return ordinary(&e),
     };
@@ -667,7 +668,7 @@ fn check_npy(bytes: &[u8]) -> Result<(), String> {
     {
         return ordinary(&anyhow::anyhow!(
             "cannot read x.npy as a .npy of float64 or uint8: {}",
-            crate::config::clip(&e.to_string())
+            pendula_cli::parse::clip(&e.to_string())
         ));
     }
     Ok(())
@@ -753,7 +754,7 @@ impl Shard {
                 ShardEdit::Remove(key) => set(doc.as_mut().expect("a document"), key, None),
                 ShardEdit::Checksum => {
                     if let Some(d) = doc.as_mut() {
-                        let w = crate::commands::sweep::checksum(npy.as_slice()).expect("bytes in memory");
+                        let w = pendula_cli::shards::checksum(npy.as_slice()).expect("bytes in memory");
                         d["data"] = json!({"bytes": w.bytes, "crc32": format!("{:08x}", w.crc32)});
                     }
                 }
@@ -810,15 +811,15 @@ pub(super) fn shards(cases: u32) -> Result<(), String> {
             5 => &["b", "a", "b", "a"],
             _ => &["a", "b", "m"],
         };
-        let args = crate::commands::merge::MergeArgs {
+        let args = pendula_cli::commands::merge::MergeArgs {
             shards: names.iter().map(|n| dir.join(format!("{n}.npy"))).collect(),
             out: dir.join("m.npy"),
-            large: crate::args::LargeArg { allow_large: *allow_large },
+            large: pendula_cli::args::LargeArg { allow_large: *allow_large },
         };
-        crate::output::validate_only(false);
+        pendula_cli::output::validate_only(false);
         let _claims = claims();
-        let _outputs = crate::output::scope();
-        match crate::commands::merge::run(&args) {
+        let _outputs = pendula_cli::output::scope();
+        match pendula_cli::commands::merge::run(&args) {
             Ok(()) => Ok(()),
             Err(e) => ordinary(&e),
         }
@@ -1003,7 +1004,7 @@ pub(super) fn plot(cases: u32) -> Result<(), String> {
             energy: case.energy,
             system: case.system.clone(),
             out: Some(dir.join(if case.svg { "p.svg" } else { "p.png" })),
-            large: crate::args::LargeArg { allow_large: false },
+            large: pendula_cli::args::LargeArg { allow_large: false },
         };
         plot_checks(&args, case.draw)
     })
@@ -1012,16 +1013,18 @@ pub(super) fn plot(cases: u32) -> Result<(), String> {
 /// `plot`'s checks of `args.file`: read and laid out, or with `draw` the whole command.
 pub(super) fn plot_checks(args: &PlotArgs, draw: bool) -> Result<(), String> {
     if draw {
-        crate::output::validate_only(false);
+        pendula_cli::output::validate_only(false);
         let _claims = claims();
-        let _outputs = crate::output::scope();
-        return match crate::commands::plot::run(args) {
+        let _outputs = pendula_cli::output::scope();
+        return match pendula_cli::commands::plot::run(args) {
             Ok(()) => Ok(()),
             Err(e) => ordinary(&e),
         };
     }
     let out = args.out.clone().unwrap_or_else(|| Path::new("p.png").to_owned());
-    match crate::commands::plot::read(args).and_then(|c| crate::commands::plot::picture(args, &out, c)) {
+    match pendula_cli::commands::plot::read(args)
+        .and_then(|c| pendula_cli::commands::plot::picture(args, &out, c))
+    {
         Ok(_) => Ok(()),
         Err(e) => ordinary(&e),
     }

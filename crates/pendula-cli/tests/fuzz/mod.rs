@@ -1,7 +1,8 @@
 //! The fuzz harness (issue 12): proptest, with a fixed seed and a fixed budget, feeds
-//! generated and hostile input to every reader of user input, in process, and checks that
+//! generated and hostile input to every reader of user input, in process (through the
+//! library target, `pendula_cli`, whose test hooks it sets), and checks that
 //! none panics and that every refusal is an ordinary error: a message of at most
-//! [`crate::MAX_MESSAGE`] bytes, which the binary prints with exit 2 (or 1 for a numerical
+//! [`pendula_cli::MAX_MESSAGE`] bytes, which the binary prints with exit 2 (or 1 for a numerical
 //! failure). An abort (an allocation of a size read from input, a stack overflow) ends the
 //! test process, and fails the test as loudly.
 //!
@@ -9,23 +10,23 @@
 //!
 //! - `argv` ([`argv`]): command lines (random tokens; every subcommand with its flags and
 //!   hostile values; cheap valid requests with a few mutations) through the clap parser and
-//!   then [`crate::dispatch`], stopped at the command's first output
-//!   ([`crate::output::validate_only`]): everything a command checks before it writes has
+//!   then [`pendula_cli::dispatch`], stopped at the command's first output
+//!   ([`pendula_cli::output::validate_only`]): everything a command checks before it writes has
 //!   been checked, and nothing runs. What commands check after their first output is
 //!   called directly: `simulate`'s events, `plot`'s reading of its file, `merge`'s reading
 //!   of the shard descriptions.
 //! - `scenario` ([`files::scenario`]): `simulate --scenario` files (random bytes, valid
-//!   scenarios mutated, deep nesting, huge lines) through [`crate::config::parse_scenario`]
+//!   scenarios mutated, deep nesting, huge lines) through [`pendula_cli::config::parse_scenario`]
 //!   and, when read, the rest of `simulate`'s validation.
 //! - `npy` ([`files::npy`]): .npy files (headers built to lie: shapes beyond the data,
-//!   repeated keys, deep nesting, huge lengths) through [`crate::limits::npy_claim_from`]
+//!   repeated keys, deep nesting, huge lengths) through [`pendula_cli::limits::npy_claim_from`]
 //!   and then ndarray-npy's reader, as `plot` and `merge` call it after the claim.
 //! - `shards` ([`files::shards`]): the shards of a real sweep and their descriptions,
-//!   mutated, through `merge` ([`crate::commands::merge::run`], which writes its output in
+//!   mutated, through `merge` ([`pendula_cli::commands::merge::run`], which writes its output in
 //!   a temporary directory).
 //! - `plot` ([`files::plot`]): CSV, .npy and JSON descriptions, mutated, through `plot`'s
 //!   reader and its panels; every 64th case also drawn and written
-//!   ([`crate::commands::plot::run`]).
+//!   ([`pendula_cli::commands::plot::run`]).
 //!
 //! Inputs are counted and the count printed (on the real stderr, past the test harness's
 //! capture). `PENDULA_FUZZ_CASES` sets the budget: 100 000 in all by default (CI, well under
@@ -42,6 +43,8 @@ use std::time::Instant;
 
 use proptest::strategy::Strategy;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestError, TestRng, TestRunner};
+
+use crate::util::panic_text;
 
 /// Inputs in all when `PENDULA_FUZZ_CASES` is not set.
 const DEFAULT_CASES: u64 = 100_000;
@@ -150,14 +153,6 @@ where
     }
 }
 
-/// A panic's message.
-fn panic_text(e: &(dyn std::any::Any + Send)) -> String {
-    e.downcast_ref::<String>()
-        .cloned()
-        .or_else(|| e.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-        .unwrap_or_else(|| "(no message)".to_owned())
-}
-
 /// An input for a failure's message: its first 2000 characters.
 fn clip_debug(input: &impl std::fmt::Debug) -> String {
     let text = format!("{input:?}");
@@ -181,13 +176,17 @@ thread_local! {
 /// in it, short enough to read.
 fn ordinary(err: &anyhow::Error) -> Result<(), String> {
     refused();
-    let text = crate::message(err);
+    let text = pendula_cli::message(err);
     if text.trim().is_empty() {
         return Err(format!("an error with an empty message: {err:?}"));
     }
-    if text.len() > crate::MAX_MESSAGE {
+    if text.len() > pendula_cli::MAX_MESSAGE {
         let head: String = text.chars().take(300).collect();
-        return Err(format!("a message of {} bytes (at most {}): {head}…", text.len(), crate::MAX_MESSAGE));
+        return Err(format!(
+            "a message of {} bytes (at most {}): {head}…",
+            text.len(),
+            pendula_cli::MAX_MESSAGE
+        ));
     }
     if text.contains("panicked") {
         return Err(format!("a message about a panic: {text}"));
@@ -206,8 +205,8 @@ fn claims() -> MutexGuard<'static, ()> {
 /// Sets this thread up for fuzzing: warnings silenced (millions of them would fill the
 /// captured output), commands run to the end unless a target stops them.
 fn quiet_thread() {
-    crate::config::QUIET_WARNINGS.set(true);
-    crate::output::validate_only(false);
+    pendula_cli::parse::QUIET_WARNINGS.set(true);
+    pendula_cli::output::validate_only(false);
 }
 
 #[test]

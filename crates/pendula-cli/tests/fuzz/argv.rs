@@ -11,7 +11,7 @@ use proptest::strategy::{BoxedStrategy, Union};
 
 use super::files::Env;
 use super::{claims, ordinary};
-use crate::cli::{Cli, Command};
+use pendula_cli::cli::{Cli, Command};
 
 /// Texts a number may be given as: the edges of f64 and of the counts' ranges, and what
 /// Rust's parser reads silently as something else.
@@ -728,7 +728,7 @@ fn check(env: &Env, cli: &mut clap::Command, argv: &[String], outcomes: &mut Out
         }
         // A server has no output to stop at, and never ends: its validation is a function.
         Command::Serve(args) => {
-            return match crate::commands::serve::options(args) {
+            return match pendula_cli::commands::serve::options(args) {
                 Ok(_) => {
                     outcomes.accepted += 1;
                     Ok(())
@@ -741,7 +741,7 @@ fn check(env: &Env, cli: &mut clap::Command, argv: &[String], outcomes: &mut Out
         }
         // `simulate --every 0` has no output to stop at: its validation is a function.
         Command::Simulate(args) => {
-            return match crate::config::simulate(args) {
+            return match pendula_cli::config::simulate(args) {
                 Ok(_) => {
                     outcomes.accepted += 1;
                     after_first_output(&command)
@@ -754,15 +754,15 @@ fn check(env: &Env, cli: &mut clap::Command, argv: &[String], outcomes: &mut Out
         }
         _ => {}
     }
-    crate::output::validate_only(true);
+    pendula_cli::output::validate_only(true);
     let result = {
         let _claims = claims();
-        crate::dispatch(&command)
+        pendula_cli::dispatch(&command)
     };
-    crate::output::validate_only(false);
+    pendula_cli::output::validate_only(false);
     match result {
         Ok(()) => Err("the command ran to its end without an output: its outputs bypass output.rs".into()),
-        Err(e) if e.chain().any(|c| c.is::<crate::output::Validated>()) => {
+        Err(e) if e.chain().any(|c| c.is::<pendula_cli::output::Validated>()) => {
             outcomes.accepted += 1;
             after_first_output(&command)
         }
@@ -779,7 +779,7 @@ fn after_first_output(command: &Command) -> Result<(), String> {
     match command {
         Command::Simulate(args) => {
             let config =
-                crate::config::simulate(args).map_err(|e| format!("accepted, then refused: {e:#}"))?;
+                pendula_cli::config::simulate(args).map_err(|e| format!("accepted, then refused: {e:#}"))?;
             let model = config.values.build();
             for e in &args.events {
                 if let Err(err) = pendula::events::EventSpec::parse(e, &*model, args.stop_on_event) {
@@ -791,7 +791,7 @@ fn after_first_output(command: &Command) -> Result<(), String> {
         Command::Plot(args) => super::files::plot_checks(args, false),
         Command::Merge(args) => {
             for path in &args.shards {
-                if let Err(err) = crate::commands::merge::describe(path) {
+                if let Err(err) = pendula_cli::commands::merge::describe(path) {
                     ordinary(&err)?;
                 }
             }
