@@ -128,7 +128,7 @@ impl StudyCommand {
             let value = match p.kind {
                 Kind::System { .. } | Kind::Method { .. } => Input::Name(text.clone()),
                 Kind::Real { .. } | Kind::Count { .. } => {
-                    Input::Number(crate::config::parse_value(&flag(p), text, None)?)
+                    Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }
             };
             if let Kind::System { .. } = p.kind {
@@ -145,7 +145,7 @@ impl StudyCommand {
                 anyhow::anyhow!("invalid --set: {} runs no system whose values it could set", self.study.name)
             })?;
             let info = pendula::model::find(name)?;
-            inputs.set = crate::config::parse_settings(info, &common.set.items)?;
+            inputs.set = crate::parse::parse_settings(info, &common.set.items)?;
         }
         Ok(inputs)
     }
@@ -165,7 +165,7 @@ impl StudyCommand {
                 let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
                 anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
             }
-            e => crate::config::flag_error(e, &names),
+            e => crate::parse::flag_error(e, &names),
         }
     }
 }

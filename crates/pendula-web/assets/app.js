@@ -3,7 +3,7 @@
 // commands. This entry module routes the server's messages to the modules under js/ —
 // util (helpers), state (what the page knows), messages, connection, share, tabs, drawing
 // (the pendulum), plots, one module per view (view-sim, view-graphs, view-fractal,
-// view-export) and views (redrawing one) — and runs the drawing loop.
+// view-export, view-studies) and views (redrawing one) — and runs the drawing loop.
 import { $, isNum, fmt, el, fillOptions } from './js/util.js';
 import { lab, st, resetHistories, onGrowth, onSimFrame, timeUnit } from './js/state.js';
 import { showNotice, showError } from './js/messages.js';
@@ -15,6 +15,7 @@ import { applyConfig, onRaceChange, initSimControls, updateNumbers, drawEnergyPl
 import { drawGraphs, initGraphControls } from './js/view-graphs.js';
 import { onFractalFrame, fractalNote, drawFractal, fractalPixelClient, initFractal } from './js/view-fractal.js';
 import { exportFigure, initExports } from './js/view-export.js';
+import { onStudies, onStudyResult, onStudyRefused, initStudies } from './js/view-studies.js';
 
 // Config messages whose share must not replace the address's fragment (the defaults sent on
 // connecting, before the fragment's own configure is answered), and when the charts were
@@ -31,6 +32,7 @@ function handleMessage(msg) {
       onRefused(msg);
       break;
     case 'growth': onGrowth(msg); break;
+    case 'study': onStudyResult(msg); break;
     case 'run_failed':
       showError(`Run failed at t = ${fmt(msg.t)} ${timeUnit()}: ${msg.message}`);
       break;
@@ -51,6 +53,7 @@ function onHello(msg) {
   fillOptions($('system'), msg.systems.map((s) => [s.name, s.name, s.description]));
   fillOptions($('method'), msg.methods.map((m) => [m.name, `${m.title || m.name} (order ${m.order})`, m.name]));
   fillOptions($('fractal-method'), (msg.fractal_methods || ['rk4']).map((m) => [m, m, m]));
+  onStudies(msg);
   const race = $('race-methods');
   race.textContent = '';
   for (const m of msg.methods) {
@@ -103,6 +106,7 @@ function onRefused(msg) {
     if (lab.config.share) lab.config.share.speed = st.speedBefore;
     $('speed').value = st.speedBefore;
   }
+  if (msg.command === 'study') onStudyRefused();
   if (msg.command === 'fractal') $('fractal-info').textContent = 'The fractal was refused: see the message above.';
   if (lab.config && (msg.command === 'configure' || msg.command === 'set_state' || msg.command === null)) applyConfig(lab.config);
 }
@@ -140,6 +144,7 @@ initGraphControls();
 initDrag();
 initFractal();
 initExports();
+initStudies();
 showView('view-sim');
 connect({ text: handleMessage, binary: handleBinary });
 requestAnimationFrame(loop);

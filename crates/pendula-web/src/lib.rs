@@ -276,6 +276,7 @@ const SCRIPTS: &[(&str, &str)] = &[
     ("/js/view-fractal.js", include_str!("../assets/js/view-fractal.js")),
     ("/js/view-graphs.js", include_str!("../assets/js/view-graphs.js")),
     ("/js/view-sim.js", include_str!("../assets/js/view-sim.js")),
+    ("/js/view-studies.js", include_str!("../assets/js/view-studies.js")),
     ("/js/views.js", include_str!("../assets/js/views.js")),
 ];
 const STYLES: &str = include_str!("../assets/style.css");

@@ -8,7 +8,8 @@ export function showView(id) {
   st.view = id;
   for (const b of document.querySelectorAll('.tab')) b.classList.toggle('active', b.dataset.view === id);
   for (const s of document.querySelectorAll('.view')) s.hidden = s.id !== id;
-  if (id !== 'view-export') st.lastPictureView = id;
+  // The studies' pictures are the server's PNGs, saved from the page itself.
+  if (id !== 'view-export' && id !== 'view-studies') st.lastPictureView = id;
   $('export-png').textContent = `Picture (PNG) of the ${VIEW_NAMES[st.lastPictureView]} view`;
   st.plotsDirty = true;
   st.fractalDirty = true;

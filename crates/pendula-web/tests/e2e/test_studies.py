@@ -1,0 +1,35 @@
+"""The Studies view: every study of the library's registry, a form from its parameters, and
+its report — the same numbers and sentences as Python's and the CLI's."""
+
+import pendula
+
+from conftest import open_lab
+
+
+def test_a_study_runs_from_its_form_with_the_librarys_report(browser, server, shots):
+    page = open_lab(browser, server)
+    page.click("#tab-studies")
+    names = page.eval_on_selector_all("#study-name option", "os => os.map(o => o.value)")
+    assert names == [s["name"] for s in pendula._core.studies()]
+    page.select_option("#study-name", "energy-budget")
+    # The form shows each parameter's default, the library's, as its placeholder.
+    assert page.get_attribute("[data-param=t_end]", "placeholder") == "20 s"
+    assert page.get_attribute("[data-param=dt]", "placeholder") == "0.001 s"
+    page.fill("[data-param=t_end]", "2")
+    page.click("#study-run")
+    page.wait_for_function("lab.study && lab.study.study === 'energy-budget'", timeout=15000)
+    shown = page.eval_on_selector_all(".study-summary", "ps => ps.map(p => p.textContent)")
+    report = pendula.energy_budget(t_end=2)
+    assert shown == list(report.summary)
+    numbers = page.evaluate("Object.fromEntries(lab.study.numbers.map(n => [n.key, n.value]))")
+    assert numbers == dict(report.numbers)
+    page.wait_for_function("[...document.querySelectorAll('img.study-plot')].every(i => i.complete && i.naturalWidth > 0)")
+    assert page.eval_on_selector_all("img.study-plot", "is => is.length") == len(report.plots)
+    page.screenshot(path=str(shots / "studies.png"), full_page=True)
+
+    page.fill("[data-param=dt]", "-1")
+    page.click("#study-run")
+    page.wait_for_function("document.getElementById('study-status').textContent.startsWith('Refused')", timeout=15000)
+    assert any("invalid value -1 for `dt`" in e for e in page.evaluate("lab.errors")), page.evaluate("lab.errors")
+    assert not page.js_errors, page.js_errors
+    page.close()
