@@ -12,8 +12,8 @@ impl From<&Plot> for Figure {
         let scale = |log: bool| if log { Scale::Log } else { Scale::Linear };
         let mut figure = Figure::new(
             plot.title.clone(),
-            axis_label(&plot.x.label, plot.x.unit),
-            axis_label(&plot.y.label, plot.y.unit),
+            axis_label(&plot.x.label, &plot.x.unit),
+            axis_label(&plot.y.label, &plot.y.unit),
         )
         .scales(scale(plot.x.log), scale(plot.y.log));
         for (i, line) in plot.series.iter().enumerate() {
@@ -44,8 +44,8 @@ mod tests {
         let plot = Plot {
             name: "p",
             title: "a title".into(),
-            x: Axis { label: "t".into(), unit: "s", log: false },
-            y: Axis { label: "theta1".into(), unit: "rad", log: true },
+            x: Axis { label: "t".into(), unit: "s".into(), log: false },
+            y: Axis { label: "theta1".into(), unit: "rad".into(), log: true },
             series: vec![
                 Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },
                 Line { label: "fit".into(), style: Style::Dashed, points: vec![[0.0, 1.0]] },

@@ -118,13 +118,13 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         },
     ];
     let points = |ys: &[f64]| -> Vec<[f64; 2]> { t.iter().zip(ys).map(|(t, y)| [*t, *y]).collect() };
-    let time = Axis { label: "t".into(), unit: tu, log: false };
+    let time = Axis { label: "t".into(), unit: tu.into(), log: false };
     let plots = vec![
         Plot {
             name: "energy-budget",
             title: format!("{system}: energy change and work ({})", method.name),
             x: time.clone(),
-            y: Axis { label: "energy".into(), unit: eu, log: false },
+            y: Axis { label: "energy".into(), unit: eu.into(), log: false },
             series: vec![
                 Line { label: "E(t) - E(0)".into(), style: Style::Solid, points: points(&change) },
                 Line { label: "W(t)".into(), style: Style::Dashed, points: points(&work) },
@@ -139,7 +139,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
                 space(tu)
             ),
             x: time,
-            y: Axis { label: "E - E(0) - W".into(), unit: eu, log: false },
+            y: Axis { label: "E - E(0) - W".into(), unit: eu.into(), log: false },
             series: vec![Line { label: "balance".into(), style: Style::Solid, points: points(&error) }],
         },
     ];

@@ -511,8 +511,9 @@ pub struct Plot {
 pub struct Axis {
     /// The quantity, as a catalogue name or symbol (`t`, `E - E(0)`).
     pub label: String,
-    /// Its unit (empty for a pure number).
-    pub unit: &'static str,
+    /// Its unit (empty for a pure number; `rad and rad/s combined` for a distance in a state
+    /// space of mixed units).
+    pub unit: String,
     /// Whether the axis is logarithmic.
     pub log: bool,
 }
