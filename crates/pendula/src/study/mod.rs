@@ -17,6 +17,7 @@
 //! arrive here as numbers and names.
 
 pub mod energy_budget;
+pub mod round_trip;
 
 use std::fmt;
 
@@ -40,7 +41,7 @@ pub fn sig(x: f64) -> String {
 }
 
 /// Every study, in the order front ends list them.
-pub const STUDIES: &[&Study] = &[&energy_budget::STUDY];
+pub const STUDIES: &[&Study] = &[&energy_budget::STUDY, &round_trip::STUDY];
 
 /// The study named `name`.
 ///
