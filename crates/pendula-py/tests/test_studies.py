@@ -1,5 +1,5 @@
 """The library's study registry in Python: one function per study, its parameters, checks
-and report the library's, and its results the same as the CLI's for the same study."""
+and report the library's, and its numbers those `pendula STUDY` writes for the same inputs."""
 
 import json
 import math
