@@ -94,7 +94,9 @@ def test_the_race_shows_rk4_drifting_and_gauss_legendre_bounded_over_1000_s(lab,
 
 
 def test_butterfly_mode_measures_the_growth_of_the_separation(lab, shots, tmp_path):
-    lab.evaluate("lab.send({cmd: 'configure', mode: 'butterfly', count: 6, delta: 1e-9, method: 'rk4', speed: 4})")
+    # At 10 ms (the first run's step is 1 ms): 30 s of samples stay under the session's 4096,
+    # unthinned, as `pendula divergence` samples them.
+    lab.evaluate("lab.send({cmd: 'configure', mode: 'butterfly', count: 6, delta: 1e-9, method: 'rk4', dt: 0.01, speed: 4})")
     c = wait_config(lab, "c.mode === 'butterfly' && c.tracks.length === 6")
     lab.wait_for_function("lab.frame.t > 25 && lab.growthRate !== null", timeout=30000)
     rate = lab.evaluate("lab.growthRate")
