@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import pendula
+import pendula.studies
 from pendula import InvalidValueError, UnknownNameError
 
 
@@ -19,6 +20,15 @@ def test_every_registered_study_is_a_function_with_the_library_defaults_in_its_d
         for p in entry["params"]:
             assert f"{p['name']}:" in f.__doc__ and f"[default: {p['default_text']}]" in f.__doc__
         assert entry["name"].replace("-", "_") in pendula.__all__
+
+
+def test_a_generated_function_never_replaces_a_hand_written_one():
+    kept = object()
+    namespace = {"energy_budget": kept}
+    added = pendula.studies.install(namespace)
+    assert namespace["energy_budget"] is kept and "energy_budget" not in added
+    assert set(added) == set(pendula.studies.FUNCTIONS) - {"energy_budget"}
+    assert pendula.energy_budget is pendula.studies.FUNCTIONS["energy_budget"]
 
 
 def test_energy_budget_balances_work_and_energy():

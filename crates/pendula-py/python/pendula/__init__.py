@@ -51,10 +51,10 @@ from .study import (
 )
 
 from .sweep import SweepResult, merge, sweep
-from .studies import FUNCTIONS as _STUDIES, StudyReport, study
+from .studies import FUNCTIONS as _STUDIES, StudyReport, install as _install_studies, study
 
 # One function per library study (pendula::study::STUDIES): `energy_budget`, ...
-globals().update(_STUDIES)
+_install_studies(globals())
 from . import distributed  # noqa: E402  (after the names it uses)
 from .view import View, view  # noqa: E402
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from . import _core
 
-__all__ = ["StudyReport", "study", "FUNCTIONS"]
+__all__ = ["StudyReport", "study", "FUNCTIONS", "install"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,3 +126,13 @@ def _function(entry: Mapping[str, Any]) -> Callable[..., StudyReport]:
 
 #: Every registered study's function, by Python name (``energy_budget``).
 FUNCTIONS = {e["name"].replace("-", "_"): _function(e) for e in _core.studies()}
+
+
+def install(namespace: dict) -> list:
+    """Adds each study's function to ``namespace`` (the package's) under its Python name,
+    except where the name is already defined: a study that keeps a hand-written function
+    (one returning its own result class) keeps it. Returns the names added."""
+    added = [name for name in FUNCTIONS if name not in namespace]
+    for name in added:
+        namespace[name] = FUNCTIONS[name]
+    return added
