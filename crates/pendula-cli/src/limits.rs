@@ -39,9 +39,6 @@ pub const MAX_ORBITS: u64 = 10_000;
 pub const MAX_SAMPLES: u64 = 1_000_000;
 /// RK4 steps per drive period of a bifurcation diagram.
 pub const MAX_STEPS_PER_PERIOD: u64 = 1_000_000;
-/// Cells along one axis of a grid (sweep, fractal, bifurcation): the grid's size is limited
-/// by its work and its bytes; this only keeps the product representable.
-pub const MAX_AXIS_CELLS: u64 = 1_000_000_000;
 /// Threads, even with `--allow-large`.
 pub const MAX_THREADS: usize = 1024;
 /// Steps of a fixed-step run (the library's own bound: 10¹³ steps take days).
@@ -189,17 +186,7 @@ pub fn round(x: f64) -> String {
     if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
 }
 
-/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
-pub fn sci(x: f64) -> String {
-    if !x.is_finite() {
-        return "unboundedly many".to_owned();
-    }
-    let text = format!("{x:.3e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-    let mantissa =
-        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
-    format!("{mantissa}e{exponent}")
-}
+pub use pendula_io::value::sci;
 
 /// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
 pub fn bytes(x: f64) -> String {

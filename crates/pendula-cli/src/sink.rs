@@ -15,40 +15,11 @@ use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use pendula_io::npy::Tally;
+use pendula_io::npy::streamed_header as npy_header;
 
 use crate::config::Output;
 use crate::output::{OutFile, PartialFile};
-
-/// A writer that counts the bytes through it and their CRC-32.
-pub struct Tally<W> {
-    inner: W,
-    bytes: u64,
-    crc: crc32fast::Hasher,
-}
-
-impl<W> Tally<W> {
-    /// Counting from nothing.
-    pub fn new(inner: W) -> Self {
-        Tally { inner, bytes: 0, crc: crc32fast::Hasher::new() }
-    }
-
-    /// The bytes written through it so far and their CRC-32.
-    pub fn written(&self) -> (u64, u32) {
-        (self.bytes, self.crc.clone().finalize())
-    }
-}
-
-impl<W: Write> Write for Tally<W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.crc.update(&buf[..n]);
-        self.bytes += n as u64;
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
 
 /// How much of a trajectory file is written: its length, the rows in it, and the CRC-32 of
 /// its bytes.
@@ -128,14 +99,13 @@ impl Sink {
         file.set_len(at.bytes)?;
         file.seek(SeekFrom::End(0))?;
         let rows = if keep_rows { Some(parse_rows(output, &prefix, columns, at.rows, path)?) } else { None };
-        let tally = Tally { inner: file, bytes: at.bytes, crc };
+        let tally = Tally::resume(file, at.bytes, crc);
         let sink = match output {
             Output::Npy(_) => Sink::Npy(NpyRows::resume(tally, columns, at.rows)),
-            Output::Csv(_) => Sink::Csv(Box::new(csv_writer(Tally {
-                inner: Box::new(tally.inner) as Box<dyn Write>,
-                bytes: tally.bytes,
-                crc: tally.crc,
-            }))),
+            Output::Csv(_) => {
+                let (file, bytes, crc) = tally.into_parts();
+                Sink::Csv(Box::new(csv_writer(Tally::resume(Box::new(file) as Box<dyn Write>, bytes, crc))))
+            }
             Output::Stdout => unreachable!("a checkpointed trajectory is a file"),
         };
         Ok((sink, rows))
@@ -300,46 +270,12 @@ impl NpyRows {
                 out.flush()?;
             }
             None => {
-                let mut file = out.into_inner().map_err(|e| e.into_error())?.inner;
+                let mut file = out.into_inner().map_err(|e| e.into_error())?.into_parts().0;
                 file.seek(SeekFrom::Start(0))?;
                 file.write_all(&header)?;
                 file.flush()?;
             }
         }
         Ok(())
-    }
-}
-
-/// The NPY 1.0 header of a C-order float64 array of shape (rows, columns): magic, version,
-/// the length, and the dictionary padded with spaces and a newline so that the whole header
-/// is `min_len` bytes or the next multiple of 64 (the format's alignment).
-fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
-    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
-    let unpadded = 10 + dict.len() + 1;
-    let total = unpadded.div_ceil(64).max(1) * 64;
-    let total = total.max(min_len);
-    let mut header = Vec::with_capacity(total);
-    header.extend_from_slice(b"\x93NUMPY\x01\x00");
-    header.extend_from_slice(&u16::try_from(total - 10).expect("a short header").to_le_bytes());
-    header.extend_from_slice(dict.as_bytes());
-    header.resize(total - 1, b' ');
-    header.push(b'\n');
-    header
-}
-
-#[cfg(test)]
-mod tests {
-    use super::npy_header;
-
-    #[test]
-    fn npy_headers_are_aligned_and_of_one_length() {
-        let long = npy_header(u64::MAX, 6, 0).len();
-        assert_eq!(long % 64, 0);
-        let short = npy_header(3, 6, long);
-        assert_eq!(short.len(), long);
-        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
-        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
-        assert!(short.ends_with(b" \n"));
     }
 }

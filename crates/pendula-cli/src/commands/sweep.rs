@@ -26,10 +26,9 @@ use serde_json::json;
 use crate::args::{Defaults, EndArg, LargeArg, MethodArgs, SetArgs, SummaryArg, SystemArg, ThreadsArg};
 use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
-use crate::config::{clip, parse_count, parse_settings, parse_value};
+use crate::config::{clip, parse_count, parse_settings};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
-use crate::sink::Tally;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SweepArgs {
@@ -97,30 +96,13 @@ pub struct SweepArgs {
 /// An example `--grid` axis for `info`: its first angle over a turn, else its first state
 /// variable.
 pub(crate) fn grid_example(info: &SystemInfo) -> String {
-    match info.state.iter().find(|q| q.is_angle()) {
-        Some(q) => format!("{}=-pi:pi:256", q.name),
-        None => format!("{}=-1:1:256", info.state[0].name),
-    }
+    pendula_io::value::axis_example(info)
 }
 
 /// Parses an axis `NAME=LO:HI:N` given to `flag` (`--grid`, or bifurcation's `--param`);
 /// `example` shows the form in the error.
 pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, text: &str) -> Result<Axis> {
-    let bad = || anyhow!("invalid {flag} `{}`: expected NAME=LO:HI:N, e.g. {example}", clip(text));
-    let (name, range) = text.split_once('=').ok_or_else(bad)?;
-    let name = name.trim();
-    let q = info.quantity(name)?;
-    let parts: Vec<&str> = range.split(':').collect();
-    let [lo, hi, n] = parts[..] else { return Err(bad()) };
-    let (lo, hi) = (parse_value(name, lo, Some(q))?, parse_value(name, hi, Some(q))?);
-    let n = parse_count(flag, n, 0, limits::MAX_AXIS_CELLS, "cells")? as usize;
-    if n == 0 {
-        bail!("invalid {flag} `{}`: the number of cells must be >= 1", clip(text));
-    }
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        bail!("invalid {flag} `{}`: need finite LO < HI (got {} and {})", clip(text), Short(lo), Short(hi));
-    }
-    Ok(Axis { name: name.to_owned(), lo, hi, n })
+    Ok(pendula_io::value::parse_axis(info, flag, example, text)?)
 }
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
@@ -559,41 +541,19 @@ pub(crate) fn quantity_unit(info: &pendula::system::SystemInfo, name: &str) -> &
 /// do not know, so adding one needs no new format, and changing one does.
 pub const SHARD_FORMAT: u64 = 2;
 
-/// What [`write_npy`] wrote: the file's length and CRC-32.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Written {
-    pub bytes: u64,
-    pub crc32: u32,
-}
-
-/// The length and CRC-32 of what `reader` holds, read to its end.
-pub(crate) fn checksum(mut reader: impl std::io::Read) -> std::io::Result<Written> {
-    let mut sink = Tally::new(std::io::sink());
-    std::io::copy(&mut reader, &mut sink)?;
-    let (bytes, crc32) = sink.written();
-    Ok(Written { bytes, crc32 })
-}
+pub(crate) use pendula_io::npy::{Written, checksum};
 
 /// Writes `data` as a .npy array of `shape` into `file`; its length and checksum.
-pub(crate) fn write_npy<T: ndarray_npy::WritableElement>(
+pub(crate) fn write_npy<T: pendula_io::npy::Element>(
     file: &AtomicFile,
     shape: &[usize],
     data: &[T],
 ) -> Result<Written> {
-    use ndarray_npy::WriteNpyExt;
-    use std::io::Write;
-    let array =
-        ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits the data");
-    // Counted under the buffer: the bytes that reach the file.
-    let mut w = std::io::BufWriter::new(Tally::new(file.handle()?));
-    array.write_npy(&mut w).map_err(|e| match e {
-        // The file's own error, which names it.
-        ndarray_npy::WriteNpyError::Io(io) => anyhow::Error::new(io),
-        other => anyhow::Error::new(other),
-    })?;
-    w.flush()?;
-    let (bytes, crc32) = w.get_ref().written();
-    Ok(Written { bytes, crc32 })
+    let mut w = std::io::BufWriter::new(file.handle()?);
+    // An error is the file's own, which names it.
+    let written = pendula_io::npy::write(&mut w, shape, data)?;
+    w.into_inner().map_err(|e| e.into_error())?;
+    Ok(written)
 }
 
 pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<()> {

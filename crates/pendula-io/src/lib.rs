@@ -1,0 +1,43 @@
+//! pendula-io: what pendula reads from its users and writes for them, written once for every
+//! front end (the CLI, the Python package, the browser lab). It has no command-line parser
+//! and no Python binding: the front ends map their own spelling onto these functions.
+//!
+//! - [`value`]: the value syntax — numbers as typed (NaN, infinities and numbers beyond
+//!   f64's range refused), angles as `120deg`, `pi`, `-0.5pi`, `2*pi` (radians), grid axes
+//!   `NAME=LO:HI:N`, counts — with errors that name the value and what is allowed.
+//! - [`npy`]: NumPy `.npy` arrays of little-endian float64, whole or streamed row by row,
+//!   with the length and CRC-32 of what was written.
+//!
+//! Units are SI and angles radians, as in the library ([`pendula`]).
+//!
+//! ```
+//! use pendula_io::value::parse_value;
+//! let info = pendula::model::find("double").unwrap();
+//! let theta1 = info.quantity("theta1").unwrap();
+//! assert_eq!(parse_value("theta1", "-0.5pi", Some(theta1)).unwrap(), -std::f64::consts::FRAC_PI_2);
+//! assert!(parse_value("m1", "2deg", Some(info.quantity("m1").unwrap())).is_err());
+//! ```
+
+pub mod npy;
+pub mod value;
+
+/// Why a value or a file was refused.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A value that cannot be used: the message names it and what is allowed.
+    #[error("{0}")]
+    Invalid(String),
+    /// The library refused it (an unknown system or quantity name, in its words).
+    #[error(transparent)]
+    Library(#[from] pendula::Error),
+}
+
+/// The result of this crate's functions.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// An [`Error::Invalid`] from a format string.
+macro_rules! invalid {
+    ($($arg:tt)*) => { $crate::Error::Invalid(format!($($arg)*)) };
+}
+pub(crate) use invalid;

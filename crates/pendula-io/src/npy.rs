@@ -1,0 +1,255 @@
+//! NumPy `.npy` arrays, C order, little-endian: whole arrays of float64 or bytes
+//! ([`write()`]), and 2-D float64 arrays streamed row by row behind a header of fixed length
+//! ([`streamed_header`]), rewritten with the row count when the rows are done.
+//!
+//! Every byte written is counted and checksummed on the way ([`Tally`]): a shard's
+//! description records its file's length and CRC-32 ([`Written`]), and a checkpoint how much
+//! of a streamed trajectory is on disk.
+//!
+//! The two headers differ as numpy's writers do: a whole array's dictionary is
+//! `{'descr': '<f8', 'fortran_order': False, 'shape': (7, 11, 4)}`, padded with at least one
+//! space to a multiple of 64 bytes (format 1.0, or 2.0 when longer than 65535 bytes); a
+//! streamed array's ends in `, }` as `numpy.save` writes it, and is padded to the length of
+//! the longest row count's header, so that the final count fits in place.
+
+use std::io::{self, Read, Write};
+
+/// The format's alignment of the data: the header's length is a multiple of it.
+const ALIGN: usize = 64;
+/// Magic string and format version 1.0.
+const MAGIC: &[u8; 6] = b"\x93NUMPY";
+
+/// A value an array holds: its type's descriptor and its little-endian bytes.
+pub trait Element: Copy {
+    /// numpy's type descriptor (`<f8`).
+    const DESCR: &'static str;
+    /// Appends the value's bytes.
+    fn extend(self, out: &mut Vec<u8>);
+}
+
+impl Element for f64 {
+    const DESCR: &'static str = "<f8";
+    fn extend(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl Element for u8 {
+    const DESCR: &'static str = "|u1";
+    fn extend(self, out: &mut Vec<u8>) {
+        out.push(self);
+    }
+}
+
+/// What was written: a file's length in bytes and its CRC-32.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Written {
+    /// Bytes.
+    pub bytes: u64,
+    /// CRC-32 (IEEE) of the bytes.
+    pub crc32: u32,
+}
+
+/// A writer that counts the bytes through it and their CRC-32.
+pub struct Tally<W> {
+    inner: W,
+    bytes: u64,
+    crc: crc32fast::Hasher,
+}
+
+impl<W> Tally<W> {
+    /// Counting from nothing.
+    pub fn new(inner: W) -> Self {
+        Tally { inner, bytes: 0, crc: crc32fast::Hasher::new() }
+    }
+
+    /// Counting on from `bytes` bytes already written, whose checksum `crc` holds (a file
+    /// continued where a checkpoint left it).
+    pub fn resume(inner: W, bytes: u64, crc: crc32fast::Hasher) -> Self {
+        Tally { inner, bytes, crc }
+    }
+
+    /// The bytes written through it so far and their CRC-32.
+    pub fn written(&self) -> (u64, u32) {
+        (self.bytes, self.crc.clone().finalize())
+    }
+
+    /// The writer underneath.
+    pub fn get_ref(&self) -> &W {
+        &self.inner
+    }
+
+    /// The writer underneath, with what was counted.
+    pub fn into_parts(self) -> (W, u64, crc32fast::Hasher) {
+        (self.inner, self.bytes, self.crc)
+    }
+}
+
+impl<W: Write> Write for Tally<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.crc.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The length and CRC-32 of what `reader` holds, read to its end.
+pub fn checksum(mut reader: impl Read) -> io::Result<Written> {
+    let mut sink = Tally::new(io::sink());
+    io::copy(&mut reader, &mut sink)?;
+    let (bytes, crc32) = sink.written();
+    Ok(Written { bytes, crc32 })
+}
+
+/// The header of a whole C-order array of `T` of `shape`: format 1.0, or 2.0 when the
+/// dictionary does not fit 1.0's two-byte length; `None` when it fits neither (a shape of
+/// some hundred million axes).
+pub fn header<T: Element>(shape: &[usize]) -> Option<Vec<u8>> {
+    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+    let tuple = match dims.len() {
+        1 => format!("({},)", dims[0]),
+        _ => format!("({})", dims.join(", ")),
+    };
+    let dict = format!("{{'descr': '{}', 'fortran_order': False, 'shape': {tuple}}}", T::DESCR);
+    [(1u8, 2usize), (2, 4)].into_iter().find_map(|(major, size)| {
+        let prefix = MAGIC.len() + 2 + size;
+        // At least one space of padding, then the newline.
+        let unpadded = prefix + dict.len() + 1;
+        let total = unpadded + ALIGN - unpadded % ALIGN;
+        let length = total - prefix;
+        let length = match size {
+            2 => u16::try_from(length).ok()?.to_le_bytes().to_vec(),
+            _ => u32::try_from(length).ok()?.to_le_bytes().to_vec(),
+        };
+        Some(frame(major, &length, &dict, total))
+    })
+}
+
+/// The header of a streamed 2-D float64 array of (rows, columns): format 1.0, its length
+/// `min_len` bytes or the next multiple of 64 (pass the length of `streamed_header(u64::MAX,
+/// columns, 0)`, so that every row count's header has the same length).
+pub fn streamed_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
+    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
+    let unpadded = 10 + dict.len() + 1;
+    let total = (unpadded.div_ceil(ALIGN).max(1) * ALIGN).max(min_len);
+    let length = u16::try_from(total - 10).expect("a short header").to_le_bytes();
+    frame(1, &length, &dict, total)
+}
+
+/// Magic, version `major`.0, the encoded `length`, the dictionary, spaces to `total - 1`
+/// bytes and the newline.
+fn frame(major: u8, length: &[u8], dict: &str, total: usize) -> Vec<u8> {
+    let mut header = Vec::with_capacity(total);
+    header.extend_from_slice(MAGIC);
+    header.extend_from_slice(&[major, 0]);
+    header.extend_from_slice(length);
+    header.extend_from_slice(dict.as_bytes());
+    header.resize(total - 1, b' ');
+    header.push(b'\n');
+    header
+}
+
+/// Writes `data`, a C-order array of `shape`, as a `.npy` file into `w` (unbuffered: give it
+/// a buffered writer); what was written.
+///
+/// # Panics
+/// When `shape`'s product is not `data`'s length.
+pub fn write<T: Element>(w: impl Write, shape: &[usize], data: &[T]) -> io::Result<Written> {
+    assert_eq!(shape.iter().product::<usize>(), data.len(), "the shape fits the data");
+    let header = header::<T>(shape)
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "a shape too long for a .npy header"))?;
+    let mut w = Tally::new(w);
+    w.write_all(&header)?;
+    let mut buf = Vec::with_capacity(1 << 16);
+    for chunk in data.chunks(8192) {
+        buf.clear();
+        chunk.iter().for_each(|v| v.extend(&mut buf));
+        w.write_all(&buf)?;
+    }
+    w.flush()?;
+    let (bytes, crc32) = w.written();
+    Ok(Written { bytes, crc32 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn npy_headers_are_aligned_and_of_one_length() {
+        let long = streamed_header(u64::MAX, 6, 0).len();
+        assert_eq!(long % 64, 0);
+        let short = streamed_header(3, 6, long);
+        assert_eq!(short.len(), long);
+        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
+        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
+        assert!(short.ends_with(b" \n"));
+    }
+
+    #[test]
+    fn whole_arrays_have_numpys_header() {
+        let h = header::<f64>(&[7, 11, 4]).expect("a short header");
+        let dict = b"{'descr': '<f8', 'fortran_order': False, 'shape': (7, 11, 4)}";
+        assert_eq!(h.len(), 128);
+        assert_eq!(&h[..8], b"\x93NUMPY\x01\x00");
+        assert_eq!(u16::from_le_bytes([h[8], h[9]]), 118);
+        assert_eq!(&h[10..10 + dict.len()], dict);
+        assert!(h[10 + dict.len()..127].iter().all(|&b| b == b' ') && h[127] == b'\n');
+        // A 1-D shape is a one-tuple; bytes are `|u1`.
+        let h = header::<u8>(&[5]).expect("a short header");
+        assert!(
+            String::from_utf8_lossy(&h).contains("{'descr': '|u1', 'fortran_order': False, 'shape': (5,)} ")
+        );
+        // A dictionary that ends exactly on the boundary is padded by a whole 64 bytes.
+        for n in 0..200 {
+            let h = header::<f64>(&[n, 3]).expect("a short header");
+            assert_eq!(h.len() % 64, 0);
+            assert_eq!(h[h.len() - 2], b' ');
+        }
+    }
+
+    /// The bytes ndarray-npy writes, which the CLI wrote before this writer (sweeps, merges,
+    /// fractals): every file stays byte-identical.
+    #[test]
+    fn regress_whole_arrays_are_ndarray_npys_bytes() {
+        use ndarray_npy::WriteNpyExt;
+        fn theirs<T: ndarray_npy::WritableElement>(shape: &[usize], data: &[T]) -> Vec<u8> {
+            let mut out = Vec::new();
+            let a = ndarray::ArrayViewD::from_shape(ndarray::IxDyn(shape), data).expect("the shape fits");
+            a.write_npy(&mut out).expect("in memory");
+            out
+        }
+        let shapes: Vec<Vec<usize>> = (0..300)
+            .map(|n| vec![n, 4])
+            .chain([vec![3], vec![7, 11, 6], vec![1, 1, 1, 1, 1, 1, 1, 2], vec![123_456_789, 0], vec![]])
+            .chain((0..40).map(|n| vec![2; n % 13].into_iter().chain([n]).collect()))
+            .collect();
+        for shape in &shapes {
+            let data: Vec<f64> = (0..shape.iter().product::<usize>()).map(|i| i as f64 * 0.1 - 3.0).collect();
+            let mut mine = Vec::new();
+            write(&mut mine, shape, &data).expect("in memory");
+            assert_eq!(mine, theirs(shape, &data), "{shape:?}");
+            let bytes: Vec<u8> = (0..data.len()).map(|i| i as u8).collect();
+            let mut mine = Vec::new();
+            write(&mut mine, shape, &bytes).expect("in memory");
+            assert_eq!(mine, theirs(shape, &bytes), "{shape:?} of u8");
+        }
+    }
+
+    #[test]
+    fn writes_count_their_bytes_and_crc() {
+        let mut out = Vec::new();
+        let w = write(&mut out, &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).expect("in memory");
+        assert_eq!(w.bytes as usize, out.len());
+        // 10 bytes of prefix and 58 of dictionary: padded to 128.
+        assert_eq!(out.len(), 128 + 48);
+        assert_eq!(&out[128..136], &1.0f64.to_le_bytes());
+        assert_eq!(checksum(out.as_slice()).expect("in memory"), w);
+        assert_eq!(w.crc32, crc32fast::hash(&out));
+    }
+}
