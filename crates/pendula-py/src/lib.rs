@@ -23,6 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 mod animate;
+mod io;
 mod serve;
 mod study;
 mod sweep;
@@ -921,6 +922,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     study::register(m)?;
     sweep::register(m)?;
+    io::register(m)?;
     serve::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;

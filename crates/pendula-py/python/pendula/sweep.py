@@ -16,10 +16,9 @@ import json
 import math
 import operator
 import os
-import struct
 import zlib
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Iterable, Mapping, Optional, Union
 
 import numpy as np
 
@@ -41,35 +40,21 @@ DEFAULT_DT = 0.01
 DEFAULT_T_END = 10.0
 
 
-def _value(name: str, value: Any) -> float:
-    """A number, or a string as the CLI reads one: ``2``, ``-pi``, ``0.5pi``, ``2*pi``,
-    ``120deg`` (the suffixes for angles, in radians; the library checks the domains)."""
+def _value(system: Optional[str], name: str, value: Any) -> float:
+    """A number, or a string in the value syntax (``2``, ``-pi``, ``0.5pi``, ``2*pi``,
+    ``120deg``: the suffixes for angles of ``system``, in radians), read by the format
+    crate's parser; the library checks the domains."""
     if isinstance(value, str):
-        text = value.strip()
-        factor = 1.0
-        if text.endswith("deg"):
-            text, factor = text[:-3].strip(), None
-        elif text.endswith("pi"):
-            text, factor = text[:-2].strip().rstrip("*"), math.pi
-        try:
-            if factor is math.pi and text in ("", "+", "-"):
-                number = -1.0 if text == "-" else 1.0
-            else:
-                number = float(text)
-        except ValueError:
-            raise InvalidValueError(
-                f"invalid value {value!r} for `{name}`: a number (radians), or degrees with a deg suffix (120deg)"
-            ) from None
-        # The CLI's arithmetic: (deg · π) / 180, or the number times π.
-        return number * math.pi / 180.0 if factor is None else number * factor
+        return _core.parse_value(system, name, value)
     try:
         return float(value)
     except (TypeError, ValueError):
         raise InvalidValueError(f"invalid value {value!r} for `{name}`: a number") from None
 
 
-def _axes(grid: Any) -> list:
-    """[(name, lo, hi, n)] from {name: (lo, hi, n)} or ["NAME=LO:HI:N", ...]."""
+def _axes(system: str, settings: list, grid: Any) -> list:
+    """[(name, lo, hi, n)] from {name: (lo, hi, n)} or ["NAME=LO:HI:N", ...], over the
+    quantities of ``system`` with ``settings`` [(name, value)]."""
     if isinstance(grid, Mapping):
         items = list(grid.items())
     elif isinstance(grid, str):
@@ -82,27 +67,19 @@ def _axes(grid: Any) -> list:
     axes = []
     for item in items:
         if isinstance(item, str):
-            name, eq, rest = item.partition("=")
-            parts = rest.split(":")
-            if not eq or len(parts) != 3:
-                raise InvalidValueError(f"invalid grid {item!r}: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256")
-            name, (lo, hi, n) = name.strip(), parts
-            try:
-                n = int(n.strip())
-            except ValueError:
-                raise InvalidValueError(f"invalid grid {item!r}: N, the number of cells, is a whole number") from None
-        else:
-            try:
-                name, (lo, hi, n) = item
-            except (TypeError, ValueError):
-                raise InvalidValueError(f"invalid grid axis {item!r}: name: (lo, hi, n)") from None
-            try:
-                n = operator.index(n)
-            except TypeError:
-                raise InvalidValueError(f"invalid n {n!r} for the {name} axis: a whole number of cells") from None
+            axes.append(_core.parse_axis(system, settings, item))
+            continue
+        try:
+            name, (lo, hi, n) = item
+        except (TypeError, ValueError):
+            raise InvalidValueError(f"invalid grid axis {item!r}: name: (lo, hi, n)") from None
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise InvalidValueError(f"invalid n {n!r} for the {name} axis: a whole number of cells") from None
         if n < 1:
             raise InvalidValueError(f"invalid n {n} for the {name} axis: at least 1 cell")
-        axes.append((str(name), _value(name, lo), _value(name, hi), n))
+        axes.append((str(name), _value(system, name, lo), _value(system, name, hi), n))
     if not axes:
         raise InvalidValueError("invalid grid: give at least one axis")
     return axes
@@ -123,21 +100,6 @@ def _shard(shard: Any) -> tuple:
 def _centres(lo: float, hi: float, n: int) -> np.ndarray:
     # The library's Axis::centre, lo + (i + ½)(hi − lo)/n, in the same order of operations.
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
-
-
-def npy_header(shape: Sequence[int]) -> bytes:
-    """The header the CLI writes (Rust's ndarray-npy) before a C-order float64 array of
-    ``shape``: ``{'descr': '<f8', 'fortran_order': False, 'shape': (…)}`` padded with spaces
-    and a newline to a multiple of 64 bytes, format 1.0 (2.0 past 65535 bytes). numpy.save's
-    differs (a trailing ``, }`` and room to grow the shape), so it is written here."""
-    text = ("{'descr': '<f8', 'fortran_order': False, 'shape': %r}" % (tuple(int(a) for a in shape),)).encode()
-    for major, size, fmt in ((1, 2, "<H"), (2, 4, "<I")):
-        prefix = 6 + 2 + size
-        pad = 64 - (prefix + len(text) + 1) % 64
-        length = len(text) + pad + 1
-        if length < 1 << (8 * size):
-            return b"\x93NUMPY" + bytes((major, 0)) + struct.pack(fmt, length) + text + b" " * pad + b"\n"
-    raise InvalidValueError(f"a shape {tuple(shape)} too long for a .npy header")
 
 
 class SweepResult:
@@ -184,10 +146,8 @@ class SweepResult:
         ``data`` (the .npy file's bytes and CRC-32), kernel, threads, wall_s."""
         d = dict(self._description)
         if self._data_info is None:
-            header = npy_header(self.data.shape)
-            body = memoryview(np.ascontiguousarray(self.data, dtype="<f8")).cast("B")
-            crc = zlib.crc32(body, zlib.crc32(header))
-            self._data_info = {"bytes": len(header) + body.nbytes, "crc32": f"{crc:08x}"}
+            size, crc = _core.npy_written(np.ascontiguousarray(self.data, dtype="<f8"))
+            self._data_info = {"bytes": size, "crc32": f"{crc:08x}"}
         # In the CLI's order of keys: `data` after the fingerprint.
         out = {}
         for k, v in d.items():
@@ -197,16 +157,13 @@ class SweepResult:
         return out
 
     def save(self, path: Union[str, os.PathLike]) -> Path:
-        """Writes the array as the CLI writes it (the same bytes, header included) to
-        ``path`` (``.npy``); for a shard, its description to ``path + ".json"``, so that
+        """Writes the array to ``path`` (``.npy``) with the format crate's writer, the one
+        ``pendula sweep`` writes with (the same bytes, header included); for a shard, its description to ``path + ".json"``, so that
         ``pendula merge`` (or :func:`merge`) assembles it."""
         path = Path(path)
         if path.suffix != ".npy":
             raise InvalidValueError(f"invalid path {str(path)!r}: a sweep is saved as .npy")
-        body = np.ascontiguousarray(self.data, dtype="<f8")
-        with open(path, "wb") as f:
-            f.write(npy_header(body.shape))
-            f.write(memoryview(body).cast("B"))
+        _core.save_npy(path, np.ascontiguousarray(self.data, dtype="<f8"))
         if self.sharded:
             side = Path(f"{path}.json")
             side.write_text(json.dumps(self.description, indent=2) + "\n")
@@ -291,19 +248,8 @@ def _arguments(system, grid, set, method, dt, steps, t_end, until, record) -> tu
     """The sweep's description as ``_core.sweep`` takes it (system, set, axes, method, dt,
     steps, t_end, until, records), from :func:`sweep`'s arguments; the library checks the
     rest."""
-    settings = []
-    if not isinstance(system, str):
-        # A System: its name, and its values where `set` does not say otherwise.
-        if set:
-            raise InvalidValueError("give the values in the System or in set=, not both")
-        core = getattr(system, "_core", None)
-        if core is None:
-            raise InvalidValueError(f"invalid system {system!r}: a System or a catalogue name")
-        defaults = dict(_core.CoreSystem(core.name, []).values())
-        settings = [(n, v) for n, v in core.values() if v != defaults[n]]
-        system = core.name
-    settings += [(str(n), _value(n, v)) for n, v in (set or {}).items()]
-    axes = _axes(grid)
+    system, settings = _settings(system, set)
+    axes = _axes(system, settings, grid)
     if steps is not None and t_end is not None:
         raise InvalidValueError("give steps or t_end (s), not both")
     if steps is not None:
@@ -318,8 +264,27 @@ def _arguments(system, grid, set, method, dt, steps, t_end, until, record) -> tu
     records = [record] if isinstance(record, str) else list(record)
     # The CLI's comma-separated form too: "final,flip-time".
     records = [r.strip() for item in records for r in str(item).split(",")]
-    t_end = None if t_end is None else _value("t_end", t_end)
-    return (str(system), settings, axes, str(method), _value("dt", dt), steps, t_end, until, records)
+    t_end = None if t_end is None else _value(None, "t_end", t_end)
+    return (system, settings, axes, str(method), _value(None, "dt", dt), steps, t_end, until, records)
+
+
+def _settings(system: Any, set: Optional[Mapping[str, Any]]) -> tuple:
+    """(the system's name, [(name, value)]) from a name or a System (its values where they
+    differ from the defaults) and ``set``."""
+    settings = []
+    if not isinstance(system, str):
+        # A System: its name, and its values where `set` does not say otherwise.
+        if set:
+            raise InvalidValueError("give the values in the System or in set=, not both")
+        core = getattr(system, "_core", None)
+        if core is None:
+            raise InvalidValueError(f"invalid system {system!r}: a System or a catalogue name")
+        defaults = dict(_core.CoreSystem(core.name, []).values())
+        settings = [(n, v) for n, v in core.values() if v != defaults[n]]
+        system = core.name
+    system = str(system)
+    settings += [(str(n), _value(system, n, v)) for n, v in (set or {}).items()]
+    return system, settings
 
 
 def _result(out: dict) -> SweepResult:
