@@ -6,7 +6,10 @@
 //!   f64's range refused), angles as `120deg`, `pi`, `-0.5pi`, `2*pi` (radians), grid axes
 //!   `NAME=LO:HI:N`, counts — with errors that name the value and what is allowed.
 //! - [`npy`]: NumPy `.npy` arrays of little-endian float64, whole or streamed row by row,
-//!   with the length and CRC-32 of what was written.
+//!   with the length and CRC-32 of what was written, and the check of what a file's header
+//!   claims before it is read.
+//! - [`shard`]: the descriptions written beside a sharded run's `.npy` files (FILE.npy.json)
+//!   and the checks that the shards handed to a merge are all of one run, each once, intact.
 //!
 //! Units are SI and angles radians, as in the library ([`pendula`]).
 //!
@@ -19,6 +22,7 @@
 //! ```
 
 pub mod npy;
+pub mod shard;
 pub mod value;
 
 /// Why a value or a file was refused.

@@ -6,6 +6,9 @@
 //! description records its file's length and CRC-32 ([`Written`]), and a checkpoint how much
 //! of a streamed trajectory is on disk.
 //!
+//! A file read is first checked for what its header claims ([`claim`]): a reader allocates
+//! what the header says, and a header that claims 10¹⁵ values would abort the process.
+//!
 //! The two headers differ as numpy's writers do: a whole array's dictionary is
 //! `{'descr': '<f8', 'fortran_order': False, 'shape': (7, 11, 4)}`, padded with at least one
 //! space to a multiple of 64 bytes (format 1.0, or 2.0 when longer than 65535 bytes); a
@@ -13,6 +16,9 @@
 //! the longest row count's header, so that the final count fits in place.
 
 use std::io::{self, Read, Write};
+
+use crate::value::clip;
+use crate::{Result, invalid};
 
 /// The format's alignment of the data: the header's length is a multiple of it.
 const ALIGN: usize = 64;
@@ -176,6 +182,157 @@ pub fn write<T: Element>(w: impl Write, shape: &[usize], data: &[T]) -> io::Resu
     Ok(Written { bytes, crc32 })
 }
 
+/// What a .npy file's header says it holds, checked against the file's length before
+/// anything is allocated: a reader allocates what the header claims, and a header that
+/// claims 10¹⁵ values would abort the process.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Claim {
+    /// The array's shape.
+    pub shape: Vec<usize>,
+    /// Bytes per value (8 for float64, 1 for uint8).
+    pub item: usize,
+}
+
+impl Claim {
+    /// The number of values.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    /// Whether it holds no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Reads and checks the header of the .npy at `path` (format 1, 2 or 3): the values its
+/// shape and type claim must be what the file holds after the header.
+pub fn claim(path: &std::path::Path) -> Result<Claim> {
+    let name = path.display();
+    let file = std::fs::File::open(path).map_err(|e| invalid!("cannot read {name}: {e}"))?;
+    let length = file.metadata().map_err(|e| invalid!("cannot read {name}: {e}"))?.len();
+    claim_from(file, length, &name.to_string())
+}
+
+/// [`claim`] of the .npy `file`, `length` bytes long, named `name` in messages (a file held
+/// in memory).
+pub fn claim_from(mut file: impl std::io::Read, length: u64, name: &str) -> Result<Claim> {
+    let bad = |why: &str| invalid!("{name} is not a valid .npy file: {why}");
+    let mut head = [0u8; 12];
+    file.read_exact(&mut head[..10]).map_err(|_| bad("too short for a header"))?;
+    if &head[..6] != b"\x93NUMPY" {
+        return Err(bad("no NUMPY magic"));
+    }
+    let (header_len, prefix) = match head[6] {
+        1 => (u16::from_le_bytes([head[8], head[9]]) as u64, 10),
+        2 | 3 => {
+            file.read_exact(&mut head[10..12]).map_err(|_| bad("too short for a header"))?;
+            (u32::from_le_bytes([head[8], head[9], head[10], head[11]]) as u64, 12)
+        }
+        v => return Err(bad(&format!("unknown format version {v}"))),
+    };
+    if prefix + header_len > length {
+        return Err(bad("its header is longer than the file"));
+    }
+    if header_len > MAX_NPY_HEADER {
+        return Err(bad(&format!(
+            "its header is longer than {}",
+            crate::value::bytes(MAX_NPY_HEADER as f64)
+        )));
+    }
+    let mut header = head[..prefix as usize].to_vec();
+    header.resize((prefix + header_len) as usize, 0);
+    file.read_exact(&mut header[prefix as usize..]).map_err(|_| bad("its header is cut short"))?;
+    // The reader's parser backtracks, taking twice as long for every level of nesting: a
+    // header of 200 bytes nested 30 deep would take days. numpy writes 2 levels (a dict and
+    // its shape tuple), a few more for structured types.
+    if let Some(depth) = nesting_beyond(&header[prefix as usize..], MAX_NPY_NESTING) {
+        return Err(bad(&format!(
+            "its header nests {depth} deep, more than {MAX_NPY_NESTING} (numpy writes 2 or 3)"
+        )));
+    }
+    // The header as the reader (ndarray-npy) parses it, which allocates what its shape says:
+    // a parse of our own could find another shape than the reader's (a key given twice, a
+    // key inside a string), and pass a file whose reading then allocates 10^15 values.
+    let header = ndarray_npy::npy::header::Header::from_reader(&mut header.as_slice()).map_err(|e| {
+        let why = e.to_string();
+        bad(&format!("its header: {}", clip(why.lines().next().unwrap_or(""))))
+    })?;
+    let descr = header
+        .type_descriptor
+        .as_string()
+        .ok_or_else(|| bad(&format!("unknown value type `{}`", clip(&header.type_descriptor.to_string()))))?;
+    let item: usize = descr
+        .trim_start_matches(|c: char| !c.is_ascii_digit())
+        .parse()
+        .map_err(|_| bad(&format!("unknown value type `{}`", clip(descr))))?;
+    if item == 0 {
+        // Any count of them fits in no data: the count could not be checked.
+        return Err(bad(&format!("its values (`{}`) take no bytes", clip(descr))));
+    }
+    let shape = header.shape;
+    // The array library counts the lengths of the non-empty axes, and refuses (the reader
+    // unwraps: a panic) a shape whose count is beyond isize, even with no values: (0, 2^63).
+    let counted = shape.iter().filter(|&&d| d != 0).try_fold(1u128, |n, &d| n.checked_mul(d as u128));
+    if counted.is_none_or(|n| n > isize::MAX as u128) {
+        return Err(bad(&format!(
+            "its header claims a shape {} beyond counting",
+            clip(&format!("{shape:?}"))
+        )));
+    }
+    let values = shape.iter().try_fold(1u128, |n, &d| n.checked_mul(d as u128));
+    let data = length - prefix - header_len;
+    match values.and_then(|v| v.checked_mul(item as u128)) {
+        Some(bytes) if bytes == data as u128 => Ok(Claim { shape, item }),
+        Some(bytes) => Err(bad(&format!(
+            "its header claims {} values of {item} bytes ({}), but the file holds {} after the header",
+            clip(&format!("{shape:?}")),
+            crate::value::bytes(bytes as f64),
+            crate::value::bytes(data as f64)
+        ))),
+        None => {
+            Err(bad(&format!("its header claims a shape {} beyond counting", clip(&format!("{shape:?}")))))
+        }
+    }
+}
+
+/// Bytes of a .npy header: numpy writes about 100 (padded to a multiple of 64).
+const MAX_NPY_HEADER: u64 = 1 << 20;
+
+/// Nesting of brackets in a .npy header: see [`claim_from`].
+const MAX_NPY_NESTING: usize = 8;
+
+/// The depth of `(`, `[` and `{` in a Python literal (outside its strings), if it goes
+/// beyond `max`.
+fn nesting_beyond(text: &[u8], max: usize) -> Option<usize> {
+    let (mut depth, mut quote, mut escaped) = (0usize, None, false);
+    for &b in text {
+        match quote {
+            Some(q) => {
+                if escaped {
+                    escaped = false;
+                } else if b == b'\\' {
+                    escaped = true;
+                } else if b == q {
+                    quote = None;
+                }
+            }
+            None => match b {
+                b'\'' | b'"' => quote = Some(b),
+                b'(' | b'[' | b'{' => {
+                    depth += 1;
+                    if depth > max {
+                        return Some(depth);
+                    }
+                }
+                b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+                _ => {}
+            },
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,6 +396,51 @@ mod tests {
             write(&mut mine, shape, &bytes).expect("in memory");
             assert_eq!(mine, theirs(shape, &bytes), "{shape:?} of u8");
         }
+    }
+
+    /// A .npy file (format 1) of `header` and `data`.
+    fn npy(header: &str, data: &[u8]) -> Vec<u8> {
+        let header = format!("{header}\n");
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        bytes.extend((header.len() as u16).to_le_bytes());
+        bytes.extend(header.bytes());
+        bytes.extend(data);
+        bytes
+    }
+
+    fn claim(bytes: &[u8]) -> crate::Result<Claim> {
+        claim_from(bytes, bytes.len() as u64, "x.npy")
+    }
+
+    #[test]
+    fn npy_headers_are_read_as_the_reader_reads_them() {
+        let plain = "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 1), }";
+        assert_eq!(claim(&npy(plain, &[0; 16])).unwrap(), Claim { shape: vec![2, 1], item: 8 });
+        // A key given twice is the last one's, as ndarray-npy (and Python) take it: the
+        // shape checked is the one allocated for.
+        let twice = "{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'shape': (1000000000000000,), }";
+        let err = claim(&npy(twice, &[0; 8])).unwrap_err().to_string();
+        assert!(err.contains("[1000000000000000]"), "{err}");
+        // No values, but an axis that the array library cannot count (its reader panicked).
+        let empty = "{'descr': '<f8', 'fortran_order': False, 'shape': (0, 9223372036854775808), }";
+        assert!(claim(&npy(empty, &[])).unwrap_err().to_string().contains("beyond counting"));
+        // Values of no bytes cannot be counted against the data.
+        let empty = "{'descr': '|V0', 'fortran_order': False, 'shape': (100000000000,), }";
+        assert!(claim(&npy(empty, &[])).unwrap_err().to_string().contains("take no bytes"));
+    }
+
+    #[test]
+    fn npy_header_nesting_is_counted_outside_strings() {
+        assert_eq!(nesting_beyond(b"{'shape': (1, 2)}", 2), None);
+        assert_eq!(nesting_beyond(b"{'x': ((1,),)}", 2), Some(3));
+        assert_eq!(nesting_beyond(b"{'x': '((((', \"[[[\\\"[[\"}", 1), None);
+        let deep = format!(
+            "{{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'x': {}1{}}}",
+            "{1: ".repeat(40),
+            "}".repeat(40)
+        );
+        let err = claim(&npy(&deep, &[0; 8])).unwrap_err().to_string();
+        assert!(err.contains("nests 9 deep"), "{err}");
     }
 
     #[test]

@@ -245,6 +245,27 @@ pub fn sci(x: f64) -> String {
     format!("{mantissa}e{exponent}")
 }
 
+/// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
+pub fn bytes(x: f64) -> String {
+    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = x;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    let shown = if !v.is_finite() || v >= 1e6 {
+        sci(v)
+    } else if v.fract() == 0.0 || v >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        // Three significant digits: 29.8 GiB, 1.5 KiB.
+        let decimals = if v >= 10.0 { 1 } else { 2 };
+        format!("{v:.decimals$}").trim_end_matches('0').trim_end_matches('.').to_owned()
+    };
+    format!("{shown} {}", UNITS[unit])
+}
+
 /// The user's text for a message: at most 40 characters, and how long the rest was, so that
 /// a megabyte of input is never echoed back.
 pub fn clip(text: &str) -> String {

@@ -1,9 +1,10 @@
 //! The format crate ([`pendula_io`]) for the pure-Python package: the value syntax
-//! (`120deg`, `pi`, `NAME=LO:HI:N`) read by the one parser every front end uses, and `.npy`
-//! arrays written by the one writer. Its refusals are `InvalidValueError`s, or the library's
+//! (`120deg`, `pi`, `NAME=LO:HI:N`) read by the one parser every front end uses, `.npy`
+//! arrays written by the one writer, and shards read and checked for a merge by the one
+//! reader. Its refusals are `InvalidValueError`s, or the library's
 //! own class for an unknown name.
 
-use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::{raise, to_py};
@@ -13,7 +14,10 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(parse_value, m)?)?;
     m.add_function(wrap_pyfunction!(parse_axis, m)?)?;
     m.add_function(wrap_pyfunction!(save_npy, m)?)?;
-    m.add_function(wrap_pyfunction!(npy_written, m)?)
+    m.add_function(wrap_pyfunction!(npy_written, m)?)?;
+    m.add_function(wrap_pyfunction!(load_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(check_shards, m)?)?;
+    m.add("SHARD_FORMAT", pendula_io::shard::SHARD_FORMAT)
 }
 
 /// The Python exception for the format crate's error.
@@ -89,4 +93,43 @@ fn npy_written(py: Python<'_>, data: PyReadonlyArrayDyn<'_, f64>) -> PyResult<(u
     let (shape, values) = contiguous(py, &data)?;
     let written = pendula_io::npy::write(std::io::sink(), &shape, values)?;
     Ok((written.bytes, written.crc32))
+}
+
+/// The shard saved at `path` (`.npy`, its description beside it): (its description as JSON
+/// text, its rows (count, columns)), after the description was checked against itself and
+/// the file against the description (length, CRC-32, header).
+#[pyfunction]
+fn load_shard<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+) -> PyResult<(String, Bound<'py, PyArray2<f64>>)> {
+    use pendula_io::shard;
+    let io = |e| io_error(py, e);
+    let d = shard::read_description(&path).map_err(io)?;
+    let s = shard::describe_value(&d, &path).map_err(io)?;
+    shard::verify_data(&s, s.n).map_err(io)?;
+    let columns = *s.shape.last().expect("a checked shape");
+    shard::check_header(&s, columns).map_err(io)?;
+    let rows = shard::read_rows(&s, columns).map_err(io)?;
+    let rows = numpy::ndarray::Array2::from_shape_vec((s.count, columns), rows).expect("whole rows");
+    Ok((d.to_string(), rows.into_pyarray(py)))
+}
+
+/// Checks the shards handed to a merge, given as (name, description as JSON text): each
+/// description against itself, all of one run, all N of them once.
+#[pyfunction]
+fn check_shards(py: Python<'_>, parts: Vec<(String, String)>) -> PyResult<()> {
+    use pendula_io::shard;
+    let io = |e| io_error(py, e);
+    let parts = parts
+        .iter()
+        .map(|(name, text)| {
+            let d: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+                raise(py, "InvalidValueError", format!("invalid shard description of {name}: {e}"))
+            })?;
+            shard::describe_value(&d, std::path::Path::new(name)).map_err(io)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    shard::same_run(&parts).map_err(io)?;
+    shard::complete(&parts).map_err(io)
 }

@@ -536,12 +536,11 @@ pub(crate) fn quantity_unit(info: &pendula::system::SystemInfo, name: &str) -> &
     }
 }
 
-/// The format of a shard's description (FILE.npy.json), in `pendula_sweep`. Format 2 added
-/// `data` (the .npy file's length and CRC-32, which `merge` checks); readers ignore keys they
-/// do not know, so adding one needs no new format, and changing one does.
-pub const SHARD_FORMAT: u64 = 2;
+pub use pendula_io::shard::SHARD_FORMAT;
 
-pub(crate) use pendula_io::npy::{Written, checksum};
+pub(crate) use pendula_io::npy::Written;
+#[cfg(test)]
+pub(crate) use pendula_io::npy::checksum;
 
 /// Writes `data` as a .npy array of `shape` into `file`; its length and checksum.
 pub(crate) fn write_npy<T: pendula_io::npy::Element>(
@@ -567,24 +566,7 @@ pub(crate) fn write_json(file: &AtomicFile, doc: &serde_json::Value) -> Result<(
 
 /// Reads a shard's description (FILE.npy.json).
 pub fn read_description(npy: &Path) -> Result<serde_json::Value> {
-    let path = PathBuf::from(format!("{}.json", npy.display()));
-    let text = read_capped(&path, limits::MAX_DESCRIPTION_BYTES).with_context(|| {
-        format!("cannot read {} (the shard's description, written by sweep --shard)", path.display())
-    })?;
-    serde_json::from_slice(&text).with_context(|| format!("invalid shard description {}", path.display()))
+    Ok(pendula_io::shard::read_description(npy)?)
 }
 
-/// The bytes of the file at `path`, at most `cap` of them: a larger file (or an endless one,
-/// /dev/zero) is an error, found without reading it whole.
-pub(crate) fn read_capped(path: &Path, cap: u64) -> std::io::Result<Vec<u8>> {
-    use std::io::Read;
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)?.take(cap + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > cap {
-        return Err(std::io::Error::other(format!(
-            "it is larger than {}, more than a description holds",
-            limits::bytes(cap as f64)
-        )));
-    }
-    Ok(bytes)
-}
+pub(crate) use pendula_io::shard::read_capped;

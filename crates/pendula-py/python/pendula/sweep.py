@@ -16,7 +16,6 @@ import json
 import math
 import operator
 import os
-import zlib
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Optional, Union
 
@@ -31,9 +30,9 @@ __all__ = ["sweep", "merge", "SweepResult"]
 #: The version of SweepResult's pickled form.
 PICKLE_VERSION = 1
 
-#: The shard description's format (`pendula_sweep`), the CLI's SHARD_FORMAT: format 2 has
-#: `data` (the .npy file's length and CRC-32).
-SHARD_FORMAT = 2
+#: The shard description's format (`pendula_sweep`): format 2 has `data` (the .npy file's
+#: length and CRC-32).
+SHARD_FORMAT = _core.SHARD_FORMAT
 
 #: What `pendula sweep` runs without those arguments.
 DEFAULT_DT = 0.01
@@ -317,31 +316,8 @@ def _result(out: dict) -> SweepResult:
 def _load(path: Union[str, os.PathLike]) -> SweepResult:
     """A shard saved by :meth:`SweepResult.save` or ``pendula sweep --shard``: its
     description, then the file checked against the length and CRC-32 it gives."""
-    path = Path(path)
-    side = Path(f"{path}.json")
-    try:
-        d = json.loads(side.read_text())
-    except OSError as e:
-        raise InvalidValueError(f"cannot read {side} (the shard's description, written with the shard): {e.strerror}") from None
-    except ValueError as e:
-        raise InvalidValueError(f"invalid shard description {side}: {e}") from None
-    if not isinstance(d, dict) or "pendula_sweep" not in d:
-        raise InvalidValueError(f"{side} is not a sweep shard's description (it has no `pendula_sweep` format number)")
-    if d["pendula_sweep"] != SHARD_FORMAT:
-        raise InvalidValueError(f"{side} is a shard description of format {d['pendula_sweep']}; this pendula reads format {SHARD_FORMAT}")
-    missing = [k for k in ("shape", "shard", "shards", "offset", "count", "fingerprint", "data", "columns", "axes") if k not in d]
-    if missing:
-        raise InvalidValueError(f"{side} has no `{missing[0]}`")
-    raw = path.read_bytes()
-    crc = zlib.crc32(raw)
-    if len(raw) != d["data"]["bytes"] or f"{crc:08x}" != d["data"]["crc32"]:
-        raise InvalidValueError(
-            f"{path}: {len(raw)} bytes of CRC-32 {crc:08x}, but its description {side} says {d['data']['bytes']} bytes of "
-            f"{d['data']['crc32']}: the file is truncated, corrupted or not the shard described"
-        )
-    data = np.load(path)
-    if data.dtype != np.float64 or data.shape != (d["count"], d["shape"][-1]):
-        raise InvalidValueError(f"{path}: shape {data.shape} of {data.dtype}, its description says ({d['count']}, {d['shape'][-1]}) float64")
+    text, data = _core.load_shard(os.fspath(path))
+    d = json.loads(text)
     result = SweepResult(data, {k: v for k, v in d.items() if k != "data"})
     result._data_info = dict(d["data"])
     return result
@@ -360,23 +336,10 @@ def merge(shards: Iterable[Union[SweepResult, str, os.PathLike]]) -> SweepResult
             parts.append((str(s), _load(s)))
     if not parts:
         raise InvalidValueError("merge: give the shards")
-    first_name, first = parts[0]
-    f = first._description
-    for name, s in parts:
-        d = s._description
-        if (d["fingerprint"], list(d["shape"]), d["shards"]) != (f["fingerprint"], list(f["shape"]), f["shards"]):
-            raise InvalidValueError(f"{name} is a shard of another sweep than {first_name} (its grid, method or records differ)")
+    # Shards held in memory are checked by their descriptions, as files are.
+    _core.check_shards([(name, json.dumps(s.description)) for name, s in parts])
+    f = parts[0][1]._description
     n = f["shards"]
-    seen: dict = {}
-    for name, s in parts:
-        k = s._description["shard"]
-        if k in seen:
-            raise InvalidValueError(f"{seen[k]} and {name} are both shard {k}/{n}: give each shard once")
-        seen[k] = name
-    missing = [f"{k}/{n}" for k in range(1, n + 1) if k not in seen]
-    if missing:
-        are = "shards" if len(missing) > 1 else "shard"
-        raise InvalidValueError(f"{are} {', '.join(missing)} {'are' if len(missing) > 1 else 'is'} missing: give all {n} shards")
     shape = [int(a) for a in f["shape"]]
     cols = shape[-1]
     whole = np.full((math.prod(shape[:-1]), cols), np.nan)
