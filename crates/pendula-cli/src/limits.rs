@@ -23,11 +23,7 @@ pub const MAX_OUTPUT_BYTES: f64 = (1u64 << 30) as f64;
 pub const MAX_MEMORY_BYTES: f64 = (2u64 << 30) as f64;
 /// Bytes of an input file (`plot`, `merge`).
 pub const MAX_INPUT_BYTES: f64 = (1u64 << 30) as f64;
-/// Bytes of a scenario file: a scenario is a few lines, and it is read whole.
-pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
 pub use pendula_io::shard::MAX_DESCRIPTION_BYTES;
-/// Nesting of arrays and tables in a scenario file (the parser recurses on it).
-pub const MAX_SCENARIO_DEPTH: usize = 16;
 /// Step sizes of a convergence or work-precision study, and tolerances of work-precision:
 /// 30 halvings span nine decades, more than double precision can resolve.
 pub const MAX_LEVELS: u64 = 30;

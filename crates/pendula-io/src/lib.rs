@@ -10,6 +10,7 @@
 //!   claims before it is read.
 //! - [`shard`]: the descriptions written beside a sharded run's `.npy` files (FILE.npy.json)
 //!   and the checks that the shards handed to a merge are all of one run, each once, intact.
+//! - [`scenario`]: scenario files (TOML), read by the CLI and written by the lab.
 //!
 //! Units are SI and angles radians, as in the library ([`pendula`]).
 //!
@@ -22,6 +23,7 @@
 //! ```
 
 pub mod npy;
+pub mod scenario;
 pub mod shard;
 pub mod value;
 
@@ -45,3 +47,19 @@ macro_rules! invalid {
     ($($arg:tt)*) => { $crate::Error::Invalid(format!($($arg)*)) };
 }
 pub(crate) use invalid;
+
+/// `context: error: its causes`, each cause skipped that only repeats the end of the text
+/// before it.
+pub(crate) fn caused(context: String, e: &dyn std::error::Error) -> Error {
+    let mut text = context;
+    let mut cause = Some(e);
+    while let Some(c) = cause {
+        let t = c.to_string();
+        if !text.ends_with(&t) {
+            text.push_str(": ");
+            text.push_str(&t);
+        }
+        cause = c.source();
+    }
+    Error::Invalid(text)
+}

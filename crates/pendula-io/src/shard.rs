@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::npy::{Written, checksum};
-use crate::{Error, Result, invalid};
+use crate::{Result, caused, invalid};
 
 /// The format of a shard's description (FILE.npy.json), in `pendula_sweep`. Format 2 added
 /// `data` (the .npy file's length and CRC-32, which a merge checks); readers ignore keys they
@@ -42,22 +42,6 @@ pub struct Shard {
     pub data: Written,
     /// Whether the CPU that computed it had fused multiply-adds (absent in older shards).
     pub fma: Option<bool>,
-}
-
-/// `context: error: its causes`, each cause skipped that only repeats the end of the text
-/// before it.
-fn caused(context: String, e: &dyn std::error::Error) -> Error {
-    let mut text = context;
-    let mut cause = Some(e);
-    while let Some(c) = cause {
-        let t = c.to_string();
-        if !text.ends_with(&t) {
-            text.push_str(": ");
-            text.push_str(&t);
-        }
-        cause = c.source();
-    }
-    Error::Invalid(text)
 }
 
 /// The description's path, for messages.
