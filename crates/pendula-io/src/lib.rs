@@ -11,6 +11,8 @@
 //! - [`shard`]: the descriptions written beside a sharded run's `.npy` files (FILE.npy.json)
 //!   and the checks that the shards handed to a merge are all of one run, each once, intact.
 //! - [`scenario`]: scenario files (TOML), read by the CLI and written by the lab.
+//! - [`checkpoint`]: checkpoint files (header line with a CRC-32, then JSON) and the exact
+//!   encodings of the state they hold.
 //!
 //! Units are SI and angles radians, as in the library ([`pendula`]).
 //!
@@ -22,6 +24,7 @@
 //! assert!(parse_value("m1", "2deg", Some(info.quantity("m1").unwrap())).is_err());
 //! ```
 
+pub mod checkpoint;
 pub mod npy;
 pub mod scenario;
 pub mod shard;
