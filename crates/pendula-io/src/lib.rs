@@ -12,7 +12,8 @@
 //!   and the checks that the shards handed to a merge are all of one run, each once, intact.
 //! - [`scenario`]: scenario files (TOML), read by the CLI and written by the lab.
 //! - [`checkpoint`]: checkpoint files (header line with a CRC-32, then JSON) and the exact
-//!   encodings of the state they hold.
+//!   encodings of the state they hold; [`chunks`]: the values files of grids computed a
+//!   chunk at a time with a checkpoint.
 //!
 //! Units are SI and angles radians, as in the library ([`pendula`]).
 //!
@@ -25,6 +26,7 @@
 //! ```
 
 pub mod checkpoint;
+pub mod chunks;
 pub mod npy;
 pub mod scenario;
 pub mod shard;
