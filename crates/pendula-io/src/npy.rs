@@ -15,7 +15,8 @@
 //! streamed array's ends in `, }` as `numpy.save` writes it, and is padded to the length of
 //! the longest row count's header, so that the final count fits in place.
 
-use std::io::{self, Read, Write};
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
 
 use crate::value::clip;
 use crate::{Result, invalid};
@@ -145,6 +146,95 @@ pub fn streamed_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
     let total = (unpadded.div_ceil(ALIGN).max(1) * ALIGN).max(min_len);
     let length = u16::try_from(total - 10).expect("a short header").to_le_bytes();
     frame(1, &length, &dict, total)
+}
+
+/// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row into `W`: the
+/// header ([`streamed_header`]) is written first with room for any row count, and rewritten
+/// with the real one at the end. Into a file that cannot seek (a FIFO), the rows go to a
+/// spool file the caller gives (an unnamed temporary file) and follow the final header at the
+/// end. Every byte that reaches `W` is counted ([`Tally`]).
+pub struct Rows<W: Write + Seek> {
+    out: BufWriter<Tally<W>>,
+    /// The rows, when `out` cannot seek.
+    spool: Option<BufWriter<File>>,
+    columns: usize,
+    rows: u64,
+    header_len: usize,
+}
+
+impl<W: Write + Seek> Rows<W> {
+    /// Starts the array in `file` (at its start); `spool` receives the rows when `file`
+    /// cannot seek.
+    pub fn new(file: W, columns: usize, spool: Option<File>) -> io::Result<Self> {
+        // The header's size for the longest row count; every header is padded to it.
+        let header_len = streamed_header_len(columns);
+        let mut out = BufWriter::with_capacity(1 << 16, Tally::new(file));
+        if spool.is_none() {
+            out.write_all(&streamed_header(0, columns, header_len))?;
+        }
+        let spool = spool.map(|f| BufWriter::with_capacity(1 << 16, f));
+        Ok(Rows { out, spool, columns, rows: 0, header_len })
+    }
+
+    /// Continues an array of `rows` rows whose bytes so far `file` has counted (a file
+    /// continued where a checkpoint left it).
+    pub fn resume(file: Tally<W>, columns: usize, rows: u64) -> Self {
+        let header_len = streamed_header_len(columns);
+        Rows { out: BufWriter::with_capacity(1 << 16, file), spool: None, columns, rows, header_len }
+    }
+
+    /// Appends one row of `columns` values.
+    pub fn row(&mut self, values: impl Iterator<Item = f64>) -> io::Result<()> {
+        let w: &mut dyn Write = match &mut self.spool {
+            Some(spool) => spool,
+            None => &mut self.out,
+        };
+        let mut n = 0;
+        for v in values {
+            w.write_all(&v.to_le_bytes())?;
+            n += 1;
+        }
+        debug_assert_eq!(n, self.columns, "a row has one value per column");
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Flushes the rows to the file and says how many bytes it holds and their CRC-32.
+    ///
+    /// # Panics
+    /// When the rows are spooled: a file that cannot seek has no position to record.
+    pub fn position(&mut self) -> io::Result<(u64, u32)> {
+        assert!(self.spool.is_none(), "a checkpointed trajectory is a regular file");
+        self.out.flush()?;
+        Ok(self.out.get_ref().written())
+    }
+
+    /// Writes the header with the final shape.
+    pub fn finish(self) -> io::Result<()> {
+        let header = streamed_header(self.rows, self.columns, self.header_len);
+        let mut out = self.out;
+        match self.spool {
+            Some(spool) => {
+                let mut spool = spool.into_inner().map_err(|e| e.into_error())?;
+                spool.seek(SeekFrom::Start(0))?;
+                out.write_all(&header)?;
+                io::copy(&mut spool, &mut out)?;
+                out.flush()?;
+            }
+            None => {
+                let mut file = out.into_inner().map_err(|e| e.into_error())?.into_parts().0;
+                file.seek(SeekFrom::Start(0))?;
+                file.write_all(&header)?;
+                file.flush()?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The length of every streamed header of `columns` columns: the longest row count's.
+pub fn streamed_header_len(columns: usize) -> usize {
+    streamed_header(u64::MAX, columns, 0).len()
 }
 
 /// Magic, version `major`.0, the encoded `length`, the dictionary, spaces to `total - 1`
@@ -441,6 +531,37 @@ mod tests {
         );
         let err = claim(&npy(&deep, &[0; 8])).unwrap_err().to_string();
         assert!(err.contains("nests 9 deep"), "{err}");
+    }
+
+    #[test]
+    fn streamed_rows_end_as_a_whole_array_with_its_row_count() {
+        let mut file = io::Cursor::new(Vec::new());
+        let mut rows = Rows::new(&mut file, 2, None).expect("in memory");
+        rows.row([1.0, 2.0].into_iter()).expect("in memory");
+        let (bytes, _) = rows.position().expect("in memory");
+        assert_eq!(bytes as usize, streamed_header_len(2) + 16);
+        rows.row([3.0, 4.0].into_iter()).expect("in memory");
+        rows.finish().expect("in memory");
+        let out = file.into_inner();
+        assert_eq!(&out[..streamed_header_len(2)], streamed_header(2, 2, streamed_header_len(2)));
+        assert_eq!(out.len(), streamed_header_len(2) + 32);
+        // Spooled (a FIFO): the same bytes.
+        let spool = File::options()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(std::env::temp_dir().join(format!("pendula-io-spool-{}", std::process::id())));
+        let spool = spool.expect("a temporary file");
+        let mut fifo = io::Cursor::new(Vec::new());
+        let mut rows = Rows::new(&mut fifo, 2, Some(spool)).expect("in memory");
+        rows.row([1.0, 2.0].into_iter()).expect("in memory");
+        rows.row([3.0, 4.0].into_iter()).expect("in memory");
+        rows.finish().expect("in memory");
+        let _ = std::fs::remove_file(
+            std::env::temp_dir().join(format!("pendula-io-spool-{}", std::process::id())),
+        );
+        assert_eq!(fifo.into_inner(), out);
     }
 
     #[test]
