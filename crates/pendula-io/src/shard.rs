@@ -7,7 +7,9 @@
 
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
+use pendula::sweep::Sweep;
+use pendula::system::SystemInfo;
+use serde_json::{Value, json};
 
 use crate::npy::{Written, checksum};
 use crate::{Result, caused, invalid};
@@ -42,6 +44,70 @@ pub struct Shard {
     pub data: Written,
     /// Whether the CPU that computed it had fused multiply-adds (absent in older shards).
     pub fma: Option<bool>,
+}
+
+/// What the description of a sweep's run says beyond the sweep itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunFacts {
+    /// The cells computed, [start, end) of the whole grid (a shard's, or all of them).
+    pub cells: (usize, usize),
+    /// The length and CRC-32 of the `.npy` file, when written.
+    pub data: Option<Written>,
+    /// Whether the CPU has fused multiply-adds.
+    pub fma: bool,
+    /// Worker threads.
+    pub threads: usize,
+    /// Wall-clock time of the computation, s.
+    pub wall_s: f64,
+}
+
+/// The description of `sweep`'s run (FILE.npy.json beside the array, and the summary):
+/// format, pendula version, system, method, dt (s), steps, axes and their units, columns
+/// and their units, the whole shape, the shard, its offset and count, the fingerprint a
+/// merge matches, `data` (when given), kernel, fma, threads, wall_s — in that order.
+pub fn sweep_description(sweep: &Sweep, run: &RunFacts) -> Value {
+    let spec = sweep.spec();
+    let (start, end) = run.cells;
+    let mut d = json!({
+        "pendula_sweep": SHARD_FORMAT,
+        "pendula": env!("CARGO_PKG_VERSION"),
+        "system": sweep.info().name,
+        "method": spec.method.name,
+        "dt": spec.h,
+        "steps": spec.steps,
+        "axes": spec.axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
+        // Units beside, not inside, `axes` and `columns`, whose entries keep their form.
+        "axis_units": spec.axes.iter().map(|a| quantity_unit(sweep.info(), &a.name)).collect::<Vec<_>>(),
+        "columns": sweep.columns(),
+        "units": sweep.columns().iter().map(|c| quantity_unit(sweep.info(), c)).collect::<Vec<_>>(),
+        "shape": sweep.shape(),
+        "shard": spec.shard.0,
+        "shards": spec.shard.1,
+        "offset": start,
+        "count": end - start,
+        "fingerprint": sweep.fingerprint(),
+    });
+    let fields = d.as_object_mut().expect("an object");
+    if let Some(w) = run.data {
+        fields.insert("data".into(), json!({ "bytes": w.bytes, "crc32": format!("{:08x}", w.crc32) }));
+    }
+    fields.insert("kernel".into(), json!(sweep.kernel()));
+    fields.insert("fma".into(), json!(run.fma));
+    fields.insert("threads".into(), json!(run.threads));
+    fields.insert("wall_s".into(), json!(run.wall_s));
+    d
+}
+
+/// The unit of a swept quantity or recorded column of `info`, as the catalogue writes it
+/// (`1` for a dimensionless one): a parameter's or state variable's own, seconds for a flip
+/// time, the energy's for an energy error.
+pub fn quantity_unit(info: &SystemInfo, name: &str) -> &'static str {
+    let or_one = |u: &'static str| if u.is_empty() { "1" } else { u };
+    match name {
+        "flip_time" => or_one(info.time_unit()),
+        "energy_error" => or_one(info.energy_unit()),
+        _ => info.quantity(name).map_or("", |q| q.unit),
+    }
 }
 
 /// The description's path, for messages.

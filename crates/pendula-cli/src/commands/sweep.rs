@@ -365,31 +365,14 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         shape = vec![end - start, cols];
     }
     let written = write_npy(&out_file, &shape, &data)?;
-    let description = json!({
-        "pendula_sweep": SHARD_FORMAT,
-        "pendula": env!("CARGO_PKG_VERSION"),
-        "system": sweep.info().name,
-        "method": sweep.spec().method.name,
-        "dt": sweep.spec().h,
-        "steps": sweep.spec().steps,
-        "axes": sweep.spec().axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
-        // Units beside, not inside, `axes` and `columns`: those keys stay as Python's
-        // `pendula.sweep` writes them.
-        "axis_units": sweep.spec().axes.iter().map(|a| quantity_unit(sweep.info(), &a.name)).collect::<Vec<_>>(),
-        "columns": sweep.columns(),
-        "units": sweep.columns().iter().map(|c| quantity_unit(sweep.info(), c)).collect::<Vec<_>>(),
-        "shape": sweep.shape(),
-        "shard": sweep.spec().shard.0,
-        "shards": sweep.spec().shard.1,
-        "offset": start,
-        "count": end - start,
-        "fingerprint": sweep.fingerprint(),
-        "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
-        "kernel": sweep.kernel(),
-        "fma": ensemble::has_fma(),
-        "threads": threads,
-        "wall_s": wall_s,
-    });
+    let run = pendula_io::shard::RunFacts {
+        cells: (start, end),
+        data: Some(written),
+        fma: ensemble::has_fma(),
+        threads,
+        wall_s,
+    };
+    let description = pendula_io::shard::sweep_description(&sweep, &run);
     write_json(&side_file, &description)?;
     let files = vec![out_file, side_file];
     // The array, its description and the summary appear together or not at all, and
@@ -524,17 +507,7 @@ impl Progress {
     }
 }
 
-/// The unit of a swept quantity or recorded column of `info`, as the catalogue writes it
-/// (`1` for a dimensionless one): a parameter's or state variable's own, seconds for a flip
-/// time, the energy's for an energy error.
-pub(crate) fn quantity_unit(info: &pendula::system::SystemInfo, name: &str) -> &'static str {
-    let or_one = |u: &'static str| if u.is_empty() { "1" } else { u };
-    match name {
-        "flip_time" => or_one(info.time_unit()),
-        "energy_error" => or_one(info.energy_unit()),
-        _ => info.quantity(name).map_or("", |q| q.unit),
-    }
-}
+pub(crate) use pendula_io::shard::quantity_unit;
 
 pub use pendula_io::shard::SHARD_FORMAT;
 

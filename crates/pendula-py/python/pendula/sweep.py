@@ -140,14 +140,15 @@ class SweepResult:
 
     @property
     def description(self) -> dict:
-        """The CLI's description of the run: system, method, dt (s), steps, axes, columns,
-        the whole shape, the shard, its offset and count, the fingerprint `merge` matches,
-        ``data`` (the .npy file's bytes and CRC-32), kernel, threads, wall_s."""
+        """The description of the run, the one ``pendula sweep`` writes: system, method,
+        dt (s), steps, axes and their units, columns and their units, the whole shape, the
+        shard, its offset and count, the fingerprint `merge` matches, ``data`` (the .npy
+        file's bytes and CRC-32), kernel, fma, threads, wall_s."""
         d = dict(self._description)
         if self._data_info is None:
             size, crc = _core.npy_written(np.ascontiguousarray(self.data, dtype="<f8"))
             self._data_info = {"bytes": size, "crc32": f"{crc:08x}"}
-        # In the CLI's order of keys: `data` after the fingerprint.
+        # In the description's order of keys: `data` after the fingerprint.
         out = {}
         for k, v in d.items():
             out[k] = v
@@ -288,26 +289,9 @@ def _settings(system: Any, set: Optional[Mapping[str, Any]]) -> tuple:
 
 def _result(out: dict) -> SweepResult:
     data = out.pop("data")
-    d = {
-        "pendula_sweep": SHARD_FORMAT,
-        "pendula": out["pendula"],
-        "system": out["system"],
-        "method": out["method"],
-        "dt": out["dt"],
-        "steps": out["steps"],
-        "axes": [{"name": n, "lo": lo, "hi": hi, "n": k} for n, lo, hi, k in out["axes"]],
-        "columns": list(out["columns"]),
-        "shape": list(out["shape"]),
-        "shard": out["shard"],
-        "shards": out["shards"],
-        "offset": out["offset"],
-        "count": out["count"],
-        "fingerprint": out["fingerprint"],
-        "kernel": out["kernel"],
-        "fma": out["fma"],
-        "threads": out["threads"],
-        "wall_s": out["wall_s"],
-    }
+    # The description every sharded run writes beside its array (pendula-io's), without
+    # `data`, which the `description` property adds from the array.
+    d = json.loads(out["description"])
     if d["shards"] == 1:
         data = data.reshape(d["shape"])
     return SweepResult(data, d)
