@@ -1,17 +1,19 @@
 //! Grids in chunks with a checkpoint (`sweep --checkpoint`, `fractal --checkpoint`): the
 //! cells are computed a chunk at a time, and each finished chunk's values are appended to
 //! `FILE.chunks` beside the checkpoint FILE, which then lists the chunks done with the
-//! CRC-32 of each. An interrupt ends the run after the chunk in progress (exit 128 + the
+//! CRC-32 of each (the files' format is [`pendula_io::chunks`]'s). An interrupt ends the run after the chunk in progress (exit 128 + the
 //! signal); `pendula resume FILE` reads the finished chunks back, checks them, computes the
 //! others, and writes the same bytes as a run never interrupted (a cell's result does not
 //! depend on which cells are computed with it). Both files are removed when the run ends.
 
 use std::fs::File;
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
+pub use pendula_io::chunks::chunk_size;
+use pendula_io::chunks::{Layout, data_path};
 use serde_json::{Value, json};
 
 use crate::checkpoint::Checkpoint;
@@ -34,29 +36,12 @@ pub struct Chunks {
     listed: bool,
 }
 
-/// Cells per chunk for `cells` cells on `threads` threads: about 256 chunks, each large
-/// enough to keep every thread busy (the ensemble engine hands out 256 members at a time).
-pub fn chunk_size(cells: usize, threads: usize) -> usize {
-    cells.div_ceil(256).max(1024 * threads).div_ceil(256) * 256
-}
-
 impl Chunks {
-    /// The values file of checkpoint `path`.
-    fn data_path(path: &Path) -> PathBuf {
-        let mut name = path.as_os_str().to_owned();
-        name.push(".chunks");
-        PathBuf::from(name)
-    }
-
     /// Claims the checkpoint `path` and its values file as outputs of the run, before any
     /// work: regular files, neither of them another output (nor a FIFO, a device, `-`).
     pub fn claim(path: &Path) -> Result<()> {
         crate::output::claim_regular(path, "--checkpoint", "a checkpoint")?;
-        crate::output::claim_regular(
-            &Self::data_path(path),
-            "--checkpoint",
-            "a checkpoint's finished chunks",
-        )?;
+        crate::output::claim_regular(&data_path(path), "--checkpoint", "a checkpoint's finished chunks")?;
         Ok(())
     }
 
@@ -71,7 +56,7 @@ impl Chunks {
                 crate::checkpoint::absolute(path).display()
             );
         }
-        let data_path = Self::data_path(path);
+        let data_path = data_path(path);
         let data = crate::output::together(|guard| guard.create_listed(&data_path))
             .map_err(|e| crate::output::WriteError::new("--checkpoint", &data_path, e))?;
         let data = OutFile::new(data, "--checkpoint", &data_path);
@@ -108,33 +93,13 @@ impl Chunks {
                 "the checkpoint {name} is of another grid ({cells} cells of {width} values in chunks of {chunk})"
             );
         }
-        let data_path = Self::data_path(&checkpoint.path);
+        let data_path = data_path(&checkpoint.path);
         let mut data = File::options().read(true).write(true).open(&data_path).with_context(|| {
             format!("cannot open {}, the finished chunks of the checkpoint {name}", data_path.display())
         })?;
-        let count = cells.div_ceil(chunk);
-        let mut finished = vec![false; count];
-        let mut length = 0u64;
-        for &(index, crc) in &done {
-            if index >= count || std::mem::replace(&mut finished[index], true) {
-                bail!("the checkpoint {name} lists chunk {index} twice or out of range");
-            }
-            let range = index * chunk..((index + 1) * chunk).min(cells);
-            let mut bytes = vec![0u8; range.len() * width * 8];
-            data.read_exact(&mut bytes).with_context(|| {
-                format!("{} is shorter than its checkpoint {name} says: it was cut", data_path.display())
-            })?;
-            if crc32fast::hash(&bytes) != crc {
-                bail!(
-                    "chunk {index} in {} does not match its checkpoint {name} (checksum): it was changed",
-                    data_path.display()
-                );
-            }
-            for (o, b) in out[range.start * width..range.end * width].iter_mut().zip(bytes.chunks_exact(8)) {
-                *o = f64::from_le_bytes(b.try_into().expect("8 bytes"));
-            }
-            length += bytes.len() as u64;
-        }
+        let layout = Layout { cells, width, chunk };
+        let (finished, length) =
+            pendula_io::chunks::read_done(&mut data, &layout, &done, out, &name.to_string(), &data_path)?;
         // Values appended after the checkpoint was written are computed again.
         let mut data = OutFile::new(data, "--checkpoint", &data_path);
         data.set_len(length)?;
@@ -160,23 +125,28 @@ impl Chunks {
         Ok((chunks, finished))
     }
 
+    /// How the grid is cut.
+    fn layout(&self) -> Layout {
+        Layout { cells: self.cells, width: self.width, chunk: self.chunk }
+    }
+
     /// The number of chunks.
     pub fn count(&self) -> usize {
-        self.cells.div_ceil(self.chunk)
+        self.layout().count()
     }
 
     /// The cells of chunk `index`.
     pub fn range(&self, index: usize) -> Range<usize> {
-        index * self.chunk..((index + 1) * self.chunk).min(self.cells)
+        self.layout().range(index)
     }
 
     /// Records chunk `index` as done with these values (its cells' × width): appends them,
     /// makes them durable, and rewrites the checkpoint.
     pub fn record(&mut self, index: usize, values: &[f64]) -> Result<()> {
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let (bytes, crc) = pendula_io::chunks::encode(values);
         self.data.write_all(&bytes)?;
         self.data.sync_data()?;
-        self.done.push((index, crc32fast::hash(&bytes)));
+        self.done.push((index, crc));
         self.write()
     }
 
@@ -184,14 +154,7 @@ impl Chunks {
     /// is kept with it.
     fn write(&mut self) -> Result<()> {
         let mut body = self.base.clone();
-        let fields = json!({
-            "cells": self.cells,
-            "width": self.width,
-            "chunk": self.chunk,
-            "chunks_done": self.done.len(),
-            "chunks": self.count(),
-            "done": self.done,
-        });
+        let fields = pendula_io::chunks::fields(&self.layout(), &self.done);
         for (k, v) in fields.as_object().expect("an object") {
             body[k] = v.clone();
         }

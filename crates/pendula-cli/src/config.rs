@@ -2,17 +2,15 @@
 //! [`SimulateConfig`], with the values parsed by `parse`, the layer below. Every error names
 //! the offending value and what is allowed.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, bail};
 use clap::Args;
 use pendula::control::Tolerances;
 use pendula::error::Short;
 use pendula::integrator::{self, Method, Scheme};
 use pendula::system::{self, SystemInfo, Values};
 use pendula::{End, RunSpec};
-use serde::Deserialize;
 
 use crate::args::{LargeArg, PresetArg, SetArgs, SummaryArg};
 use crate::limits::{self, Cost, Estimate};
@@ -174,174 +172,16 @@ pub struct Checkpoints {
     pub every: Option<f64>,
 }
 
-/// A scenario file: the same names as the flags.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Scenario {
-    system: Option<String>,
-    method: Option<String>,
-    dt: Option<f64>,
-    #[serde(alias = "t-end")]
-    t_end: Option<f64>,
-    steps: Option<u64>,
-    rtol: Option<f64>,
-    atol: Option<f64>,
-    #[serde(alias = "h-min")]
-    h_min: Option<f64>,
-    #[serde(alias = "h-max")]
-    h_max: Option<f64>,
-    every: Option<u64>,
-    out: Option<PathBuf>,
-    summary: Option<PathBuf>,
-    #[serde(default)]
-    set: BTreeMap<String, toml::Value>,
-}
+pub use pendula_io::scenario::Scenario;
 
 fn read_scenario(path: &Path) -> Result<Scenario> {
-    use std::io::Read;
-    let name = path.display();
-    let file = std::fs::File::open(path).with_context(|| format!("cannot read scenario file {name}"))?;
-    // Read at most one byte past the cap: a huge file, or an endless one (/dev/zero, a
-    // pipe), is refused without being read whole.
-    let mut bytes = Vec::new();
-    file.take(limits::MAX_SCENARIO_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .with_context(|| format!("cannot read scenario file {name}"))?;
-    parse_scenario(bytes, &name.to_string())
+    Ok(pendula_io::scenario::read(path)?)
 }
 
-/// The scenario in `bytes`, the contents of the file `name`: checked for its size, UTF-8 and
-/// nesting before the TOML parser sees it (the fuzz harness, `tests/fuzz/`, calls it with
-/// generated files).
+/// The scenario in `bytes`, the contents of the file `name` ([`pendula_io::scenario::parse`]:
+/// the fuzz harness, `tests/fuzz/`, calls it with generated files).
 pub fn parse_scenario(bytes: Vec<u8>, name: &str) -> Result<Scenario> {
-    if bytes.len() as u64 > limits::MAX_SCENARIO_BYTES {
-        bail!(
-            "scenario file {name} is larger than {}, the limit for a scenario (a few lines of keys and values)",
-            limits::bytes(limits::MAX_SCENARIO_BYTES as f64)
-        );
-    }
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let (line, column) = line_column(&String::from_utf8_lossy(e.as_bytes()), at);
-        anyhow!("invalid scenario file {name}, line {line}, column {column}: not UTF-8 text")
-    })?;
-    // The parser recurses on nested arrays and inline tables: a deep nest is refused first.
-    if let Some(at) = too_deep(&text, limits::MAX_SCENARIO_DEPTH) {
-        let (line, column) = line_column(&text, at);
-        bail!(
-            "invalid scenario file {name}, line {line}, column {column}: arrays or tables nested more than {} deep",
-            limits::MAX_SCENARIO_DEPTH
-        );
-    }
-    let scenario: Scenario = toml::from_str(&text).map_err(|e| {
-        // toml's own message quotes the whole offending line and serde's may quote a whole
-        // value: the message is clipped and the line shown around the error only.
-        let message = clip_message(e.message());
-        match e.span() {
-            Some(span) => {
-                let (line, column) = line_column(&text, span.start);
-                let excerpt = excerpt(&text, span.start);
-                anyhow!("invalid scenario file {name}, line {line}, column {column}: {message}\n  {excerpt}")
-            }
-            None => anyhow!("invalid scenario file {name}: {message}"),
-        }
-    })?;
-    if scenario.t_end.is_some() && scenario.steps.is_some() {
-        bail!("scenario file {name} sets both t_end and steps; set one");
-    }
-    Ok(scenario)
-}
-
-/// The 1-based line and column (in characters) of byte `at` of `text`.
-fn line_column(text: &str, at: usize) -> (usize, usize) {
-    let at = floor_boundary(text, at);
-    let before = &text[..at];
-    let line = before.matches('\n').count() + 1;
-    let start = before.rfind('\n').map_or(0, |i| i + 1);
-    (line, before[start..].chars().count() + 1)
-}
-
-/// The largest char boundary of `text` at or before `at`.
-fn floor_boundary(text: &str, at: usize) -> usize {
-    let mut at = at.min(text.len());
-    while !text.is_char_boundary(at) {
-        at -= 1;
-    }
-    at
-}
-
-/// The line around byte `at`: at most 30 characters either side, marked where cut.
-fn excerpt(text: &str, at: usize) -> String {
-    const SIDE: usize = 30;
-    let at = floor_boundary(text, at);
-    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    let end = text[at..].find('\n').map_or(text.len(), |i| at + i);
-    let before: Vec<char> = text[start..at].chars().collect();
-    let after: Vec<char> = text[at..end].chars().collect();
-    let (b, a) = (before.len().saturating_sub(SIDE), after.len().min(SIDE));
-    format!(
-        "{}{}{}{}",
-        if b > 0 { "…" } else { "" },
-        before[b..].iter().collect::<String>(),
-        after[..a].iter().collect::<String>(),
-        if a < after.len() { "…" } else { "" }
-    )
-}
-
-/// A parser's message, clipped to 200 characters and to its first line.
-fn clip_message(message: &str) -> String {
-    const KEEP: usize = 200;
-    let first = message.lines().next().unwrap_or("");
-    match first.char_indices().nth(KEEP) {
-        None => first.to_owned(),
-        Some((cut, _)) => format!("{}… (clipped)", &first[..cut]),
-    }
-}
-
-/// The byte offset where arrays and inline tables of a TOML text first nest deeper than
-/// `max`, if they do: brackets are counted outside strings and comments, in one pass.
-fn too_deep(text: &str, max: usize) -> Option<usize> {
-    let b = text.as_bytes();
-    let (mut i, mut depth) = (0, 0usize);
-    while i < b.len() {
-        match b[i] {
-            b'#' => {
-                while i < b.len() && b[i] != b'\n' {
-                    i += 1;
-                }
-            }
-            q @ (b'"' | b'\'') => {
-                let triple = b[i..].starts_with(if q == b'"' { b"\"\"\"" } else { b"\'\'\'" });
-                let width = if triple { 3 } else { 1 };
-                i += width;
-                while i < b.len() {
-                    if q == b'"' && b[i] == b'\\' {
-                        i += 2;
-                        continue;
-                    }
-                    if b[i] == q && (width == 1 || b[i..].starts_with(&[q, q, q])) {
-                        i += width - 1;
-                        break;
-                    }
-                    // A single-line string ends at the line's end, closed or not.
-                    if width == 1 && b[i] == b'\n' {
-                        break;
-                    }
-                    i += 1;
-                }
-            }
-            b'[' | b'{' => {
-                depth += 1;
-                if depth > max {
-                    return Some(i);
-                }
-            }
-            b']' | b'}' => depth = depth.saturating_sub(1),
-            _ => {}
-        }
-        i += 1;
-    }
-    None
+    Ok(pendula_io::scenario::parse(bytes, name)?)
 }
 
 /// Validates `simulate`'s arguments (and scenario file) into a [`SimulateConfig`].
@@ -659,7 +499,7 @@ fn parse_times(text: &str) -> Result<Vec<f64>> {
     let times: Vec<f64> = text
         .split(',')
         .map(|t| parse_float("--t-eval", t, "comma-separated times in seconds, e.g. 0,0.5,1"))
-        .collect::<Result<_>>()?;
+        .collect::<Result<_, _>>()?;
     if let Some(bad) = times.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
         bail!("invalid --t-eval: {} is not a time >= 0 s", Short(*bad));
     }
@@ -682,20 +522,5 @@ fn output(path: PathBuf) -> Result<Output> {
             "invalid --out `{}`: the format follows the extension; use .csv, .npy, or - for CSV on stdout (a FIFO or device takes CSV)",
             path.display()
         ),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn nesting_is_counted_outside_strings_and_comments() {
-        assert_eq!(too_deep("a = [[1, 2], [3]]\n", 2), None);
-        assert_eq!(too_deep("a = [[[1]]]\n", 2), Some(6));
-        assert_eq!(too_deep("a = \"[[[[\" # {{{{\nb = '[[[['\n", 2), None);
-        assert_eq!(too_deep("a = \"\"\"\n[[[[\n\"\"\"\nb = '''{{{{'''\n", 2), None);
-        assert_eq!(too_deep("a = \"\\\"[[[\"\n", 2), None);
-        assert_eq!(too_deep("a = { b = { c = { d = 1 } } }\n", 2), Some(16));
     }
 }

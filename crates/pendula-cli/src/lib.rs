@@ -48,8 +48,8 @@
 //!
 //! # Where checkpoint state lives
 //!
-//! `crates/pendula-cli/src/checkpoint.rs` is the file
-//! format (a header line with the format, its version and the CRC-32 of the rest; JSON with the
+//! `crates/pendula-cli/src/checkpoint.rs` writes the file
+//! format, `pendula_io::checkpoint`'s (a header line with the format, its version and the CRC-32 of the rest; JSON with the
 //! command, working directory, arguments, a fingerprint of the validated request, and state as
 //! hexadecimal bit patterns; written through the writer, `AtomicFile::recreate`, at every pause).
 //! `crates/pendula-cli/src/run_state.rs` is what a `simulate` checkpoint holds — the library's

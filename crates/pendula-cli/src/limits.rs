@@ -26,13 +26,7 @@ pub const MAX_OUTPUT_BYTES: f64 = (1u64 << 30) as f64;
 pub const MAX_MEMORY_BYTES: f64 = (2u64 << 30) as f64;
 /// Bytes of an input file (`plot`, `merge`).
 pub const MAX_INPUT_BYTES: f64 = (1u64 << 30) as f64;
-/// Bytes of a scenario file: a scenario is a few lines, and it is read whole.
-pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
-/// Bytes of a JSON description beside a .npy (a shard's, a sweep's or fractal's summary):
-/// some hundred bytes per axis, and it is read whole.
-pub const MAX_DESCRIPTION_BYTES: u64 = 1 << 20;
-/// Nesting of arrays and tables in a scenario file (the parser recurses on it).
-pub const MAX_SCENARIO_DEPTH: usize = 16;
+pub use pendula_io::shard::MAX_DESCRIPTION_BYTES;
 /// Step sizes of a convergence or work-precision study, and tolerances of work-precision:
 /// 30 halvings span nine decades, more than double precision can resolve.
 pub const MAX_LEVELS: u64 = 30;
@@ -42,9 +36,6 @@ pub const MAX_ORBITS: u64 = 10_000;
 pub const MAX_SAMPLES: u64 = 1_000_000;
 /// RK4 steps per drive period of a bifurcation diagram.
 pub const MAX_STEPS_PER_PERIOD: u64 = 1_000_000;
-/// Cells along one axis of a grid (sweep, fractal, bifurcation): the grid's size is limited
-/// by its work and its bytes; this only keeps the product representable.
-pub const MAX_AXIS_CELLS: u64 = 1_000_000_000;
 /// Threads, even with `--allow-large`.
 pub const MAX_THREADS: usize = 1024;
 /// Steps of a fixed-step run (the library's own bound: 10¹³ steps take days).
@@ -192,26 +183,7 @@ pub fn round(x: f64) -> String {
     if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
 }
 
-/// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
-pub fn bytes(x: f64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = x;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    let shown = if !v.is_finite() || v >= 1e6 {
-        sci(v)
-    } else if v.fract() == 0.0 || v >= 100.0 {
-        format!("{v:.0}")
-    } else {
-        // Three significant digits: 29.8 GiB, 1.5 KiB.
-        let decimals = if v >= 10.0 { 1 } else { 2 };
-        format!("{v:.decimals$}").trim_end_matches('0').trim_end_matches('.').to_owned()
-    };
-    format!("{shown} {}", UNITS[unit])
-}
+pub use pendula_io::value::bytes;
 
 /// Steps of a run of `span` seconds at step `h`, at least 1 (as [`pendula::RunSpec::schedule`]
 /// counts them, without its checks: for estimates of validated values).
@@ -238,148 +210,18 @@ pub fn motion_period(model: &dyn pendula::model::DynModel, y0: &[f64]) -> f64 {
     model.time_scale() * if ratio.is_nan() { 0.0 } else { ratio.min(1.0).sqrt() }
 }
 
-/// What a .npy file's header says it holds, checked against the file's length before
-/// anything is allocated: a reader allocates what the header claims, and a header that
-/// claims 10¹⁵ values would abort the process.
-#[derive(Debug, Clone, PartialEq)]
-pub struct NpyClaim {
-    pub shape: Vec<usize>,
-    /// Bytes per value (8 for float64, 1 for uint8).
-    pub item: usize,
-}
+pub use pendula_io::npy::Claim as NpyClaim;
 
-// Public for the fuzz harness only; a claim is a shape, not a collection to test for emptiness.
-#[allow(clippy::len_without_is_empty)]
-impl NpyClaim {
-    /// The number of values.
-    pub fn len(&self) -> usize {
-        self.shape.iter().product()
-    }
-}
-
-/// Reads and checks the header of the .npy at `path` (format 1, 2 or 3): the values its
-/// shape and type claim must be what the file holds after the header.
+/// Reads and checks the header of the .npy at `path`: see [`pendula_io::npy::claim`].
 pub fn npy_claim(path: &std::path::Path) -> Result<NpyClaim> {
-    let name = path.display();
-    let file = std::fs::File::open(path).map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?;
-    let length = file.metadata().map_err(|e| anyhow::anyhow!("cannot read {name}: {e}"))?.len();
-    npy_claim_from(file, length, &name.to_string())
+    Ok(pendula_io::npy::claim(path)?)
 }
 
 /// [`npy_claim`] of the .npy `file`, `length` bytes long, named `name` in messages (the fuzz
-/// harness, `tests/fuzz/`, reads generated files from memory).
-pub fn npy_claim_from(mut file: impl std::io::Read, length: u64, name: &str) -> Result<NpyClaim> {
-    let bad = |why: &str| anyhow::anyhow!("{name} is not a valid .npy file: {why}");
-    let mut head = [0u8; 12];
-    file.read_exact(&mut head[..10]).map_err(|_| bad("too short for a header"))?;
-    if &head[..6] != b"\x93NUMPY" {
-        return Err(bad("no NUMPY magic"));
-    }
-    let (header_len, prefix) = match head[6] {
-        1 => (u16::from_le_bytes([head[8], head[9]]) as u64, 10),
-        2 | 3 => {
-            file.read_exact(&mut head[10..12]).map_err(|_| bad("too short for a header"))?;
-            (u32::from_le_bytes([head[8], head[9], head[10], head[11]]) as u64, 12)
-        }
-        v => return Err(bad(&format!("unknown format version {v}"))),
-    };
-    if prefix + header_len > length {
-        return Err(bad("its header is longer than the file"));
-    }
-    if header_len > MAX_NPY_HEADER {
-        return Err(bad(&format!("its header is longer than {}", bytes(MAX_NPY_HEADER as f64))));
-    }
-    let mut header = head[..prefix as usize].to_vec();
-    header.resize((prefix + header_len) as usize, 0);
-    file.read_exact(&mut header[prefix as usize..]).map_err(|_| bad("its header is cut short"))?;
-    // The reader's parser backtracks, taking twice as long for every level of nesting: a
-    // header of 200 bytes nested 30 deep would take days. numpy writes 2 levels (a dict and
-    // its shape tuple), a few more for structured types.
-    if let Some(depth) = nesting_beyond(&header[prefix as usize..], MAX_NPY_NESTING) {
-        return Err(bad(&format!(
-            "its header nests {depth} deep, more than {MAX_NPY_NESTING} (numpy writes 2 or 3)"
-        )));
-    }
-    // The header as the reader (ndarray-npy) parses it, which allocates what its shape says:
-    // a parse of our own could find another shape than the reader's (a key given twice, a
-    // key inside a string), and pass a file whose reading then allocates 10^15 values.
-    let header = ndarray_npy::npy::header::Header::from_reader(&mut header.as_slice()).map_err(|e| {
-        let why = e.to_string();
-        bad(&format!("its header: {}", crate::parse::clip(why.lines().next().unwrap_or(""))))
-    })?;
-    let descr = header.type_descriptor.as_string().ok_or_else(|| {
-        bad(&format!("unknown value type `{}`", crate::parse::clip(&header.type_descriptor.to_string())))
-    })?;
-    let item: usize = descr
-        .trim_start_matches(|c: char| !c.is_ascii_digit())
-        .parse()
-        .map_err(|_| bad(&format!("unknown value type `{}`", crate::parse::clip(descr))))?;
-    if item == 0 {
-        // Any count of them fits in no data: the count could not be checked.
-        return Err(bad(&format!("its values (`{}`) take no bytes", crate::parse::clip(descr))));
-    }
-    let shape = header.shape;
-    // The array library counts the lengths of the non-empty axes, and refuses (the reader
-    // unwraps: a panic) a shape whose count is beyond isize, even with no values: (0, 2^63).
-    let counted = shape.iter().filter(|&&d| d != 0).try_fold(1u128, |n, &d| n.checked_mul(d as u128));
-    if counted.is_none_or(|n| n > isize::MAX as u128) {
-        return Err(bad(&format!(
-            "its header claims a shape {} beyond counting",
-            crate::parse::clip(&format!("{shape:?}"))
-        )));
-    }
-    let values = shape.iter().try_fold(1u128, |n, &d| n.checked_mul(d as u128));
-    let data = length - prefix - header_len;
-    match values.and_then(|v| v.checked_mul(item as u128)) {
-        Some(bytes) if bytes == data as u128 => Ok(NpyClaim { shape, item }),
-        Some(bytes) => Err(bad(&format!(
-            "its header claims {} values of {item} bytes ({}), but the file holds {} after the header",
-            crate::parse::clip(&format!("{shape:?}")),
-            self::bytes(bytes as f64),
-            self::bytes(data as f64)
-        ))),
-        None => Err(bad(&format!(
-            "its header claims a shape {} beyond counting",
-            crate::parse::clip(&format!("{shape:?}"))
-        ))),
-    }
-}
-
-/// Bytes of a .npy header: numpy writes about 100 (padded to a multiple of 64).
-const MAX_NPY_HEADER: u64 = 1 << 20;
-
-/// Nesting of brackets in a .npy header: see [`npy_claim_from`].
-const MAX_NPY_NESTING: usize = 8;
-
-/// The depth of `(`, `[` and `{` in a Python literal (outside its strings), if it goes
-/// beyond `max`.
-fn nesting_beyond(text: &[u8], max: usize) -> Option<usize> {
-    let (mut depth, mut quote, mut escaped) = (0usize, None, false);
-    for &b in text {
-        match quote {
-            Some(q) => {
-                if escaped {
-                    escaped = false;
-                } else if b == b'\\' {
-                    escaped = true;
-                } else if b == q {
-                    quote = None;
-                }
-            }
-            None => match b {
-                b'\'' | b'"' => quote = Some(b),
-                b'(' | b'[' | b'{' => {
-                    depth += 1;
-                    if depth > max {
-                        return Some(depth);
-                    }
-                }
-                b')' | b']' | b'}' => depth = depth.saturating_sub(1),
-                _ => {}
-            },
-        }
-    }
-    None
+/// harness, `tests/fuzz/`, reads generated files from memory): see
+/// [`pendula_io::npy::claim_from`].
+pub fn npy_claim_from(file: impl std::io::Read, length: u64, name: &str) -> Result<NpyClaim> {
+    Ok(pendula_io::npy::claim_from(file, length, name)?)
 }
 
 #[cfg(test)]
@@ -410,51 +252,6 @@ mod tests {
         assert!(check("simulate", false, &[Estimate::new(Cost::Steps, 1e11, "")]).is_ok());
         // NaN is no estimate to run on.
         assert!(check("simulate", false, &[Estimate::new(Cost::Output, f64::NAN, "")]).is_err());
-    }
-
-    /// A .npy file (format 1) of `header` and `data`.
-    fn npy(header: &str, data: &[u8]) -> Vec<u8> {
-        let header = format!("{header}\n");
-        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-        bytes.extend((header.len() as u16).to_le_bytes());
-        bytes.extend(header.bytes());
-        bytes.extend(data);
-        bytes
-    }
-
-    fn claim(bytes: &[u8]) -> Result<NpyClaim> {
-        npy_claim_from(bytes, bytes.len() as u64, "x.npy")
-    }
-
-    #[test]
-    fn npy_headers_are_read_as_the_reader_reads_them() {
-        let plain = "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 1), }";
-        assert_eq!(claim(&npy(plain, &[0; 16])).unwrap(), NpyClaim { shape: vec![2, 1], item: 8 });
-        // A key given twice is the last one's, as ndarray-npy (and Python) take it: the
-        // shape checked is the one allocated for.
-        let twice = "{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'shape': (1000000000000000,), }";
-        let err = claim(&npy(twice, &[0; 8])).unwrap_err().to_string();
-        assert!(err.contains("[1000000000000000]"), "{err}");
-        // No values, but an axis that the array library cannot count (its reader panicked).
-        let empty = "{'descr': '<f8', 'fortran_order': False, 'shape': (0, 9223372036854775808), }";
-        assert!(claim(&npy(empty, &[])).unwrap_err().to_string().contains("beyond counting"));
-        // Values of no bytes cannot be counted against the data.
-        let empty = "{'descr': '|V0', 'fortran_order': False, 'shape': (100000000000,), }";
-        assert!(claim(&npy(empty, &[])).unwrap_err().to_string().contains("take no bytes"));
-    }
-
-    #[test]
-    fn npy_header_nesting_is_counted_outside_strings() {
-        assert_eq!(nesting_beyond(b"{'shape': (1, 2)}", 2), None);
-        assert_eq!(nesting_beyond(b"{'x': ((1,),)}", 2), Some(3));
-        assert_eq!(nesting_beyond(b"{'x': '((((', \"[[[\\\"[[\"}", 1), None);
-        let deep = format!(
-            "{{'descr': '<f8', 'fortran_order': False, 'shape': (1,), 'x': {}1{}}}",
-            "{1: ".repeat(40),
-            "}".repeat(40)
-        );
-        let err = claim(&npy(&deep, &[0; 8])).unwrap_err().to_string();
-        assert!(err.contains("nests 9 deep"), "{err}");
     }
 
     #[test]

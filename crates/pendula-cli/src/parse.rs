@@ -1,7 +1,10 @@
 //! Command-line values and arguments: numbers (`120deg`, `pi`, counts), `--set NAME=VALUE`
 //! settings, step and end-time schedules, and the echo of a bad value in a message — the bottom
 //! of the CLI's layers, used by every command and by `simulate`'s settings (`config`). Every
-//! error names the offending value and what is allowed.
+//! error names the offending value and what is allowed. The value syntax itself is
+//! [`pendula_io::value`]'s, shared with Python and the lab; this layer adds the command line's
+//! own: `--set` items, flags' defaults, schedules, and the warning on stderr for an angle
+//! given in radians that exceeds a full turn.
 
 use std::path::Path;
 
@@ -11,191 +14,16 @@ use pendula::integrator::Scheme;
 use pendula::system::{self, Quantity, SystemInfo};
 use pendula::{End, RunSpec};
 
-/// Marks the `deg` suffix (its factor is applied as (deg · π) / 180).
-const DEGREE: f64 = std::f64::consts::PI / 180.0;
+pub use pendula_io::value::{Unusable, check_scale, clip, count, float, parse_count, parse_float, sci};
 
-/// Parses a number: a float, optionally with a `deg` or `pi` suffix when `quantity` is an
-/// angle (`120deg`, `-0.5pi`, `pi`).
+/// Parses a number ([`pendula_io::value::parse_value`]: `120deg`, `-0.5pi`, `pi` for an
+/// angle), warning on stderr when a bare number for an angle exceeds a full turn.
 pub fn parse_value(name: &str, text: &str, quantity: Option<&Quantity>) -> Result<f64> {
-    let t = text.trim();
-    let angle = quantity.is_some_and(|q| q.is_angle());
-    let pi = std::f64::consts::PI;
-    let (number, factor) = if let Some(n) = t.strip_suffix("deg") {
-        (n.trim(), DEGREE)
-    } else if let Some(n) = t.strip_suffix("pi") {
-        (n.trim().trim_end_matches('*'), pi)
-    } else {
-        (t, 1.0)
-    };
-    if factor != 1.0 && !angle {
-        let unit = quantity.map_or("", |q| q.unit);
-        bail!(
-            "invalid value `{text}` for `{name}`: the deg and pi suffixes are only for angles; `{name}` is in {unit}"
-        );
-    }
-    let value = match number {
-        "" | "+" if factor == pi => 1.0,
-        "-" if factor == pi => -1.0,
-        _ => float(number).map_err(|why| {
-            let what = match why {
-                Unusable::NotANumber => format!(
-                    "expected a number{}",
-                    if angle { " (radians), or degrees with a deg suffix (120deg)" } else { "" }
-                ),
-                other => other.to_string(),
-            };
-            anyhow!("invalid value `{}` for `{name}`: {what}", clip(text))
-        })?,
-    };
-    if factor == 1.0 && angle {
-        warn_radians(name, t, value);
-    }
-    // (deg · π) / 180, the same rounding as the catalogue's defaults and the benchmark spec.
-    let value = if factor == DEGREE { value * pi / 180.0 } else { value * factor };
-    if let Some(q) = quantity {
-        check_scale(name, text, value, q)?;
+    let value = pendula_io::value::parse_value(name, text, quantity)?;
+    if quantity.is_some_and(|q| q.is_angle()) && pendula_io::value::is_bare(text) {
+        warn_radians(name, text.trim(), value);
     }
     Ok(value)
-}
-
-/// How far from its default a mass or a length may be: beyond 10¹² times (or below 10⁻¹²
-/// times) the energies, products of masses, lengths and g, overflow or vanish in round-off
-/// against the other terms, and the run's numbers mean nothing.
-const SCALE_RANGE: f64 = 1e12;
-
-/// Refuses a mass or a length (a positive parameter in kg or m) more than [`SCALE_RANGE`]
-/// times away from its default; `text` is the value as given.
-pub fn check_scale(name: &str, text: &str, value: f64, q: &Quantity) -> Result<()> {
-    let scaled = matches!(q.unit, "kg" | "m") && q.domain == system::Domain::Positive && q.default > 0.0;
-    if scaled && value > 0.0 && value.is_finite() {
-        let ratio = value / q.default;
-        if !(1.0 / SCALE_RANGE..=SCALE_RANGE).contains(&ratio) {
-            let kind = if q.unit == "kg" { "mass" } else { "length" };
-            bail!(
-                "invalid value `{}` for `{name}`: a {kind} must be within 10^12 times its default {} {u} (from {} to {} {u}); beyond that the energies overflow or vanish in round-off",
-                clip(text),
-                Short(q.default),
-                sci(q.default / SCALE_RANGE),
-                sci(q.default * SCALE_RANGE),
-                u = q.unit,
-            );
-        }
-    }
-    Ok(())
-}
-
-/// Why a text is no usable float.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Unusable {
-    /// Not a number at all (`fast`).
-    NotANumber,
-    /// `nan`.
-    NaN,
-    /// `inf`, `-infinity`.
-    Infinite,
-    /// A number beyond f64's range, which Rust reads as infinity (`1e400`).
-    Overflow,
-    /// A number below the smallest normal float, which Rust reads as a subnormal with
-    /// fewer digits (`1e-320`) or as 0 (`1e-400`).
-    Underflow,
-}
-
-impl std::fmt::Display for Unusable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Unusable::NotANumber => "not a number",
-            Unusable::NaN => "NaN is not a number; a finite value is needed",
-            Unusable::Infinite => "must be finite",
-            Unusable::Overflow => "beyond the largest float (about 1.8e308); must be finite",
-            Unusable::Underflow => {
-                "below the smallest normal float (about 2.2e-308), where digits are lost or the value becomes 0"
-            }
-        })
-    }
-}
-
-/// Reads a float as typed, refusing NaN, infinities and numbers beyond f64's range, which
-/// Rust's parser turns silently into infinity, a subnormal or 0.
-pub fn float(text: &str) -> std::result::Result<f64, Unusable> {
-    let t = text.trim();
-    let v: f64 = t.parse().map_err(|_| Unusable::NotANumber)?;
-    let bare = t.trim_start_matches(['+', '-']).to_ascii_lowercase();
-    if v.is_nan() {
-        return Err(Unusable::NaN);
-    }
-    if v.is_infinite() {
-        return Err(if bare == "inf" || bare == "infinity" {
-            Unusable::Infinite
-        } else {
-            Unusable::Overflow
-        });
-    }
-    let mantissa = bare.split('e').next().unwrap_or("");
-    let nonzero = mantissa.chars().any(|c| ('1'..='9').contains(&c));
-    if (v != 0.0 && v.abs() < f64::MIN_POSITIVE) || (v == 0.0 && nonzero) {
-        return Err(Unusable::Underflow);
-    }
-    Ok(v)
-}
-
-/// A float given to `flag`: see [`float`]; the error names the flag, the text as typed and
-/// what was `expected`.
-pub fn parse_float(flag: &str, text: &str, expected: &str) -> Result<f64> {
-    float(text).map_err(|why| match why {
-        Unusable::NotANumber => anyhow!("invalid value `{}` for {flag}: expected {expected}", clip(text)),
-        other => anyhow!("invalid value `{}` for {flag}: {other}", clip(text)),
-    })
-}
-
-/// A whole number given to `flag`, from `min` to `max`; `what` names the unit (`steps`).
-/// Text that is no whole number, or one beyond the range (`99999999999999999999`), is
-/// refused with the range.
-pub fn parse_count(flag: &str, text: &str, min: u64, max: u64, what: &str) -> Result<u64> {
-    let range = format!("a whole number of {what}, >= {} and <= {}", count(min), count(max));
-    let n: u64 = text
-        .trim()
-        .parse()
-        .map_err(|_| anyhow!("invalid value `{}` for {flag}: expected {range}", clip(text)))?;
-    if !(min..=max).contains(&n) {
-        bail!("invalid value `{}` for {flag}: expected {range}", clip(text));
-    }
-    Ok(n)
-}
-
-/// A count for a message: in full up to a million, as a power of ten (`10^13`) or with an
-/// exponent beyond.
-pub fn count(n: u64) -> String {
-    if n < 1_000_000 {
-        return n.to_string();
-    }
-    let digits = n.to_string();
-    if digits.starts_with('1') && digits[1..].bytes().all(|b| b == b'0') {
-        format!("10^{}", digits.len() - 1)
-    } else {
-        sci(n as f64)
-    }
-}
-
-/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
-pub fn sci(x: f64) -> String {
-    if !x.is_finite() {
-        return "unboundedly many".to_owned();
-    }
-    let text = format!("{x:.3e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-    let mantissa =
-        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
-    format!("{mantissa}e{exponent}")
-}
-
-/// The user's text for a message: at most 40 characters, and how long the rest was, so that
-/// a megabyte of input is never echoed back.
-pub fn clip(text: &str) -> String {
-    const KEEP: usize = 40;
-    match text.char_indices().nth(KEEP) {
-        None => text.to_owned(),
-        Some((cut, _)) => format!("{}… ({} bytes in all)", &text[..cut], text.len()),
-    }
 }
 
 thread_local! {
@@ -249,7 +77,7 @@ pub(crate) fn toml_value(name: &str, value: &toml::Value, quantity: &Quantity) -
 }
 
 /// A scenario's bare number: radians for an angle, so it gets the same warning as `--set`;
-/// masses and lengths within [`SCALE_RANGE`] of their defaults, as from `--set`.
+/// masses and lengths within 10^12 times their defaults ([`check_scale`]), as from `--set`.
 fn number_value(name: &str, value: f64, quantity: &Quantity) -> Result<f64> {
     let text = Short(value).to_string();
     if value != 0.0 && value.abs() < f64::MIN_POSITIVE {
@@ -320,7 +148,7 @@ pub fn preset_settings(info: &SystemInfo, preset: &system::driven::Preset) -> Re
 
 /// An optional floating-point flag: parsed when given, `default` otherwise.
 pub fn f64_arg(flag: &str, text: Option<&str>, default: f64, expected: &str) -> Result<f64> {
-    text.map_or(Ok(default), |t| parse_float(flag, t, expected))
+    text.map_or(Ok(default), |t| Ok(parse_float(flag, t, expected)?))
 }
 
 /// A float given to `flag` that must be finite and > 0 (a step, a time span), or `default`.
@@ -398,37 +226,5 @@ pub fn check_image_path(path: &Path, flag: &str) -> Result<()> {
     match path.extension().and_then(|e| e.to_str()) {
         Some("png" | "svg") => Ok(()),
         _ => bail!("invalid {flag} `{}`: the format follows the extension; use .png or .svg", path.display()),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn floats_beyond_f64_are_refused_as_what_they_are() {
-        assert_eq!(float("1e400"), Err(Unusable::Overflow));
-        assert_eq!(float("-1e400"), Err(Unusable::Overflow));
-        assert_eq!(float("inf"), Err(Unusable::Infinite));
-        assert_eq!(float("-Infinity"), Err(Unusable::Infinite));
-        assert_eq!(float("NaN"), Err(Unusable::NaN));
-        assert_eq!(float("1e-320"), Err(Unusable::Underflow));
-        assert_eq!(float("1e-400"), Err(Unusable::Underflow));
-        assert_eq!(float("fast"), Err(Unusable::NotANumber));
-        // Zero written any way is zero, and the extremes of the normal range are numbers.
-        for zero in ["0", "-0.0", "0e-400", "0.000e5"] {
-            assert_eq!(float(zero), Ok(0.0), "{zero}");
-        }
-        assert_eq!(float("2.2250738585072014e-308"), Ok(f64::MIN_POSITIVE));
-        assert_eq!(float("1.7976931348623157e308"), Ok(f64::MAX));
-    }
-
-    #[test]
-    fn echoes_are_clipped() {
-        assert_eq!(clip("short"), "short");
-        let long = clip(&"x".repeat(1 << 20));
-        assert!(long.len() < 80 && long.contains("1048576 bytes"), "{long}");
-        assert_eq!(count(10_000_000_000_000), "10^13");
-        assert_eq!(count(12_345), "12345");
     }
 }

@@ -1,5 +1,6 @@
 //! Trajectories stream to disk as CSV rows, or as .npy rows behind a fixed-size header
-//! rewritten with the row count at the end, so memory does not grow with the run's length.
+//! rewritten with the row count at the end ([`pendula_io::npy::Rows`]), so memory does not
+//! grow with the run's length.
 //!
 //! Every byte written is counted and checksummed (CRC-32) on the way, so that a checkpoint
 //! can record how much of the trajectory is on disk ([`Sink::position`]); a resumed run
@@ -10,45 +11,14 @@
 //! Write errors name the output ([`crate::output::OutFile`]); into a FIFO, which cannot
 //! seek, .npy rows are spooled in an unnamed temporary file and follow the final header.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use pendula_io::npy::{Rows, Tally, streamed_header_len};
 
 use crate::config::Output;
 use crate::output::{OutFile, PartialFile};
-
-/// A writer that counts the bytes through it and their CRC-32.
-pub struct Tally<W> {
-    inner: W,
-    bytes: u64,
-    crc: crc32fast::Hasher,
-}
-
-impl<W> Tally<W> {
-    /// Counting from nothing.
-    pub fn new(inner: W) -> Self {
-        Tally { inner, bytes: 0, crc: crc32fast::Hasher::new() }
-    }
-
-    /// The bytes written through it so far and their CRC-32.
-    pub fn written(&self) -> (u64, u32) {
-        (self.bytes, self.crc.clone().finalize())
-    }
-}
-
-impl<W: Write> Write for Tally<W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        let n = self.inner.write(buf)?;
-        self.crc.update(&buf[..n]);
-        self.bytes += n as u64;
-        Ok(n)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
-    }
-}
 
 /// How much of a trajectory file is written: its length, the rows in it, and the CRC-32 of
 /// its bytes.
@@ -128,14 +98,13 @@ impl Sink {
         file.set_len(at.bytes)?;
         file.seek(SeekFrom::End(0))?;
         let rows = if keep_rows { Some(parse_rows(output, &prefix, columns, at.rows, path)?) } else { None };
-        let tally = Tally { inner: file, bytes: at.bytes, crc };
+        let tally = Tally::resume(file, at.bytes, crc);
         let sink = match output {
-            Output::Npy(_) => Sink::Npy(NpyRows::resume(tally, columns, at.rows)),
-            Output::Csv(_) => Sink::Csv(Box::new(csv_writer(Tally {
-                inner: Box::new(tally.inner) as Box<dyn Write>,
-                bytes: tally.bytes,
-                crc: tally.crc,
-            }))),
+            Output::Npy(_) => Sink::Npy(NpyRows(Rows::resume(tally, columns, at.rows))),
+            Output::Csv(_) => {
+                let (file, bytes, crc) = tally.into_parts();
+                Sink::Csv(Box::new(csv_writer(Tally::resume(Box::new(file) as Box<dyn Write>, bytes, crc))))
+            }
             Output::Stdout => unreachable!("a checkpointed trajectory is a file"),
         };
         Ok((sink, rows))
@@ -165,11 +134,7 @@ impl Sink {
                 w.flush()?;
                 w.get_ref().written()
             }
-            Sink::Npy(npy) => {
-                assert!(npy.spool.is_none(), "a checkpointed trajectory is a regular file");
-                npy.out.flush()?;
-                npy.out.get_ref().written()
-            }
+            Sink::Npy(npy) => npy.0.position()?,
         };
         Ok(Position { bytes: tally.0, rows, crc32: tally.1 })
     }
@@ -202,7 +167,7 @@ fn csv_error(e: csv::Error) -> anyhow::Error {
 fn parse_rows(output: &Output, bytes: &[u8], columns: usize, rows: u64, path: &Path) -> Result<Vec<f64>> {
     let values: Vec<f64> = match output {
         Output::Npy(_) => {
-            let header = npy_header(u64::MAX, columns, 0).len();
+            let header = streamed_header_len(columns);
             bytes
                 .get(header..)
                 .unwrap_or_default()
@@ -234,112 +199,32 @@ fn parse_rows(output: &Output, bytes: &[u8], columns: usize, rows: u64, path: &P
     Ok(values)
 }
 
-/// A 2-D little-endian float64 array in NPY format 1.0, streamed row by row: the header is
-/// written first with room for any row count, and rewritten with the real one at the end.
-/// Into a FIFO, which cannot seek, the rows are spooled in an unnamed temporary file (gone
-/// with the process, however it ends) and follow the final header at the end.
-pub struct NpyRows {
-    out: BufWriter<Tally<OutFile>>,
-    /// The rows, when `out` cannot seek.
-    spool: Option<BufWriter<File>>,
-    columns: usize,
-    rows: u64,
-    header_len: usize,
-}
+/// Trajectory rows as a streamed .npy array ([`pendula_io::npy::Rows`]) into the output
+/// file; into a FIFO, which cannot seek, the rows are spooled in an unnamed temporary file
+/// (gone with the process, however it ends).
+pub struct NpyRows(Rows<OutFile>);
 
 impl NpyRows {
     /// Starts the array in `file` (at its start).
     pub fn new(mut file: OutFile, columns: usize) -> Result<Self> {
-        // The header's size for the longest row count; every header is padded to it.
-        let header_len = npy_header(u64::MAX, columns, 0).len();
-        let seekable = file.seekable();
-        let mut out = BufWriter::with_capacity(1 << 16, Tally::new(file));
-        let spool = if seekable {
-            out.write_all(&npy_header(0, columns, header_len))?;
+        let spool = if file.seekable() {
             None
         } else {
-            let spool = tempfile::tempfile()
-                .context("cannot spool the .npy rows for a FIFO in the temporary directory")?;
-            Some(BufWriter::with_capacity(1 << 16, spool))
+            Some(
+                tempfile::tempfile()
+                    .context("cannot spool the .npy rows for a FIFO in the temporary directory")?,
+            )
         };
-        Ok(NpyRows { out, spool, columns, rows: 0, header_len })
-    }
-
-    /// Continues an array of `rows` rows whose bytes so far `file` has counted.
-    fn resume(file: Tally<OutFile>, columns: usize, rows: u64) -> Self {
-        let header_len = npy_header(u64::MAX, columns, 0).len();
-        NpyRows { out: BufWriter::with_capacity(1 << 16, file), spool: None, columns, rows, header_len }
+        Ok(NpyRows(Rows::new(file, columns, spool)?))
     }
 
     /// Appends one row of `columns` values.
     pub fn row(&mut self, values: impl Iterator<Item = f64>) -> Result<()> {
-        let w: &mut dyn Write = match &mut self.spool {
-            Some(spool) => spool,
-            None => &mut self.out,
-        };
-        let mut n = 0;
-        for v in values {
-            w.write_all(&v.to_le_bytes())?;
-            n += 1;
-        }
-        debug_assert_eq!(n, self.columns, "a row has one value per column");
-        self.rows += 1;
-        Ok(())
+        Ok(self.0.row(values)?)
     }
 
     /// Writes the header with the final shape.
     pub fn finish(self) -> Result<()> {
-        let header = npy_header(self.rows, self.columns, self.header_len);
-        let mut out = self.out;
-        match self.spool {
-            Some(spool) => {
-                let mut spool = spool.into_inner().map_err(|e| e.into_error())?;
-                spool.seek(SeekFrom::Start(0))?;
-                out.write_all(&header)?;
-                io::copy(&mut spool, &mut out)?;
-                out.flush()?;
-            }
-            None => {
-                let mut file = out.into_inner().map_err(|e| e.into_error())?.inner;
-                file.seek(SeekFrom::Start(0))?;
-                file.write_all(&header)?;
-                file.flush()?;
-            }
-        }
-        Ok(())
-    }
-}
-
-/// The NPY 1.0 header of a C-order float64 array of shape (rows, columns): magic, version,
-/// the length, and the dictionary padded with spaces and a newline so that the whole header
-/// is `min_len` bytes or the next multiple of 64 (the format's alignment).
-fn npy_header(rows: u64, columns: usize, min_len: usize) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
-    // 6 bytes of magic, 2 of version, 2 of length, the dictionary and its newline.
-    let unpadded = 10 + dict.len() + 1;
-    let total = unpadded.div_ceil(64).max(1) * 64;
-    let total = total.max(min_len);
-    let mut header = Vec::with_capacity(total);
-    header.extend_from_slice(b"\x93NUMPY\x01\x00");
-    header.extend_from_slice(&u16::try_from(total - 10).expect("a short header").to_le_bytes());
-    header.extend_from_slice(dict.as_bytes());
-    header.resize(total - 1, b' ');
-    header.push(b'\n');
-    header
-}
-
-#[cfg(test)]
-mod tests {
-    use super::npy_header;
-
-    #[test]
-    fn npy_headers_are_aligned_and_of_one_length() {
-        let long = npy_header(u64::MAX, 6, 0).len();
-        assert_eq!(long % 64, 0);
-        let short = npy_header(3, 6, long);
-        assert_eq!(short.len(), long);
-        assert_eq!(&short[..8], b"\x93NUMPY\x01\x00");
-        assert_eq!(usize::from(u16::from_le_bytes([short[8], short[9]])), long - 10);
-        assert!(short.ends_with(b" \n"));
+        Ok(self.0.finish()?)
     }
 }

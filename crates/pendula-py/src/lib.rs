@@ -57,6 +57,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 mod animate;
+mod io;
 mod serve;
 mod studies;
 mod study;
@@ -962,6 +963,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     study::register(m)?;
     studies::register(m)?;
     sweep::register(m)?;
+    io::register(m)?;
     serve::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;

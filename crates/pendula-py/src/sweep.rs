@@ -49,7 +49,7 @@ fn cell_error(py: Python<'_>, e: CellError) -> PyErr {
 /// `"flip"` stops each cell at its first flip; `records` the recorded quantities' names;
 /// shard (K, N) of the cells, or the cells [start, end) given as `cells` (a block of
 /// `pendula.distributed.sweep_array`). Returns the rows (count, columns) and the run's
-/// description.
+/// description (`description`: the shard description's JSON, without `data`).
 #[pyfunction]
 #[pyo3(signature = (system, set, axes, method, dt, steps, t_end, until, records, shard, threads=None, progress=None, cells=None))]
 #[allow(clippy::too_many_arguments)] // the sweep's description, as Python passes it
@@ -195,5 +195,13 @@ fn sweep<'py>(
     out.set_item("fma", pendula::ensemble::has_fma())?;
     out.set_item("threads", threads)?;
     out.set_item("wall_s", wall_s)?;
+    let run = pendula_io::shard::RunFacts {
+        cells: (start, end),
+        data: None,
+        fma: pendula::ensemble::has_fma(),
+        threads,
+        wall_s,
+    };
+    out.set_item("description", pendula_io::shard::sweep_description(&sweep, &run).to_string())?;
     Ok(out)
 }

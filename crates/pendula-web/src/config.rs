@@ -372,15 +372,7 @@ impl Config {
 
     /// The equivalent scenario file (`pendula simulate --scenario FILE`), of the first track.
     pub fn scenario(&self) -> String {
-        #[derive(Serialize)]
-        struct Scenario {
-            system: &'static str,
-            method: &'static str,
-            dt: f64,
-            t_end: f64,
-            set: toml::Table,
-        }
-        let set: toml::Table = self
+        let set = self
             .changed()
             .into_iter()
             .map(|(n, v)| {
@@ -390,14 +382,15 @@ impl Config {
                 )
             })
             .collect();
-        let s = Scenario {
-            system: family_of(self.info()).name,
-            method: self.first_method().name,
-            dt: self.dt,
-            t_end: 10.0,
+        pendula_io::scenario::Scenario {
+            system: Some(family_of(self.info()).name.to_owned()),
+            method: Some(self.first_method().name.to_owned()),
+            dt: Some(self.dt),
+            t_end: Some(10.0),
             set,
-        };
-        toml::to_string(&s).expect("a scenario serialises")
+            ..Default::default()
+        }
+        .to_toml()
     }
 }
 

@@ -41,8 +41,8 @@ use crate::checkpoint::Checkpoint;
 use crate::chunks::{Chunks, chunk_size};
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
-use crate::parse::{clip, parse_count, parse_settings, parse_value};
-use crate::shards::{SHARD_FORMAT, write_json, write_npy};
+use crate::parse::{clip, parse_count, parse_settings};
+use crate::shards::{write_json, write_npy};
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct SweepArgs {
@@ -110,30 +110,13 @@ pub struct SweepArgs {
 /// An example `--grid` axis for `info`: its first angle over a turn, else its first state
 /// variable.
 pub(crate) fn grid_example(info: &SystemInfo) -> String {
-    match info.state.iter().find(|q| q.is_angle()) {
-        Some(q) => format!("{}=-pi:pi:256", q.name),
-        None => format!("{}=-1:1:256", info.state[0].name),
-    }
+    pendula_io::value::axis_example(info)
 }
 
 /// Parses an axis `NAME=LO:HI:N` given to `flag` (`--grid`, or bifurcation's `--param`);
 /// `example` shows the form in the error.
 pub(crate) fn parse_axis(info: &'static SystemInfo, flag: &str, example: &str, text: &str) -> Result<Axis> {
-    let bad = || anyhow!("invalid {flag} `{}`: expected NAME=LO:HI:N, e.g. {example}", clip(text));
-    let (name, range) = text.split_once('=').ok_or_else(bad)?;
-    let name = name.trim();
-    let q = info.quantity(name)?;
-    let parts: Vec<&str> = range.split(':').collect();
-    let [lo, hi, n] = parts[..] else { return Err(bad()) };
-    let (lo, hi) = (parse_value(name, lo, Some(q))?, parse_value(name, hi, Some(q))?);
-    let n = parse_count(flag, n, 0, limits::MAX_AXIS_CELLS, "cells")? as usize;
-    if n == 0 {
-        bail!("invalid {flag} `{}`: the number of cells must be >= 1", clip(text));
-    }
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        bail!("invalid {flag} `{}`: need finite LO < HI (got {} and {})", clip(text), Short(lo), Short(hi));
-    }
-    Ok(Axis { name: name.to_owned(), lo, hi, n })
+    Ok(pendula_io::value::parse_axis(info, flag, example, text)?)
 }
 
 fn parse(args: &SweepArgs) -> Result<Sweep> {
@@ -396,31 +379,14 @@ pub(crate) fn execute(args: &SweepArgs, resumed: Option<Checkpoint>) -> Result<(
         shape = vec![end - start, cols];
     }
     let written = write_npy(&out_file, &shape, &data)?;
-    let description = json!({
-        "pendula_sweep": SHARD_FORMAT,
-        "pendula": env!("CARGO_PKG_VERSION"),
-        "system": sweep.info().name,
-        "method": sweep.spec().method.name,
-        "dt": sweep.spec().h,
-        "steps": sweep.spec().steps,
-        "axes": sweep.spec().axes.iter().map(|a| json!({"name": a.name, "lo": a.lo, "hi": a.hi, "n": a.n})).collect::<Vec<_>>(),
-        // Units beside, not inside, `axes` and `columns`: those keys stay as Python's
-        // `pendula.sweep` writes them.
-        "axis_units": sweep.spec().axes.iter().map(|a| quantity_unit(sweep.info(), &a.name)).collect::<Vec<_>>(),
-        "columns": sweep.columns(),
-        "units": sweep.columns().iter().map(|c| quantity_unit(sweep.info(), c)).collect::<Vec<_>>(),
-        "shape": sweep.shape(),
-        "shard": sweep.spec().shard.0,
-        "shards": sweep.spec().shard.1,
-        "offset": start,
-        "count": end - start,
-        "fingerprint": sweep.fingerprint(),
-        "data": { "bytes": written.bytes, "crc32": format!("{:08x}", written.crc32) },
-        "kernel": sweep.kernel(),
-        "fma": ensemble::has_fma(),
-        "threads": threads,
-        "wall_s": wall_s,
-    });
+    let run = pendula_io::shard::RunFacts {
+        cells: (start, end),
+        data: Some(written),
+        fma: ensemble::has_fma(),
+        threads,
+        wall_s,
+    };
+    let description = pendula_io::shard::sweep_description(&sweep, &run);
     write_json(&side_file, &description)?;
     let files = vec![out_file, side_file];
     // The array, its description and the summary appear together or not at all, and
@@ -552,14 +518,4 @@ impl Progress {
     }
 }
 
-/// The unit of a swept quantity or recorded column of `info`, as the catalogue writes it
-/// (`1` for a dimensionless one): a parameter's or state variable's own, seconds for a flip
-/// time, the energy's for an energy error.
-pub(crate) fn quantity_unit(info: &pendula::system::SystemInfo, name: &str) -> &'static str {
-    let or_one = |u: &'static str| if u.is_empty() { "1" } else { u };
-    match name {
-        "flip_time" => or_one(info.time_unit()),
-        "energy_error" => or_one(info.energy_unit()),
-        _ => info.quantity(name).map_or("", |q| q.unit),
-    }
-}
+pub(crate) use pendula_io::shard::quantity_unit;

@@ -53,7 +53,7 @@ def sweep(client: Any, system: Any, grid: Any, *, chunks: Optional[int] = None, 
     if "shard" in kwargs:
         raise InvalidValueError("invalid argument `shard`: a distributed sweep cuts the grid itself (`chunks`)")
     # Bad input raises on a worker and again here, as the same exception.
-    cells = _cells(grid)
+    cells = _cells(system, grid, kwargs.get("set"))
     n = _parts(client, cells, chunks)
     futures = [client.submit(_local_sweep, system, grid, shard=(k, n), pure=False, **kwargs) for k in range(1, n + 1)]
     return merge(client.gather(futures))
@@ -114,10 +114,10 @@ def sweep_array(system: Any, grid: Any, *, rows: Optional[int] = None, threads: 
     )
 
 
-def _cells(grid: Any) -> int:
-    from .sweep import _axes
+def _cells(system: Any, grid: Any, set: Any) -> int:
+    from .sweep import _axes, _settings
 
-    return math.prod(a[3] for a in _axes(grid))
+    return math.prod(a[3] for a in _axes(*_settings(system, set), grid))
 
 
 def _fractal_part(system, theta1, theta2, t_max, method, dt, tolerance, threads, pixels):

@@ -16,10 +16,8 @@ import json
 import math
 import operator
 import os
-import struct
-import zlib
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Iterable, Mapping, Optional, Union
 
 import numpy as np
 
@@ -32,44 +30,30 @@ __all__ = ["sweep", "merge", "SweepResult"]
 #: The version of SweepResult's pickled form.
 PICKLE_VERSION = 1
 
-#: The shard description's format (`pendula_sweep`), the CLI's SHARD_FORMAT: format 2 has
-#: `data` (the .npy file's length and CRC-32).
-SHARD_FORMAT = 2
+#: The shard description's format (`pendula_sweep`): format 2 has `data` (the .npy file's
+#: length and CRC-32).
+SHARD_FORMAT = _core.SHARD_FORMAT
 
 #: What `pendula sweep` runs without those arguments.
 DEFAULT_DT = 0.01
 DEFAULT_T_END = 10.0
 
 
-def _value(name: str, value: Any) -> float:
-    """A number, or a string as the CLI reads one: ``2``, ``-pi``, ``0.5pi``, ``2*pi``,
-    ``120deg`` (the suffixes for angles, in radians; the library checks the domains)."""
+def _value(system: Optional[str], name: str, value: Any) -> float:
+    """A number, or a string in the value syntax (``2``, ``-pi``, ``0.5pi``, ``2*pi``,
+    ``120deg``: the suffixes for angles of ``system``, in radians), read by the format
+    crate's parser; the library checks the domains."""
     if isinstance(value, str):
-        text = value.strip()
-        factor = 1.0
-        if text.endswith("deg"):
-            text, factor = text[:-3].strip(), None
-        elif text.endswith("pi"):
-            text, factor = text[:-2].strip().rstrip("*"), math.pi
-        try:
-            if factor is math.pi and text in ("", "+", "-"):
-                number = -1.0 if text == "-" else 1.0
-            else:
-                number = float(text)
-        except ValueError:
-            raise InvalidValueError(
-                f"invalid value {value!r} for `{name}`: a number (radians), or degrees with a deg suffix (120deg)"
-            ) from None
-        # The CLI's arithmetic: (deg · π) / 180, or the number times π.
-        return number * math.pi / 180.0 if factor is None else number * factor
+        return _core.parse_value(system, name, value)
     try:
         return float(value)
     except (TypeError, ValueError):
         raise InvalidValueError(f"invalid value {value!r} for `{name}`: a number") from None
 
 
-def _axes(grid: Any) -> list:
-    """[(name, lo, hi, n)] from {name: (lo, hi, n)} or ["NAME=LO:HI:N", ...]."""
+def _axes(system: str, settings: list, grid: Any) -> list:
+    """[(name, lo, hi, n)] from {name: (lo, hi, n)} or ["NAME=LO:HI:N", ...], over the
+    quantities of ``system`` with ``settings`` [(name, value)]."""
     if isinstance(grid, Mapping):
         items = list(grid.items())
     elif isinstance(grid, str):
@@ -82,27 +66,19 @@ def _axes(grid: Any) -> list:
     axes = []
     for item in items:
         if isinstance(item, str):
-            name, eq, rest = item.partition("=")
-            parts = rest.split(":")
-            if not eq or len(parts) != 3:
-                raise InvalidValueError(f"invalid grid {item!r}: expected NAME=LO:HI:N, e.g. theta1=-pi:pi:256")
-            name, (lo, hi, n) = name.strip(), parts
-            try:
-                n = int(n.strip())
-            except ValueError:
-                raise InvalidValueError(f"invalid grid {item!r}: N, the number of cells, is a whole number") from None
-        else:
-            try:
-                name, (lo, hi, n) = item
-            except (TypeError, ValueError):
-                raise InvalidValueError(f"invalid grid axis {item!r}: name: (lo, hi, n)") from None
-            try:
-                n = operator.index(n)
-            except TypeError:
-                raise InvalidValueError(f"invalid n {n!r} for the {name} axis: a whole number of cells") from None
+            axes.append(_core.parse_axis(system, settings, item))
+            continue
+        try:
+            name, (lo, hi, n) = item
+        except (TypeError, ValueError):
+            raise InvalidValueError(f"invalid grid axis {item!r}: name: (lo, hi, n)") from None
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise InvalidValueError(f"invalid n {n!r} for the {name} axis: a whole number of cells") from None
         if n < 1:
             raise InvalidValueError(f"invalid n {n} for the {name} axis: at least 1 cell")
-        axes.append((str(name), _value(name, lo), _value(name, hi), n))
+        axes.append((str(name), _value(system, name, lo), _value(system, name, hi), n))
     if not axes:
         raise InvalidValueError("invalid grid: give at least one axis")
     return axes
@@ -123,21 +99,6 @@ def _shard(shard: Any) -> tuple:
 def _centres(lo: float, hi: float, n: int) -> np.ndarray:
     # The library's Axis::centre, lo + (i + ½)(hi − lo)/n, in the same order of operations.
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
-
-
-def npy_header(shape: Sequence[int]) -> bytes:
-    """The header the CLI writes (Rust's ndarray-npy) before a C-order float64 array of
-    ``shape``: ``{'descr': '<f8', 'fortran_order': False, 'shape': (…)}`` padded with spaces
-    and a newline to a multiple of 64 bytes, format 1.0 (2.0 past 65535 bytes). numpy.save's
-    differs (a trailing ``, }`` and room to grow the shape), so it is written here."""
-    text = ("{'descr': '<f8', 'fortran_order': False, 'shape': %r}" % (tuple(int(a) for a in shape),)).encode()
-    for major, size, fmt in ((1, 2, "<H"), (2, 4, "<I")):
-        prefix = 6 + 2 + size
-        pad = 64 - (prefix + len(text) + 1) % 64
-        length = len(text) + pad + 1
-        if length < 1 << (8 * size):
-            return b"\x93NUMPY" + bytes((major, 0)) + struct.pack(fmt, length) + text + b" " * pad + b"\n"
-    raise InvalidValueError(f"a shape {tuple(shape)} too long for a .npy header")
 
 
 class SweepResult:
@@ -179,16 +140,15 @@ class SweepResult:
 
     @property
     def description(self) -> dict:
-        """The CLI's description of the run: system, method, dt (s), steps, axes, columns,
-        the whole shape, the shard, its offset and count, the fingerprint `merge` matches,
-        ``data`` (the .npy file's bytes and CRC-32), kernel, threads, wall_s."""
+        """The description of the run, the one ``pendula sweep`` writes: system, method,
+        dt (s), steps, axes and their units, columns and their units, the whole shape, the
+        shard, its offset and count, the fingerprint `merge` matches, ``data`` (the .npy
+        file's bytes and CRC-32), kernel, fma, threads, wall_s."""
         d = dict(self._description)
         if self._data_info is None:
-            header = npy_header(self.data.shape)
-            body = memoryview(np.ascontiguousarray(self.data, dtype="<f8")).cast("B")
-            crc = zlib.crc32(body, zlib.crc32(header))
-            self._data_info = {"bytes": len(header) + body.nbytes, "crc32": f"{crc:08x}"}
-        # In the CLI's order of keys: `data` after the fingerprint.
+            size, crc = _core.npy_written(np.ascontiguousarray(self.data, dtype="<f8"))
+            self._data_info = {"bytes": size, "crc32": f"{crc:08x}"}
+        # In the description's order of keys: `data` after the fingerprint.
         out = {}
         for k, v in d.items():
             out[k] = v
@@ -197,16 +157,13 @@ class SweepResult:
         return out
 
     def save(self, path: Union[str, os.PathLike]) -> Path:
-        """Writes the array as the CLI writes it (the same bytes, header included) to
-        ``path`` (``.npy``); for a shard, its description to ``path + ".json"``, so that
+        """Writes the array to ``path`` (``.npy``) with the format crate's writer, the one
+        ``pendula sweep`` writes with (the same bytes, header included); for a shard, its description to ``path + ".json"``, so that
         ``pendula merge`` (or :func:`merge`) assembles it."""
         path = Path(path)
         if path.suffix != ".npy":
             raise InvalidValueError(f"invalid path {str(path)!r}: a sweep is saved as .npy")
-        body = np.ascontiguousarray(self.data, dtype="<f8")
-        with open(path, "wb") as f:
-            f.write(npy_header(body.shape))
-            f.write(memoryview(body).cast("B"))
+        _core.save_npy(path, np.ascontiguousarray(self.data, dtype="<f8"))
         if self.sharded:
             side = Path(f"{path}.json")
             side.write_text(json.dumps(self.description, indent=2) + "\n")
@@ -291,19 +248,8 @@ def _arguments(system, grid, set, method, dt, steps, t_end, until, record) -> tu
     """The sweep's description as ``_core.sweep`` takes it (system, set, axes, method, dt,
     steps, t_end, until, records), from :func:`sweep`'s arguments; the library checks the
     rest."""
-    settings = []
-    if not isinstance(system, str):
-        # A System: its name, and its values where `set` does not say otherwise.
-        if set:
-            raise InvalidValueError("give the values in the System or in set=, not both")
-        core = getattr(system, "_core", None)
-        if core is None:
-            raise InvalidValueError(f"invalid system {system!r}: a System or a catalogue name")
-        defaults = dict(_core.CoreSystem(core.name, []).values())
-        settings = [(n, v) for n, v in core.values() if v != defaults[n]]
-        system = core.name
-    settings += [(str(n), _value(n, v)) for n, v in (set or {}).items()]
-    axes = _axes(grid)
+    system, settings = _settings(system, set)
+    axes = _axes(system, settings, grid)
     if steps is not None and t_end is not None:
         raise InvalidValueError("give steps or t_end (s), not both")
     if steps is not None:
@@ -318,32 +264,34 @@ def _arguments(system, grid, set, method, dt, steps, t_end, until, record) -> tu
     records = [record] if isinstance(record, str) else list(record)
     # The CLI's comma-separated form too: "final,flip-time".
     records = [r.strip() for item in records for r in str(item).split(",")]
-    t_end = None if t_end is None else _value("t_end", t_end)
-    return (str(system), settings, axes, str(method), _value("dt", dt), steps, t_end, until, records)
+    t_end = None if t_end is None else _value(None, "t_end", t_end)
+    return (system, settings, axes, str(method), _value(None, "dt", dt), steps, t_end, until, records)
+
+
+def _settings(system: Any, set: Optional[Mapping[str, Any]]) -> tuple:
+    """(the system's name, [(name, value)]) from a name or a System (its values where they
+    differ from the defaults) and ``set``."""
+    settings = []
+    if not isinstance(system, str):
+        # A System: its name, and its values where `set` does not say otherwise.
+        if set:
+            raise InvalidValueError("give the values in the System or in set=, not both")
+        core = getattr(system, "_core", None)
+        if core is None:
+            raise InvalidValueError(f"invalid system {system!r}: a System or a catalogue name")
+        defaults = dict(_core.CoreSystem(core.name, []).values())
+        settings = [(n, v) for n, v in core.values() if v != defaults[n]]
+        system = core.name
+    system = str(system)
+    settings += [(str(n), _value(system, n, v)) for n, v in (set or {}).items()]
+    return system, settings
 
 
 def _result(out: dict) -> SweepResult:
     data = out.pop("data")
-    d = {
-        "pendula_sweep": SHARD_FORMAT,
-        "pendula": out["pendula"],
-        "system": out["system"],
-        "method": out["method"],
-        "dt": out["dt"],
-        "steps": out["steps"],
-        "axes": [{"name": n, "lo": lo, "hi": hi, "n": k} for n, lo, hi, k in out["axes"]],
-        "columns": list(out["columns"]),
-        "shape": list(out["shape"]),
-        "shard": out["shard"],
-        "shards": out["shards"],
-        "offset": out["offset"],
-        "count": out["count"],
-        "fingerprint": out["fingerprint"],
-        "kernel": out["kernel"],
-        "fma": out["fma"],
-        "threads": out["threads"],
-        "wall_s": out["wall_s"],
-    }
+    # The description every sharded run writes beside its array (pendula-io's), without
+    # `data`, which the `description` property adds from the array.
+    d = json.loads(out["description"])
     if d["shards"] == 1:
         data = data.reshape(d["shape"])
     return SweepResult(data, d)
@@ -352,31 +300,8 @@ def _result(out: dict) -> SweepResult:
 def _load(path: Union[str, os.PathLike]) -> SweepResult:
     """A shard saved by :meth:`SweepResult.save` or ``pendula sweep --shard``: its
     description, then the file checked against the length and CRC-32 it gives."""
-    path = Path(path)
-    side = Path(f"{path}.json")
-    try:
-        d = json.loads(side.read_text())
-    except OSError as e:
-        raise InvalidValueError(f"cannot read {side} (the shard's description, written with the shard): {e.strerror}") from None
-    except ValueError as e:
-        raise InvalidValueError(f"invalid shard description {side}: {e}") from None
-    if not isinstance(d, dict) or "pendula_sweep" not in d:
-        raise InvalidValueError(f"{side} is not a sweep shard's description (it has no `pendula_sweep` format number)")
-    if d["pendula_sweep"] != SHARD_FORMAT:
-        raise InvalidValueError(f"{side} is a shard description of format {d['pendula_sweep']}; this pendula reads format {SHARD_FORMAT}")
-    missing = [k for k in ("shape", "shard", "shards", "offset", "count", "fingerprint", "data", "columns", "axes") if k not in d]
-    if missing:
-        raise InvalidValueError(f"{side} has no `{missing[0]}`")
-    raw = path.read_bytes()
-    crc = zlib.crc32(raw)
-    if len(raw) != d["data"]["bytes"] or f"{crc:08x}" != d["data"]["crc32"]:
-        raise InvalidValueError(
-            f"{path}: {len(raw)} bytes of CRC-32 {crc:08x}, but its description {side} says {d['data']['bytes']} bytes of "
-            f"{d['data']['crc32']}: the file is truncated, corrupted or not the shard described"
-        )
-    data = np.load(path)
-    if data.dtype != np.float64 or data.shape != (d["count"], d["shape"][-1]):
-        raise InvalidValueError(f"{path}: shape {data.shape} of {data.dtype}, its description says ({d['count']}, {d['shape'][-1]}) float64")
+    text, data = _core.load_shard(os.fspath(path))
+    d = json.loads(text)
     result = SweepResult(data, {k: v for k, v in d.items() if k != "data"})
     result._data_info = dict(d["data"])
     return result
@@ -395,23 +320,10 @@ def merge(shards: Iterable[Union[SweepResult, str, os.PathLike]]) -> SweepResult
             parts.append((str(s), _load(s)))
     if not parts:
         raise InvalidValueError("merge: give the shards")
-    first_name, first = parts[0]
-    f = first._description
-    for name, s in parts:
-        d = s._description
-        if (d["fingerprint"], list(d["shape"]), d["shards"]) != (f["fingerprint"], list(f["shape"]), f["shards"]):
-            raise InvalidValueError(f"{name} is a shard of another sweep than {first_name} (its grid, method or records differ)")
+    # Shards held in memory are checked by their descriptions, as files are.
+    _core.check_shards([(name, json.dumps(s.description)) for name, s in parts])
+    f = parts[0][1]._description
     n = f["shards"]
-    seen: dict = {}
-    for name, s in parts:
-        k = s._description["shard"]
-        if k in seen:
-            raise InvalidValueError(f"{seen[k]} and {name} are both shard {k}/{n}: give each shard once")
-        seen[k] = name
-    missing = [f"{k}/{n}" for k in range(1, n + 1) if k not in seen]
-    if missing:
-        are = "shards" if len(missing) > 1 else "shard"
-        raise InvalidValueError(f"{are} {', '.join(missing)} {'are' if len(missing) > 1 else 'is'} missing: give all {n} shards")
     shape = [int(a) for a in f["shape"]]
     cols = shape[-1]
     whole = np.full((math.prod(shape[:-1]), cols), np.nan)
