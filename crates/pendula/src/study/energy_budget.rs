@@ -12,7 +12,7 @@ use std::ops::ControlFlow;
 
 use super::{
     Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study, Style,
-    Table, Unit, sig,
+    Table, Unit, sig, unit_suffix,
 };
 use crate::analysis::EnergyBalance;
 use crate::error::Short;
@@ -56,12 +56,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let dt = args.real("dt")?;
     let t_end = args.real("t_end")?;
     let spec = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
-    let schedule = spec.schedule().map_err(|e| match e {
-        Error::InvalidValue { name, value, allowed } if name == "h" => {
-            Error::InvalidValue { name: "dt".into(), value, allowed }
-        }
-        e => e,
-    })?;
+    let schedule = super::schedule(dt, t_end)?;
     budget.afford(schedule.steps as f64, format!("a run of {} steps", schedule.steps))?;
     let model = values.build();
     let info = values.info();
@@ -82,9 +77,9 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         "{system}, {} at dt = {}{} to t = {}{}: E went from {} {eu} to {} {eu}; the non-conservative forces did W = {} {eu} of work",
         method.name,
         Short(dt),
-        space(tu),
+        unit_suffix(tu),
         Short(t_end),
-        space(tu),
+        unit_suffix(tu),
         sig(balance.initial),
         sig(balance.last),
         sig(balance.work),
@@ -136,7 +131,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
                 "{system}: balance E(t) - E(0) - W(t) ({}, dt = {}{})",
                 method.name,
                 Short(dt),
-                space(tu)
+                unit_suffix(tu)
             ),
             x: time,
             y: Axis { label: "E - E(0) - W".into(), unit: eu.into(), log: false },
@@ -174,14 +169,9 @@ fn describe(values: &crate::system::Values) -> String {
         .parameters
         .iter()
         .filter(|q| values.get(q.name) != q.default)
-        .map(|q| format!("{} = {}{}", q.name, Short(values.get(q.name)), space(q.unit)))
+        .map(|q| format!("{} = {}{}", q.name, Short(values.get(q.name)), unit_suffix(q.unit)))
         .collect();
     if changed.is_empty() { info.name.to_owned() } else { format!("{} ({})", info.name, changed.join(", ")) }
-}
-
-/// " s" for a unit, "" for none.
-fn space(unit: &str) -> String {
-    if unit.is_empty() { String::new() } else { format!(" {unit}") }
 }
 
 /// Tracks the balance at every step and keeps (t, E, W, balance) every `every` steps and at

@@ -40,6 +40,26 @@ pub fn sig(x: f64) -> String {
     }
 }
 
+/// " s" for a unit, "" for none: a number and its unit in a sentence.
+pub fn unit_suffix(unit: &str) -> String {
+    if unit.is_empty() { String::new() } else { format!(" {unit}") }
+}
+
+/// The steps of a run from 0 to `t_end` at step `dt`, with the run loop's checks; an error
+/// about its step names the parameter `dt` (the run loop calls it `h`).
+///
+/// # Errors
+/// Those of [`crate::RunSpec::schedule`].
+pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error> {
+    let spec = crate::RunSpec { t0: 0.0, h: dt, end: crate::End::Time(t_end) };
+    spec.schedule().map_err(|e| match e {
+        Error::InvalidValue { name, value, allowed } if name == "h" => {
+            Error::InvalidValue { name: "dt".into(), value, allowed }
+        }
+        e => e,
+    })
+}
+
 /// Every study, in the order front ends list them.
 pub const STUDIES: &[&Study] = &[&energy_budget::STUDY, &round_trip::STUDY];
 

@@ -11,8 +11,9 @@
 
 use super::{
     Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study, Style,
-    Table, Unit, sig,
+    Table, Unit, sig, unit_suffix,
 };
+use crate::analysis::divergence::state_distance;
 use crate::error::Short;
 use crate::integrator::Method;
 use crate::observe::{Every, Recorder};
@@ -50,14 +51,8 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let method = args.method("method")?;
     let dt = args.real("dt")?;
     let t_end = args.real("t_end")?;
-    let rename = |e: Error| match e {
-        Error::InvalidValue { name, value, allowed } if name == "h" => {
-            Error::InvalidValue { name: "dt".into(), value, allowed }
-        }
-        e => e,
-    };
     let forward = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
-    let schedule = forward.schedule().map_err(rename)?;
+    let schedule = super::schedule(dt, t_end)?;
     budget.afford(2.0 * schedule.steps as f64, format!("2 runs of {} steps", schedule.steps))?;
     let model = values.build();
     let info = values.info();
@@ -78,23 +73,21 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     for a in &rows_there {
         if let Some(b) = rows_back.iter().find(|b| (b[0] - a[0]).abs() <= 1e-9 * dt) {
             t.push(a[0]);
-            distance.push(a[1..].iter().zip(&b[1..]).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt());
+            distance.push(state_distance(&a[1..], &b[1..]));
         }
     }
-    let returned =
-        home.iter().zip(values.initial_state()).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt();
+    let returned = state_distance(&home, values.initial_state());
 
     let tu = info.time_unit();
-    let space = |u: &str| if u.is_empty() { String::new() } else { format!(" {u}") };
     let summary = vec![
         format!(
             "{}, {} at dt = {}{}, to t = {}{} and back with -dt: it returns {} from its start (the state-space distance, |y(0) after the round trip - y(0)|)",
             info.name,
             method.name,
             Short(dt),
-            space(tu),
+            unit_suffix(tu),
             Short(t_end),
-            space(tu),
+            unit_suffix(tu),
             sig(returned)
         ),
         symmetry(method),
@@ -109,7 +102,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             info.name,
             method.name,
             Short(dt),
-            space(tu)
+            unit_suffix(tu)
         ),
         x: Axis { label: "t".into(), unit: tu.into(), log: false },
         y: Axis { label: label.into(), unit: state_units(info), log: true },
