@@ -17,7 +17,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis;
-use pendula::integrator::{self, METHODS, Method};
+use pendula::integrator::{METHODS, Method};
 use pendula::model::DynModel;
 use pendula::system::{self, Values};
 use pendula_viz::Figure;
@@ -168,21 +168,11 @@ pub fn reference_failed(e: pendula::Error, t_end: f64) -> anyhow::Error {
     ))
 }
 
-/// Whether a library error is a numerical failure (exit 1), not a refusal of the input.
-pub fn numerical(e: &pendula::Error) -> bool {
-    matches!(
-        e,
-        pendula::Error::NonFinite { .. }
-            | pendula::Error::NewtonDidNotConverge { .. }
-            | pendula::Error::StepSizeTooSmall { .. }
-    )
-}
-
 /// When no run of a study gave a result and one failed numerically: that failure, as the
 /// study's error (exit 1), instead of an empty figure.
 pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) -> Result<()> {
     match first {
-        Some(e) if !produced && numerical(&e) => {
+        Some(e) if !produced && e.is_numerical() => {
             Err(anyhow::Error::new(e).context(format!("{command}: every run failed; the first")))
         }
         _ => Ok(()),
@@ -231,40 +221,18 @@ pub fn preset_settings(
     Ok((info, settings))
 }
 
-/// Methods from a comma-separated list, or every method that applies to `model` at steps up
-/// to `max_h` when `None` (Tao's maps apply only where ω h ≤ 1; `None` for `max_h` keeps
-/// them).
+/// Methods from a comma-separated list ([`pendula::model::named_methods`]: each must apply,
+/// named once), or every method that applies to `model` at steps up to `max_h` when `None`
+/// ([`pendula::model::applicable`]).
 pub fn methods(list: Option<&str>, model: &dyn DynModel, max_h: Option<f64>) -> Result<Vec<&'static Method>> {
-    let stable = |m: &Method| match (m.scheme, max_h) {
-        (pendula::integrator::Scheme::Tao(t), Some(h)) => {
-            pendula::integrator::tao::check_binding_step(&t, h).is_ok()
-        }
-        _ => true,
-    };
     match list {
-        // A method asked for by name must apply: the library's refusal is the error.
-        Some(text) => {
-            let methods = text
-                .split(',')
-                .map(|name| {
-                    let method = integrator::find(name.trim())?;
-                    // The library's refusal when the requirement is not met, before any step.
-                    model.check(method)?;
-                    Ok(method)
-                })
-                .collect::<Result<Vec<&'static Method>>>()?;
-            for (i, m) in methods.iter().enumerate() {
-                if methods[..i].iter().any(|n| n.name == m.name) {
-                    bail!(
-                        "invalid --methods `{}`: {} is listed twice; list each method once",
-                        crate::parse::clip(text),
-                        m.name
-                    );
-                }
+        Some(text) => pendula::model::named_methods(model, text.split(',')).map_err(|e| match e {
+            pendula::Error::InvalidInput { allowed, .. } => {
+                anyhow::anyhow!("invalid --methods `{}`: {allowed}", crate::parse::clip(text))
             }
-            Ok(methods)
-        }
-        None => Ok(METHODS.iter().copied().filter(|m| model.check(m).is_ok() && stable(m)).collect()),
+            other => other.into(),
+        }),
+        None => Ok(pendula::model::applicable(model, METHODS, max_h)),
     }
 }
 
@@ -791,16 +759,11 @@ pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) 
     }
 }
 
-/// The library's reason for a failed or refused run, or the error itself when it is not
-/// one a study reports per method.
+/// The library's reason for a failed or refused run ([`pendula::Error::is_per_run`]), or the
+/// error itself when it is not one a study reports per method.
 pub fn refusal(e: anyhow::Error) -> Result<String> {
     match e.downcast_ref::<pendula::Error>() {
-        Some(
-            pendula::Error::NonFinite { .. }
-            | pendula::Error::NewtonDidNotConverge { .. }
-            | pendula::Error::InvalidValue { .. }
-            | pendula::Error::UnmetRequirement { .. },
-        ) => Ok(e.to_string()),
+        Some(l) if l.is_per_run() => Ok(e.to_string()),
         _ => Err(e),
     }
 }

@@ -156,7 +156,8 @@ pub(crate) fn poincare<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = &*system.model;
     let info = system.values.info();
-    // The system first, as the CLI: a system without an energy surface has no section.
+    // The system first: a system without an energy surface has no section, whatever the
+    // other arguments say.
     section_of::check_system(model).map_err(|e| to_py(py, &e))?;
     if !energy.is_finite() {
         return Err(invalid(py, "energy", Short(energy), "a finite energy (J)"));
@@ -511,43 +512,31 @@ pub(crate) fn bifurcation<'py>(
     Ok(out)
 }
 
-/// The methods named (each must apply to `model`, listed once), or every method that
-/// applies.
+/// The methods named ([`pendula::model::named_methods`]: each must apply, named once), or
+/// every method that applies ([`pendula::model::applicable`]).
 fn methods_of(
     py: Python<'_>,
     model: &dyn DynModel,
     names: Option<Vec<String>>,
 ) -> PyResult<Vec<&'static Method>> {
-    let Some(names) = names else {
-        return Ok(METHODS.iter().copied().filter(|m| model.check(m).is_ok()).collect());
-    };
-    let mut methods: Vec<&'static Method> = Vec::new();
-    for name in &names {
-        let method = integrator::find(name.trim()).map_err(|e| to_py(py, &e))?;
-        model.check(method).map_err(|e| to_py(py, &e))?;
-        if methods.iter().any(|m| m.name == method.name) {
-            return Err(raise(
-                py,
-                "InvalidValueError",
-                format!("invalid methods: {} is listed twice; list each method once", method.name),
-            ));
+    match names {
+        None => Ok(pendula::model::applicable(model, METHODS, None)),
+        Some(names) => {
+            pendula::model::named_methods(model, names.iter().map(String::as_str)).map_err(|e| to_py(py, &e))
         }
-        methods.push(method);
     }
-    if methods.is_empty() {
-        return Err(raise(py, "InvalidValueError", "invalid methods []: name at least one".to_owned()));
-    }
-    Ok(methods)
 }
 
-/// Whether a run's failure drops its point with a note (as the CLI's studies do) rather
-/// than ending the study.
 /// Why a step of a study's ladder was dropped, in the words of Python's arguments: the step
 /// is `dt`, and Tao's step limit names the largest dt (the library's message speaks of h and
 /// of the binding constant, which the studies do not set).
-fn dropped(method: &Method, h: f64, e: &Error) -> String {
+fn dropped(method: &Method, d: &analysis::Dropped) -> String {
+    let e = &d.error;
+    if d.adaptive {
+        return e.to_string();
+    }
     if let Error::InvalidValue { .. } = e
-        && let Some(why) = crate::tao_step_refusal(method, h)
+        && let Some(why) = crate::tao_step_refusal(method, d.x)
     {
         return why;
     }
@@ -559,8 +548,23 @@ fn dropped(method: &Method, h: f64, e: &Error) -> String {
     }
 }
 
-/// A dropped step's error and its reason in Python's words ([`dropped`]).
-type Dropped = (Error, String);
+/// A method's note on its dropped run: where (`dt` or `tol`) and why ([`dropped`]).
+fn failure_note(method: &Method, d: &analysis::Dropped) -> String {
+    format!("at {} = {}: {}", if d.adaptive { "tol" } else { "dt" }, Short(d.x), dropped(method, d))
+}
+
+/// The error of a study whose every run was dropped ([`analysis::all_dropped`]), in the
+/// words of [`dropped`]; `None` when some run gave a point.
+fn all_dropped<'a>(
+    py: Python<'_>,
+    produced: bool,
+    runs: impl IntoIterator<Item = (&'static Method, &'a [analysis::Dropped])>,
+) -> PyResult<()> {
+    let runs: Vec<_> = runs.into_iter().collect();
+    let Some(first) = analysis::all_dropped(produced, runs.iter().map(|(_, d)| *d)) else { return Ok(()) };
+    let method = runs.iter().find(|(_, d)| !d.is_empty()).map(|(m, _)| *m).expect("the failed method");
+    Err(refused(py, &first.error, dropped(method, first)))
+}
 
 /// The error of a study whose every step was dropped, with the message of [`dropped`].
 fn refused(py: Python<'_>, e: &Error, why: String) -> PyErr {
@@ -568,16 +572,6 @@ fn refused(py: Python<'_>, e: &Error, why: String) -> PyErr {
         Error::InvalidValue { .. } => raise(py, "InvalidValueError", why),
         other => to_py(py, other),
     }
-}
-
-fn droppable(e: &Error) -> bool {
-    matches!(
-        e,
-        Error::NonFinite { .. }
-            | Error::NewtonDidNotConverge { .. }
-            | Error::InvalidValue { .. }
-            | Error::UnmetRequirement { .. }
-    )
 }
 
 /// The end time (default: the system's study horizon) and the given steps, checked.
@@ -622,7 +616,7 @@ pub(crate) fn convergence<'py>(
     let methods = methods_of(py, model, methods)?;
     let ladder =
         |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
-    if methods.iter().all(|&m| ladder(m).is_empty()) {
+    if analysis::nothing_to_run(&methods, ladder, false) {
         return Err(raise(
             py,
             "InvalidValueError",
@@ -633,54 +627,33 @@ pub(crate) fn convergence<'py>(
         ));
     }
     let y0 = system.values.initial_state();
-    type Row = (&'static str, Vec<f64>, Vec<f64>, OrderEstimate, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
+    let run = || -> Result<_, Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
-        let scale = reference.scale();
-        let (mut results, mut first) = (Vec::new(), None);
-        for &method in &methods {
-            let (mut hs, mut errors, mut failure) = (Vec::new(), Vec::new(), None);
-            for h in ladder(method) {
-                match analysis::convergence_errors(model, method, y0, t_end, &[h], &reference.state) {
-                    Ok(e) => {
-                        hs.push(h);
-                        errors.push(e[0]);
-                    }
-                    Err(e) if droppable(&e) => {
-                        let why = dropped(method, h, &e);
-                        failure = Some(format!("at dt = {}: {why}", Short(h)));
-                        first.get_or_insert((e, why));
-                    }
-                    Err(e) => return Err(e),
-                }
-            }
-            let estimate = analysis::estimate_order(&hs, &errors, scale, t_end, reference.accuracy);
-            results.push((method.name, hs, errors, estimate, failure));
-        }
-        Ok((reference, results, first))
+        let results = analysis::convergence_study(model, y0, t_end, &reference, &methods, ladder, || ())?;
+        Ok((reference, results))
     };
-    let (reference, results, first) =
+    let (reference, results) =
         interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
-    if results.iter().all(|r| r.1.is_empty())
-        && let Some((e, why)) = first
-    {
-        return Err(refused(py, &e, why));
-    }
+    let produced = results.iter().any(|r| !r.hs.is_empty());
+    all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
     let list = PyList::empty(py);
-    for (name, hs, errors, estimate, failure) in results {
+    for r in results {
         let d = PyDict::new(py);
-        d.set_item("method", name)?;
-        d.set_item("dt", hs.into_pyarray(py))?;
-        d.set_item("error", errors.into_pyarray(py))?;
-        d.set_item("order", estimate.order())?;
-        match estimate {
+        d.set_item("method", r.method.name)?;
+        d.set_item("order", r.estimate.order())?;
+        match r.estimate {
             OrderEstimate::Fitted { points, h_min, h_max, .. } => {
                 d.set_item("fit", (points, h_min, h_max))?;
             }
             _ => d.set_item("fit", py.None())?,
         }
-        d.set_item("reason", estimate.reason())?;
-        d.set_item("failure", failure)?;
+        d.set_item("reason", r.estimate.reason())?;
+        d.set_item("failure", r.dropped.last().map(|f| failure_note(r.method, f)))?;
+        // The table's note and the legend's label, as the library words them.
+        d.set_item("note", r.note(pendula::study::sig, |f| failure_note(r.method, f)))?;
+        d.set_item("label", r.estimate.label())?;
+        d.set_item("dt", r.hs.into_pyarray(py))?;
+        d.set_item("error", r.errors.into_pyarray(py))?;
         list.append(d)?;
     }
     let out = PyDict::new(py);
@@ -731,8 +704,7 @@ pub(crate) fn work_precision<'py>(
     let methods = methods_of(py, model, methods)?;
     let ladder =
         |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
-    let any = methods.iter().any(|&m| matches!(m.scheme, Scheme::Embedded(_)) || !ladder(m).is_empty());
-    if !any {
+    if analysis::nothing_to_run(&methods, ladder, true) {
         return Err(raise(
             py,
             "InvalidValueError",
@@ -743,46 +715,20 @@ pub(crate) fn work_precision<'py>(
         ));
     }
     let y0 = system.values.initial_state();
-    type Row = (&'static str, Vec<analysis::WorkPoint>, Option<String>);
-    let run = || -> Result<(analysis::Reference, Vec<Row>, Option<Dropped>), Error> {
+    let run = || -> Result<_, Error> {
         let reference = analysis::reference_state(model, y0, t_end)?;
-        let (mut results, mut first) = (Vec::new(), None);
-        for &method in &methods {
-            let adaptive = matches!(method.scheme, Scheme::Embedded(_));
-            let xs = if adaptive { tols.clone() } else { ladder(method) };
-            let (mut points, mut note) = (Vec::new(), None);
-            for x in xs {
-                let point = if adaptive {
-                    analysis::work_precision_adaptive(model, method, y0, t_end, &[x], &reference.state)
-                } else {
-                    analysis::work_precision(model, method, y0, t_end, &[x], &reference.state)
-                };
-                match point {
-                    Ok(p) => points.extend(p),
-                    Err(e) if droppable(&e) => {
-                        let why = if adaptive { e.to_string() } else { dropped(method, x, &e) };
-                        note =
-                            Some(format!("at {} = {}: {why}", if adaptive { "tol" } else { "dt" }, Short(x)));
-                        first.get_or_insert((e, why));
-                    }
-                    Err(e) => return Err(e),
-                }
-            }
-            results.push((method.name, points, note));
-        }
-        Ok((reference, results, first))
+        let results =
+            analysis::work_precision_study(model, y0, t_end, &reference, &methods, ladder, &tols, || ())?;
+        Ok((reference, results))
     };
-    let (reference, results, first) =
+    let (reference, results) =
         interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
-    if results.iter().all(|r| r.1.is_empty())
-        && let Some((e, why)) = first
-    {
-        return Err(refused(py, &e, why));
-    }
+    let produced = results.iter().any(|r| !r.points.is_empty());
+    all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
     let list = PyList::empty(py);
-    for (name, points, note) in results {
-        let d = PyDict::new(py);
-        d.set_item("method", name)?;
+    for r in results {
+        let (d, points) = (PyDict::new(py), &r.points);
+        d.set_item("method", r.method.name)?;
         d.set_item("dt", points.iter().map(|p| p.h).collect::<Vec<_>>().into_pyarray(py))?;
         d.set_item(
             "tol",
@@ -791,7 +737,7 @@ pub(crate) fn work_precision<'py>(
         d.set_item("error", points.iter().map(|p| p.error).collect::<Vec<_>>().into_pyarray(py))?;
         d.set_item("rhs_evals", points.iter().map(|p| p.rhs_evals).collect::<Vec<_>>().into_pyarray(py))?;
         d.set_item("wall_s", points.iter().map(|p| p.wall_s).collect::<Vec<_>>().into_pyarray(py))?;
-        d.set_item("failure", note)?;
+        d.set_item("failure", r.dropped.last().map(|f| failure_note(r.method, f)))?;
         list.append(d)?;
     }
     let out = PyDict::new(py);

@@ -1,15 +1,15 @@
 //! `pendula.sweep`'s computation: the library's sweep ([`pendula::sweep`]), the
 //! one `pendula sweep` runs, so the two give the same array bit for bit (and the same shard
 //! fingerprints, so their shards merge together). The arguments arrive parsed by
-//! `python/pendula/sweep.py` (numbers, names); here they are checked as the CLI checks its
-//! flags, in Python's words, and then by the library. The run releases the GIL and stops
-//! at a Ctrl-C.
+//! `python/pendula/sweep.py` (numbers, names); here the library checks them
+//! ([`Record::parse_list`], [`SweepSpec::validate`]) and its refusals are phrased with
+//! Python's argument names. The run releases the GIL and stops at a Ctrl-C.
 
 use std::time::Instant;
 
 use numpy::IntoPyArray;
 use pendula::error::{did_you_mean, suggestions};
-use pendula::sweep::{Axis, CellError, Record, SweepSpec};
+use pendula::sweep::{Axis, CellError, Record, RecordError, SweepSpec};
 use pendula::{End, Error, RunSpec, integrator};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -73,7 +73,6 @@ fn sweep<'py>(
     let info = family.values(&set).map_err(|e| to_py(py, &e))?.info();
     let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
     let invalid = |message: String| raise(py, "InvalidValueError", message);
-    let has_angle = info.state.iter().any(|q| q.is_angle());
     let end = match (steps, t_end) {
         (Some(n), None) => End::Steps(n),
         (None, Some(t)) => End::Time(t),
@@ -88,7 +87,7 @@ fn sweep<'py>(
     }
     let until_flip = match until.as_deref() {
         None => false,
-        Some("flip") if has_angle => true,
+        Some("flip") if pendula::sweep::has_angle(info) => true,
         Some("flip") => {
             return Err(invalid(format!("invalid until 'flip': the `{}` system has no angle", info.name)));
         }
@@ -99,26 +98,17 @@ fn sweep<'py>(
             )));
         }
     };
-    let mut parsed = Vec::new();
-    for name in &records {
-        let record = Record::from_name(name).ok_or_else(|| {
-            let names = Record::ALL.map(Record::name);
-            invalid(format!(
-                "invalid record {name:?}{}: expected final, flip-time or energy-error",
-                did_you_mean(&suggestions(name, names))
-            ))
-        })?;
-        if record == Record::FlipTime && !has_angle {
-            return Err(invalid(format!(
-                "invalid record 'flip-time': the `{}` system has no angle",
-                info.name
-            )));
+    let parsed = Record::parse_list(records.iter().map(String::as_str), info).map_err(|e| match e {
+        RecordError::Unknown { name, suggestions } => invalid(format!(
+            "invalid record {name:?}{}: expected {}",
+            did_you_mean(&suggestions),
+            pendula::sweep::RECORD_NAMES
+        )),
+        RecordError::NoAngle => {
+            invalid(format!("invalid record 'flip-time': the `{}` system has no angle", info.name))
         }
-        if parsed.contains(&record) {
-            return Err(invalid(format!("invalid record: {name:?} is given twice")));
-        }
-        parsed.push(record);
-    }
+        RecordError::Twice(name) => invalid(format!("invalid record: {name:?} is given twice")),
+    })?;
     let axes = axes.into_iter().map(|(name, lo, hi, n)| Axis { name, lo, hi, n }).collect();
     let spec = SweepSpec {
         system: family,

@@ -219,6 +219,28 @@ impl std::error::Error for ObserverFailure {
 }
 
 impl Error {
+    /// Whether this is the failure of one run that a study reports beside its other runs —
+    /// a step that blew up, did not converge, or was refused (Tao's maps above ω h = 1, a
+    /// method the system cannot run) — rather than a reason to end the study.
+    pub fn is_per_run(&self) -> bool {
+        matches!(
+            self,
+            Error::NonFinite { .. }
+                | Error::NewtonDidNotConverge { .. }
+                | Error::InvalidValue { .. }
+                | Error::UnmetRequirement { .. }
+        )
+    }
+
+    /// Whether this is a numerical failure of a run (the CLI's exit 1), not a refusal of
+    /// the input.
+    pub fn is_numerical(&self) -> bool {
+        matches!(
+            self,
+            Error::NonFinite { .. } | Error::NewtonDidNotConverge { .. } | Error::StepSizeTooSmall { .. }
+        )
+    }
+
     /// [`Error::UnknownName`] for `name` among `valid`, with its suggestions.
     pub fn unknown_name<'a>(
         system: &'static str,

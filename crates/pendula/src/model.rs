@@ -175,6 +175,53 @@ pub fn ensemble_path(method: &'static Method, base: &Values, swept: &[&str]) -> 
     }
 }
 
+/// The methods of `methods` (in their order) that apply to `model` and are stable at every
+/// step up to `max_h` (Tao's maps only where ω h ≤ 1, [`Method::max_step`]); `None` for
+/// `max_h` keeps every step limit. What a study runs when no method is named.
+pub fn applicable(
+    model: &dyn DynModel,
+    methods: &[&'static Method],
+    max_h: Option<f64>,
+) -> Vec<&'static Method> {
+    let within = |m: &Method| match (m.max_step(), max_h) {
+        (Some(limit), Some(h)) => h <= limit,
+        _ => true,
+    };
+    methods.iter().copied().filter(|m| model.check(m).is_ok() && within(m)).collect()
+}
+
+/// The methods named, in order: each a known method ([`crate::integrator::find`]) that
+/// applies to `model`, each named once.
+///
+/// # Errors
+/// The first unknown name ([`Error::UnknownMethod`], with a did-you-mean), the first method
+/// the system cannot run ([`Error::UnmetRequirement`]), or [`Error::InvalidInput`] for
+/// `methods` when none is named or one is named twice.
+pub fn named_methods<'a>(
+    model: &dyn DynModel,
+    names: impl IntoIterator<Item = &'a str>,
+) -> Result<Vec<&'static Method>, Error> {
+    let names: Vec<&str> = names.into_iter().map(str::trim).collect();
+    let invalid = |allowed: String| Error::InvalidInput {
+        name: "methods".into(),
+        value: crate::error::clip(&names.join(","), 80),
+        allowed,
+    };
+    if names.is_empty() {
+        return Err(invalid("name at least one method".into()));
+    }
+    let mut methods: Vec<&'static Method> = Vec::with_capacity(names.len());
+    for name in &names {
+        let method = crate::integrator::find(name)?;
+        model.check(method)?;
+        if methods.iter().any(|m| m.name == method.name) {
+            return Err(invalid(format!("{} is listed twice; list each method once", method.name)));
+        }
+        methods.push(method);
+    }
+    Ok(methods)
+}
+
 /// A catalogued system chosen at run time: its physics ([`DynSystem`]) and its runs.
 pub trait DynModel: DynSystem {
     /// Whether `method` applies to this system: [`crate::simulate::check`], before any step.

@@ -91,7 +91,59 @@ impl Record {
     pub fn from_name(name: &str) -> Option<Record> {
         Record::ALL.into_iter().find(|r| r.name() == name)
     }
+
+    /// The records named, in order, for a sweep of `info`: each known, each once, and
+    /// `flip-time` only where the system has an angle. The front ends phrase the
+    /// [`RecordError`] in their own spelling.
+    ///
+    /// # Errors
+    /// The first name that is unknown, given twice, or needs an angle the system lacks.
+    pub fn parse_list<'a>(
+        names: impl IntoIterator<Item = &'a str>,
+        info: &SystemInfo,
+    ) -> Result<Vec<Record>, RecordError> {
+        let mut records = Vec::new();
+        for name in names {
+            let record = Record::from_name(name).ok_or_else(|| RecordError::Unknown {
+                name: name.to_owned(),
+                suggestions: crate::error::suggestions(name, Record::ALL.map(Record::name)),
+            })?;
+            if record == Record::FlipTime && !has_angle(info) {
+                return Err(RecordError::NoAngle);
+            }
+            if records.contains(&record) {
+                return Err(RecordError::Twice(name.to_owned()));
+            }
+            records.push(record);
+        }
+        Ok(records)
+    }
 }
+
+/// Whether a sweep of `info` can stop at a flip (and record its time): the system has an
+/// angle.
+pub fn has_angle(info: &SystemInfo) -> bool {
+    info.state.iter().any(|q| q.is_angle())
+}
+
+/// Why a list of records was refused ([`Record::parse_list`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum RecordError {
+    /// No record has this name; the valid names closest to it.
+    Unknown {
+        /// The name given.
+        name: String,
+        /// The closest valid names (see [`crate::error::suggestions`]).
+        suggestions: Vec<String>,
+    },
+    /// `flip-time` for a system without an angle.
+    NoAngle,
+    /// The record was named twice (the name as given).
+    Twice(String),
+}
+
+/// The valid records, in the words of an error: "final, flip-time or energy-error".
+pub const RECORD_NAMES: &str = "final, flip-time or energy-error";
 
 /// What a sweep computes, as given: [`SweepSpec::validate`] checks it into a [`Sweep`].
 #[derive(Debug, Clone)]

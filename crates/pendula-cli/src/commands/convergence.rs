@@ -10,14 +10,14 @@
 
 use anyhow::Result;
 use clap::Args;
-use pendula::analysis::{self, OrderEstimate, estimate_order};
+use pendula::analysis::{self, MethodConvergence};
 use pendula::integrator::Method;
 use pendula::system::Values;
 use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
 use serde_json::json;
 
 use crate::args::{Defaults, SystemArg};
-use crate::study::{self, Common, Ladder, OutDir, StepRange, default_t_end, num, refusal, short, steps_for};
+use crate::study::{self, Common, Ladder, OutDir, StepRange, default_t_end, num, short, steps_for};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
@@ -32,34 +32,14 @@ pub struct ConvergenceArgs {
     pub common: Common,
 }
 
-/// The result for one method.
-pub struct MethodConvergence {
-    pub method: &'static str,
-    pub hs: Vec<f64>,
-    pub errors: Vec<f64>,
-    /// What the fit found.
-    pub estimate: OrderEstimate,
-    /// Where the method failed or was refused, if it did (the library's reason).
-    pub failure: Option<String>,
+/// Why a run was dropped, in the CLI's words: the step is `h`.
+pub fn dropped(d: &analysis::Dropped) -> String {
+    format!("at {} = {}: {}", if d.adaptive { "tol" } else { "h" }, short(d.x), d.error)
 }
 
-impl MethodConvergence {
-    /// The fitted order, if any.
-    pub fn order(&self) -> Option<f64> {
-        self.estimate.order()
-    }
-
-    /// The table's note: the fit's range, or why there is no order.
-    pub fn note(&self) -> String {
-        match (&self.estimate, &self.failure) {
-            (OrderEstimate::Fitted { points, h_min, h_max, .. }, _) => {
-                format!("fitted over {points} steps, {} .. {}", short(*h_min), short(*h_max))
-            }
-            (e, None) => e.reason().unwrap_or_default().to_owned(),
-            (_, Some(f)) if self.hs.is_empty() => f.clone(),
-            (e, Some(f)) => format!("{}; {f}", e.reason().unwrap_or_default()),
-        }
-    }
+/// The table's note for one method ([`MethodConvergence::note`] in the CLI's words).
+pub fn note(r: &MethodConvergence) -> String {
+    r.note(short, dropped)
 }
 
 /// What convergence runs on without a system named (its methods and steps are its own).
@@ -76,7 +56,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         let hs = steps_for(&values, m, &ladder, t_end);
         (n + hs.iter().map(|h| crate::limits::steps(t_end, *h)).sum::<f64>(), k + hs.len())
     });
-    if levels == 0 {
+    if analysis::nothing_to_run(&methods, |m| steps_for(&values, m, &ladder, t_end), false) {
         anyhow::bail!(
             "convergence: no step of the methods' default ladders fits --t-end {} within their cost caps (at most 2e6 steps a run); give a shorter --t-end, or the steps (--dt-min, --dt-max, --levels)",
             short(t_end)
@@ -98,7 +78,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let mut rows = Vec::new();
     for r in &results {
         for (h, e) in r.hs.iter().zip(&r.errors) {
-            rows.push(vec![r.method.to_owned(), num(*h), num(*e)]);
+            rows.push(vec![r.method.name.to_owned(), num(*h), num(*e)]);
         }
     }
     out.csv("convergence.csv", &["method", "dt", "error"], &rows)?;
@@ -107,19 +87,23 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let shown: Vec<Vec<String>> = results
         .iter()
         .map(|r| {
-            let declared =
-                pendula::integrator::find(r.method).map(|m| m.order.to_string()).unwrap_or_default();
-            vec![r.method.to_owned(), declared, r.order().map_or("-".into(), |o| format!("{o:.3}")), r.note()]
+            let declared = r.method.order.to_string();
+            vec![
+                r.method.name.to_owned(),
+                declared,
+                r.order().map_or("-".into(), |o| format!("{o:.3}")),
+                note(r),
+            ]
         })
         .collect();
     say!(summary, "{}", study::table(&["method", "declared order", "fitted order", "note"], &shown));
     out.figure("convergence", &figure(system, t_end, &results, reference.source))?;
     let orders: serde_json::Map<String, serde_json::Value> =
-        results.iter().map(|r| (r.method.to_owned(), json!(r.order()))).collect();
+        results.iter().map(|r| (r.method.name.to_owned(), json!(r.order()))).collect();
     let notes: serde_json::Map<String, serde_json::Value> =
-        results.iter().map(|r| (r.method.to_owned(), json!(r.note()))).collect();
+        results.iter().map(|r| (r.method.name.to_owned(), json!(note(r)))).collect();
     let dts: serde_json::Map<String, serde_json::Value> =
-        results.iter().map(|r| (r.method.to_owned(), json!(r.hs))).collect();
+        results.iter().map(|r| (r.method.name.to_owned(), json!(r.hs))).collect();
     // The summary and the files appear together or not at all.
     out.finish_with(summary,
         &json!({ "system": system, "t_end": t_end, "reference": reference.source, "dt": dts, "orders": orders, "notes": notes }),
@@ -127,9 +111,8 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
     Ok(())
 }
 
-/// Errors and fitted orders of `methods`, against the exact solution or a dop853 reference
-/// at tolerance 1e-14. A method that fails (non-finite state, Newton failure) or is refused
-/// (Tao's maps above ω h = 1) at some step keeps the errors of the steps before and says why.
+/// Errors and fitted orders of `methods` ([`analysis::convergence_study`]), against the
+/// exact solution or a dop853 reference at tolerance 1e-14.
 pub fn study_orders(
     values: &Values,
     methods: &[&'static Method],
@@ -137,40 +120,23 @@ pub fn study_orders(
     t_end: f64,
 ) -> Result<(Vec<MethodConvergence>, analysis::Reference)> {
     let model = values.build();
-    let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
-        .map_err(|e| study::reference_failed(e, t_end))?;
-    let scale = reference.scale();
+    let y0 = values.initial_state();
+    let reference =
+        analysis::reference_state(&*model, y0, t_end).map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "convergence");
-    let mut results = Vec::new();
-    let mut first_failure = None;
-    for method in methods {
-        let (mut hs, mut errors, mut failure) = (Vec::new(), Vec::new(), None);
-        for h in steps_for(values, method, ladder, t_end) {
-            match analysis::convergence_errors(
-                &*model,
-                method,
-                values.initial_state(),
-                t_end,
-                &[h],
-                &reference.state,
-            ) {
-                Ok(e) => {
-                    hs.push(h);
-                    errors.push(e[0]);
-                }
-                // Large steps may be refused or blow up where smaller ones work: keep going.
-                Err(e) => {
-                    first_failure.get_or_insert_with(|| e.clone());
-                    failure = Some(format!("at h = {}: {}", short(h), refusal(e.into())?));
-                }
-            }
-        }
-        let estimate = estimate_order(&hs, &errors, scale, t_end, reference.accuracy);
-        results.push(MethodConvergence { method: method.name, hs, errors, estimate, failure });
-        bar.inc(1);
-    }
+    let results = analysis::convergence_study(
+        &*model,
+        y0,
+        t_end,
+        &reference,
+        methods,
+        |m| steps_for(values, m, ladder, t_end),
+        || bar.inc(1),
+    )?;
     bar.finish_and_clear();
-    study::all_failed("convergence", results.iter().any(|r| !r.hs.is_empty()), first_failure)?;
+    let produced = results.iter().any(|r| !r.hs.is_empty());
+    let first = analysis::all_dropped(produced, results.iter().map(|r| &r.dropped[..]));
+    study::all_failed("convergence", produced, first.map(|d| d.error.clone()))?;
     Ok((results, reference))
 }
 
@@ -198,10 +164,10 @@ pub fn figure(system: &str, t_end: f64, results: &[MethodConvergence], reference
     )
     .scales(Scale::Log, Scale::Log);
     for r in results.iter().filter(|r| !r.hs.is_empty()) {
-        let label = format!("{}{} ({})", r.method, fixed_steps(r.method), r.estimate.label());
+        let label = format!("{}{} ({})", r.method.name, fixed_steps(r.method.name), r.estimate.label());
         fig = fig.with_style(
             label,
-            method_style(r.method),
+            method_style(r.method.name),
             Kind::LineMarkers,
             r.hs.iter().copied().zip(r.errors.iter().copied()).collect(),
         );

@@ -31,7 +31,7 @@ use pendula::error::{Short, did_you_mean, suggestions};
 use pendula::integrator;
 use pendula::model::EnsemblePath;
 pub(crate) use pendula::sweep::Axis;
-use pendula::sweep::{CellError, Record, Sweep, SweepSpec};
+use pendula::sweep::{CellError, Record, RecordError, Sweep, SweepSpec};
 use pendula::system::SystemInfo;
 use pendula::{End, RunSpec};
 use serde_json::json;
@@ -178,29 +178,24 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
     }
     let until_flip = match args.until.as_deref() {
         None => false,
-        Some("flip") if info.state.iter().any(|q| q.is_angle()) => true,
+        Some("flip") if pendula::sweep::has_angle(info) => true,
         Some("flip") => bail!("invalid --until flip: the `{}` system has no angle", info.name),
         Some(other) => {
             bail!("invalid --until `{other}`{}: expected flip", did_you_mean(&suggestions(other, ["flip"])))
         }
     };
-    let mut records = Vec::new();
-    for name in args.record.as_deref().unwrap_or("final").split(',').map(str::trim) {
-        let record = match name {
-            "final" => Record::Final,
-            "flip-time" if info.state.iter().any(|q| q.is_angle()) => Record::FlipTime,
-            "flip-time" => bail!("invalid --record flip-time: the `{}` system has no angle", info.name),
-            "energy-error" => Record::EnergyError,
-            other => bail!(
-                "invalid --record `{other}`{}: expected final, flip-time or energy-error",
-                did_you_mean(&suggestions(other, ["final", "flip-time", "energy-error"]))
-            ),
-        };
-        if records.contains(&record) {
-            bail!("invalid --record: `{name}` is given twice");
+    let names = args.record.as_deref().unwrap_or("final").split(',').map(str::trim);
+    let records = Record::parse_list(names, info).map_err(|e| match e {
+        RecordError::Unknown { name, suggestions } => anyhow::anyhow!(
+            "invalid --record `{name}`{}: expected {}",
+            did_you_mean(&suggestions),
+            pendula::sweep::RECORD_NAMES
+        ),
+        RecordError::NoAngle => {
+            anyhow::anyhow!("invalid --record flip-time: the `{}` system has no angle", info.name)
         }
-        records.push(record);
-    }
+        RecordError::Twice(name) => anyhow::anyhow!("invalid --record: `{name}` is given twice"),
+    })?;
     let cells: usize = axes.iter().map(|a| a.n).product();
     let shard = match &args.shard {
         None => (1, 1),
@@ -255,7 +250,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         )
         // A numerical failure in that step is the first cell's, and named so (exit 1).
         .map_err(|e| {
-            let numerical = crate::study::numerical(&e);
+            let numerical = e.is_numerical();
             let e = anyhow::Error::new(e);
             if numerical { e.context("cell 0 of the sweep") } else { e }
         })?;

@@ -10,7 +10,8 @@ use serde_json::json;
 
 use crate::args::{Defaults, SystemArg};
 use crate::parse::{f64_arg, parse_count};
-use crate::study::{self, Common, OutDir, StepRange, num, refusal, short};
+use crate::study::{self, Common, OutDir, StepRange, num, short};
+use pendula::integrator::Method;
 use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
@@ -87,11 +88,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
                 .sum(),
         })
         .sum();
-    let any = methods.iter().any(|m| {
-        matches!(m.scheme, Scheme::Embedded(_))
-            || !crate::study::steps_for(&values, m, &ladder, t_end).is_empty()
-    });
-    if !any {
+    if analysis::nothing_to_run(&methods, |m| crate::study::steps_for(&values, m, &ladder, t_end), true) {
         bail!(
             "work-precision: no step of the methods' default ladders fits --t-end {} within their cost caps (at most 2e6 steps a run); give a shorter --t-end, or the steps (--dt-min, --dt-max, --levels)",
             short(t_end)
@@ -110,41 +107,26 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
         .map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "work-precision");
-    let mut results: Vec<(&'static str, Vec<WorkPoint>)> = Vec::new();
-    // Per method: why some runs are missing (the library's reason), if any are.
-    let mut notes: Vec<Option<String>> = Vec::new();
-    let mut first_failure = None;
-    for method in &methods {
-        let y0 = values.initial_state();
-        let (mut points, mut note) = (Vec::new(), None);
-        // One run per step or tolerance: a failure (a large step blowing up, Tao's refusal above
-        // ω h = 1, a Newton failure) drops that point and is reported, and the study goes on.
-        let runs: Vec<(f64, bool)> = if let Scheme::Embedded(_) = method.scheme {
-            tols.iter().map(|t| (*t, true)).collect()
-        } else {
-            crate::study::steps_for(&values, method, &ladder, t_end).into_iter().map(|h| (h, false)).collect()
-        };
-        for (x, adaptive) in runs {
-            let point = if adaptive {
-                analysis::work_precision_adaptive(&*model, method, y0, t_end, &[x], &reference.state)
-            } else {
-                analysis::work_precision(&*model, method, y0, t_end, &[x], &reference.state)
-            };
-            match point {
-                Ok(p) => points.extend(p),
-                Err(e) => {
-                    first_failure.get_or_insert_with(|| e.clone());
-                    let what = if adaptive { "tol" } else { "h" };
-                    note = Some(format!("at {what} = {}: {}", short(x), refusal(e.into())?));
-                }
-            }
-        }
-        results.push((method.name, points));
-        notes.push(note);
-        bar.inc(1);
-    }
+    let ladder = |m: &Method| crate::study::steps_for(&values, m, &ladder, t_end);
+    let results = analysis::work_precision_study(
+        &*model,
+        values.initial_state(),
+        t_end,
+        &reference,
+        &methods,
+        ladder,
+        &tols,
+        || bar.inc(1),
+    )?;
     bar.finish_and_clear();
-    study::all_failed("work-precision", results.iter().any(|(_, p)| !p.is_empty()), first_failure)?;
+    let produced = results.iter().any(|r| !r.points.is_empty());
+    let first = analysis::all_dropped(produced, results.iter().map(|r| &r.dropped[..]));
+    study::all_failed("work-precision", produced, first.map(|d| d.error.clone()))?;
+    // Per method: why some runs are missing (the library's reason), if any are.
+    let notes: Vec<Option<String>> =
+        results.iter().map(|r| r.dropped.last().map(super::convergence::dropped)).collect();
+    let results: Vec<(&'static str, Vec<WorkPoint>)> =
+        results.into_iter().map(|r| (r.method.name, r.points)).collect();
 
     let mut rows = Vec::new();
     for (m, points) in &results {

@@ -259,7 +259,7 @@ class PoincareResult(_Pickled):
     (q₁, q₂, p₁, p₂): rad and kg m²/s), ``q`` and ``p`` (the other angle, wrapped into
     [−π, π), and its momentum: the section's picture). ``initial`` (count, 4): each orbit's
     start (positions, velocities). ``crossings``, ``crossings_per_orbit`` and
-    ``max_energy_error`` (J, the largest |H − E| at a crossing) as the CLI's summary.
+    ``max_energy_error`` (J, the largest |H − E| at a crossing).
     """
 
     system: "System"
@@ -376,7 +376,7 @@ def poincare(
 
 @dataclass(frozen=True, eq=False)
 class FractalResult(_Pickled):
-    """The flip fractal: ``flip_time`` (n₂, n₁; θ₁ fastest, as the CLI's fractal.npy) the
+    """The flip fractal: ``flip_time`` (n₂, n₁; θ₁ fastest, the layout of fractal.npy) the
     time to the first flip from rest (s; NaN: none by ``t_max`` or forbidden by energy), the
     same at dt/2 (``flip_time_half_step``), ``converged`` (bool, as fractal-converged.npy):
     both agree within ``tolerance`` s. Axes ``theta1``, ``theta2`` ((lo, hi, n), rad; the
@@ -648,7 +648,8 @@ class MethodConvergence(_Pickled):
     """One method's convergence: its steps ``dt`` (s) and max-norm errors ``error`` at the
     end time; ``order`` fitted over ``fit`` = (points, h_min, h_max) in the asymptotic range,
     or None with the ``reason``; ``failure``: why steps are missing (the library's message),
-    if any are."""
+    if any are; ``note``: the fit's range or why there is no order, and ``label``: the
+    order or the reason's first words (the library's wording for tables and legends)."""
 
     method: str
     dt: np.ndarray
@@ -657,23 +658,15 @@ class MethodConvergence(_Pickled):
     fit: Optional[Tuple[int, float, float]]
     reason: Optional[str]
     failure: Optional[str]
-
-    @property
-    def note(self) -> str:
-        """The fit's range or why there is no order, as the CLI's table says."""
-        if self.fit is not None:
-            points, h_min, h_max = self.fit
-            return f"fitted over {points} steps, {h_min:.4g} .. {h_max:.4g}"
-        if self.failure is None:
-            return self.reason or ""
-        return self.failure if len(self.dt) == 0 else f"{self.reason}; {self.failure}"
+    note: str = ""
+    label: str = ""
 
 
 @dataclass(frozen=True, eq=False)
 class ConvergenceResult(_Pickled):
     """A convergence study: per method (``methods``, in order) errors against steps and the
     fitted order; ``t_end`` (s) and the ``reference`` the errors are against. ``orders``,
-    ``dt``, ``notes``: dicts by method name, as the CLI's summary."""
+    ``dt``, ``notes``: dicts by method name."""
 
     system: "System"
     t_end: float
@@ -704,10 +697,7 @@ class ConvergenceResult(_Pickled):
         ax = _axes(ax)
         for m in self.methods:
             if len(m.dt):
-                # Why there is no order, in the reason's first words, as the CLI's legend.
-                why = (m.reason or m.failure or "no order").split(":")[0]
-                label = f"{m.method} (order {m.order:.2f})" if m.order is not None else f"{m.method} ({why})"
-                ax.loglog(m.dt, m.error, marker="o", markersize=3, label=label)
+                ax.loglog(m.dt, m.error, marker="o", markersize=3, label=f"{m.method} ({m.label})")
         ax.set_xlabel("step size h" + _time_unit(self.system))
         ax.set_ylabel("max |y(t) − y_ref(t)|")
         unit = "" if self.system.dimensionless else " s"
@@ -766,6 +756,8 @@ def convergence(
                 fit=m["fit"],
                 reason=m["reason"],
                 failure=m["failure"],
+                note=m["note"],
+                label=m["label"],
             )
             for m in raw["methods"]
         ),

@@ -104,7 +104,7 @@ def _centres(lo: float, hi: float, n: int) -> np.ndarray:
 class SweepResult:
     """A sweep's results, or one shard's.
 
-    ``data``: the array as the CLI's ``.npy`` holds it — the axes slowest first, then the
+    ``data``: the array as its ``.npy`` file holds it (``pendula_io``'s layout) — the axes slowest first, then the
     ``columns`` (state variables for ``final``, ``flip_time`` s, ``energy_error`` J); a
     shard's is ``(count, columns)``, cells ``offset`` … ``offset + count`` of the whole
     grid in order (first axis fastest). ``axes``: ((name, cell centres), …) in the order

@@ -30,6 +30,7 @@
 //! steps on the ensemble engine, and its convergence rule) and
 //! `crates/pendula/src/analysis/strobe.rs` (stroboscopic samples on the scalar path).
 
+pub mod accuracy;
 pub mod convergence;
 pub mod divergence;
 pub mod energy;
@@ -40,6 +41,10 @@ pub mod poincare;
 pub mod stability;
 pub mod strobe;
 
+pub use accuracy::{
+    Dropped, MethodConvergence, MethodWork, all_dropped, convergence_study, nothing_to_run,
+    work_precision_study,
+};
 pub use convergence::{
     DEFAULT_LEVELS, FLOOR_MARGIN, MIN_SPAN, OrderEstimate, OrderFit, REFERENCE_TOLERANCE, Reference,
     SATURATION, STRAIGHT, WorkPoint, convergence_errors, default_ladder, estimate_order, fit_order,

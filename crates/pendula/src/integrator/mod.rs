@@ -115,6 +115,18 @@ pub struct Method {
     pub scheme: Scheme,
 }
 
+impl Method {
+    /// The largest step this method is run at, s: for Tao's maps
+    /// [`tao::MAX_BINDING_STEP`] / ω (above it they are unstable, and refused); `None` for
+    /// the others, whose stable step depends on the system.
+    pub fn max_step(&self) -> Option<f64> {
+        match &self.scheme {
+            Scheme::Tao(t) => Some(tao::MAX_BINDING_STEP / t.binding),
+            _ => None,
+        }
+    }
+}
+
 /// Every method pendula knows, in the order `pendula list methods` shows them.
 #[rustfmt::skip] // one method per line
 pub static METHODS: &[&Method] = &[
