@@ -20,10 +20,14 @@ use pendula::integrator::{self, Method};
 
 use crate::parse::{f64_arg, positive_arg};
 
-/// A command's defaults for the shared arguments it takes; fields it does not take are
-/// not shown (`document` touches only the arguments the command has).
+/// A command's defaults: the library's for its study ([`pendula::study::defaults`]), and a
+/// sentence the command adds to an argument's help, by argument id (`dt`, `t_end`, …).
+/// Fields the command does not take are not shown (`document` touches only the arguments
+/// the command has).
 #[derive(Debug, Clone, Copy)]
 pub struct Defaults {
+    /// The library's defaults of the study.
+    pub of: &'static pendula::study::defaults::Defaults,
     /// The system run without a name (`pendula list systems`).
     pub system: &'static str,
     /// The method run without `--method` (`pendula list methods`; `None`: the command
@@ -39,10 +43,25 @@ pub struct Defaults {
 }
 
 impl Defaults {
+    /// The command of the study whose defaults are `of`, with its help's `notes`.
+    pub const fn of(
+        of: &'static pendula::study::defaults::Defaults,
+        notes: &'static [(&'static str, &'static str)],
+    ) -> Self {
+        Defaults { of, system: of.system, method: of.method, dt: of.dt, t_end: of.t_end, notes }
+    }
+
     /// `arg` with its help stating this command's default, when it is one of the shared
     /// arguments; other arguments unchanged.
     pub fn document(&self, arg: clap::Arg) -> clap::Arg {
         let id = arg.get_id().as_str().to_owned();
+        // The study's own default: written after the flag's own help.
+        if let Some(d) = self.of.values.iter().find(|d| d.name == id) {
+            let own =
+                arg.get_help().map(|h| h.to_string().trim_end_matches('.').to_owned()).unwrap_or_default();
+            let why = if d.why.is_empty() { String::new() } else { format!(", {}", d.why) };
+            return arg.help(format!("{own} [default: {}{why}]", d.value));
+        }
         let (what, default) = match id.as_str() {
             "system" => {
                 ("System to run (see `pendula list systems`)".to_owned(), Some(self.system.to_owned()))
@@ -180,6 +199,54 @@ mod tests {
         }
         // 13 commands take the system, 8 the method and the step, 7 the end time.
         assert!(documented >= 30, "only {documented} shared arguments documented");
+    }
+
+    /// No default is written twice: every `[default: …]` that states a number in any
+    /// command's help is the library's ([`pendula::study::defaults`], or a registry study's
+    /// parameter), written into the help from it; a number typed into a doc comment fails.
+    #[test]
+    fn every_number_a_help_gives_as_default_is_the_librarys() {
+        let cli = crate::cli::Cli::command();
+        let mut checked = 0;
+        for command in cli.get_subcommands() {
+            let name = command.get_name();
+            let lib = pendula::study::defaults::ALL.iter().find(|d| d.study == name);
+            let study = pendula::study::find(name).ok();
+            for arg in command.get_arguments() {
+                let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+                let Some(at) = help.find("[default: ") else { continue };
+                let stated = &help[at + 10..];
+                let numeric = stated.starts_with(|c: char| c.is_ascii_digit() || c == '-');
+                if !numeric {
+                    continue;
+                }
+                let id = arg.get_id().as_str();
+                let expected = match (lib, study) {
+                    (Some(d), _) => match (id, d.values.iter().find(|v| v.name == id)) {
+                        (_, Some(v)) => v.value.to_string(),
+                        ("dt", None) => pendula::error::Short(d.dt.expect("a step")).to_string(),
+                        ("t_end", None) => pendula::error::Short(d.t_end.expect("an end")).to_string(),
+                        _ => panic!(
+                            "`pendula {name} --{}`: a default typed into its help: {help}",
+                            arg.get_long().unwrap_or(id)
+                        ),
+                    },
+                    (None, Some(s)) => {
+                        let p =
+                            s.params.iter().find(|p| p.name.replace('-', "_") == id).expect("a parameter");
+                        p.default_text()
+                    }
+                    (None, None) => panic!("`pendula {name}`: a default typed into its help: {help}"),
+                };
+                assert!(
+                    stated.starts_with(&expected),
+                    "`pendula {name}` {id}: {help} (the library says {expected})"
+                );
+                checked += 1;
+            }
+        }
+        // The shared step and end times of eight commands, and some thirty of their own.
+        assert!(checked >= 40, "only {checked} numeric defaults checked");
     }
 
     /// What the help states is what the conversion uses.

@@ -34,20 +34,20 @@ pub struct SimulateArgs {
     /// Number of steps, instead of --t-end: 1 to 10^13.
     #[arg(long, allow_hyphen_values = true, value_name = "N", conflicts_with = "t_end")]
     pub steps: Option<String>,
-    /// Binding constant ω of tao-2 and tao-4, 1/s [default: 200]: larger holds the two copies
-    /// closer on chaotic orbits; binding * dt must be <= 1.
+    /// Binding constant ω of tao-2 and tao-4, 1/s: larger holds the two copies closer on
+    /// chaotic orbits; binding * dt must be <= 1.
     #[arg(long, value_name = "OMEGA", allow_hyphen_values = true)]
     pub binding: Option<String>,
     /// Relative tolerance of adaptive methods (dopri5, dop853), from 1e-15 (below that the
-    /// error estimate is round-off) to 1 [default: 1e-6].
+    /// error estimate is round-off) to 1.
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub rtol: Option<String>,
-    /// Absolute tolerance of adaptive methods, >= 0 [default: 1e-6]; with 0, a component that
+    /// Absolute tolerance of adaptive methods, >= 0; with 0, a component that
     /// stays exactly 0 meets it (a state at rest does not stall the controller).
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub atol: Option<String>,
     /// Smallest step an adaptive method may take, s; below it the run fails (exit 1); never
-    /// below 16 ε t_end, which the end time cannot resolve [default: 0].
+    /// below 16 ε t_end, which the end time cannot resolve.
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub h_min: Option<String>,
     /// Largest step an adaptive method may take, s [default: unbounded].
@@ -64,7 +64,7 @@ pub struct SimulateArgs {
     /// tables nested at most 16 deep.
     #[arg(long, value_name = "FILE.toml")]
     pub scenario: Option<PathBuf>,
-    /// Write every N-th step (and the last); 0 writes no trajectory [default: 1]. The
+    /// Write every N-th step (and the last); 0 writes no trajectory. The
     /// trajectory may take at most 1 GiB (--allow-large lifts it).
     #[arg(long, allow_hyphen_values = true, value_name = "N")]
     pub every: Option<String>,
@@ -110,15 +110,10 @@ pub struct SimulateArgs {
     pub large: LargeArg,
 }
 
-use pendula::simulate::defaults;
-
 /// What simulate runs without arguments or scenario file: the library's defaults of a run.
-pub const SIMULATE: crate::args::Defaults = crate::args::Defaults {
-    system: defaults::SYSTEM,
-    method: Some(defaults::METHOD),
-    dt: Some(defaults::DT),
-    t_end: Some(defaults::T_END),
-    notes: &[
+pub const SIMULATE: crate::args::Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::SIMULATE,
+    &[
         (
             "dt",
             "For adaptive methods the first step to try. The run may take at most 10^11 steps (10^13 with --allow-large).",
@@ -126,7 +121,7 @@ pub const SIMULATE: crate::args::Defaults = crate::args::Defaults {
         ("t_end", "The last step is shortened to land on it."),
         ("set", "For example `--set theta1=120deg --set m2=2`."),
     ],
-};
+);
 /// Default trajectory file.
 pub const DEFAULT_OUT: &str = "trajectory.csv";
 
@@ -279,9 +274,9 @@ pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<Simulate
     let asked = args.rtol.is_some() || args.atol.is_some() || args.h_min.is_some() || args.h_max.is_some();
     let tolerances = if matches!(method.scheme, Scheme::Embedded(_)) || asked {
         let tol = Tolerances {
-            rtol: number("--rtol", &args.rtol, scenario.rtol, defaults::RTOL)?,
-            atol: number("--atol", &args.atol, scenario.atol, defaults::ATOL)?,
-            h_min: number("--h-min", &args.h_min, scenario.h_min, 0.0)?,
+            rtol: number("--rtol", &args.rtol, scenario.rtol, SIMULATE.of.number("rtol"))?,
+            atol: number("--atol", &args.atol, scenario.atol, SIMULATE.of.number("atol"))?,
+            h_min: number("--h-min", &args.h_min, scenario.h_min, SIMULATE.of.number("h_min"))?,
             h_max: number("--h-max", &args.h_max, scenario.h_max, f64::INFINITY)?,
         };
         tol.validate().map_err(|e| {
@@ -343,7 +338,7 @@ pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<Simulate
     }
     let every = match &args.every {
         Some(text) => parse_count("--every", text, 0, limits::MAX_STEPS, "steps")?,
-        None => scenario.every.unwrap_or(1),
+        None => scenario.every.unwrap_or(SIMULATE.of.count("every")),
     };
     let every = (every > 0).then_some(every);
     let out = match every {

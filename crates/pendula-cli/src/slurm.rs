@@ -54,7 +54,8 @@ pub struct SlurmArgs {
     /// D-HH:MM:SS, ...) [default: the partition's].
     #[arg(long, value_name = "HH:MM:SS", requires = "emit_slurm")]
     pub time: Option<String>,
-    /// With --emit-slurm: CPUs per shard, each shard running that many threads [default: 1].
+    /// With --emit-slurm: CPUs per shard, each shard running that many threads [default:
+    /// Slurm's, one CPU per task].
     #[arg(long, value_name = "C", requires = "emit_slurm")]
     pub cpus: Option<String>,
 }

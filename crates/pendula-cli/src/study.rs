@@ -35,7 +35,7 @@ macro_rules! say {
 macro_rules! sayln {
     ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
 }
-use crate::args::{LargeArg, SetArgs, SummaryArg};
+use crate::args::{Defaults, LargeArg, SetArgs, SummaryArg};
 use crate::output::{AtomicFile, CreatedDirs};
 
 // The summary's opening, beside the summary: `args` declares the flag, below this module.
@@ -68,11 +68,10 @@ pub struct StepRange {
     /// --dt-max, --levels each method runs its own ladder of halved steps].
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt_min: Option<String>,
-    /// Largest step size, s [default: 0.05 for convergence, 0.1 for work-precision].
+    /// Largest step size, s.
     #[arg(long, value_name = "H", allow_hyphen_values = true)]
     pub dt_max: Option<String>,
-    /// Number of step sizes, geometrically spaced, 2 to 30 [default: 5 for convergence, 7 for
-    /// work-precision].
+    /// Number of step sizes, geometrically spaced, 2 to 30.
     #[arg(long, value_name = "N")]
     pub levels: Option<String>,
     /// End time at which the error is measured, s [default: the system's study horizon, a
@@ -113,7 +112,7 @@ impl StepRange {
     /// The given steps (when any of --dt-min, --dt-max, --levels is given; the others take
     /// [`StepRange::resolve`]'s defaults) or each method's default ladder, and the end time
     /// (`default_t_end` unless --t-end is given).
-    pub fn resolve_or_default(&self, default_t_end: f64) -> Result<(Ladder, f64)> {
+    pub fn resolve_or_default(&self, default_t_end: f64, defaults: &Defaults) -> Result<(Ladder, f64)> {
         let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
         if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
             let spec = pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) };
@@ -122,7 +121,8 @@ impl StepRange {
         }
         // The end time as read (its shortest round-trip text), for `resolve` to read again.
         let with_t = StepRange { t_end: Some(format!("{t_end:e}")), ..self.clone() };
-        let (hs, t_end) = with_t.resolve(0.05, 5)?;
+        let (hs, t_end) =
+            with_t.resolve(defaults.of.number("dt_max"), defaults.of.count("levels") as usize)?;
         Ok((Ladder::Given(hs), t_end))
     }
 }
@@ -726,16 +726,7 @@ pub fn num(v: f64) -> String {
     if v.is_finite() { ryu::Buffer::new().format(v).to_owned() } else { String::new() }
 }
 
-/// A number for humans: 4 significant digits.
-pub fn short(v: f64) -> String {
-    if !v.is_finite() {
-        "-".into()
-    } else if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
-        format!("{v:.3e}")
-    } else {
-        format!("{v:.4}")
-    }
-}
+pub use pendula::error::short;
 
 /// Which steps each method runs.
 #[derive(Debug, Clone)]
@@ -756,14 +747,5 @@ pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) 
     match ladder {
         Ladder::Given(hs) => hs.clone(),
         Ladder::PerMethod => analysis::method_ladder(method, values.build().time_scale(), t_end),
-    }
-}
-
-/// The library's reason for a failed or refused run ([`pendula::Error::is_per_run`]), or the
-/// error itself when it is not one a study reports per method.
-pub fn refusal(e: anyhow::Error) -> Result<String> {
-    match e.downcast_ref::<pendula::Error>() {
-        Some(l) if l.is_per_run() => Ok(e.to_string()),
-        _ => Err(e),
     }
 }

@@ -167,7 +167,40 @@ fn run_study<'py>(
 }
 
 /// Adds the functions to `_core`.
+/// Every study's defaults ([`pendula::study::defaults::ALL`]) by study name: `system`,
+/// `method`, `dt`, `t_end` (None where the study chooses per method) and its own, by
+/// keyword; Python's signatures take theirs from here.
+#[pyfunction]
+fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    use pendula::study::defaults::{ALL, Value};
+    let out = PyDict::new(py);
+    for d in ALL {
+        let one = PyDict::new(py);
+        one.set_item("system", d.system)?;
+        one.set_item("method", d.method)?;
+        one.set_item("dt", d.dt)?;
+        one.set_item("t_end", d.t_end)?;
+        for v in d.values {
+            match v.value {
+                Value::Number(x) => one.set_item(v.name, x)?,
+                Value::Count(n) => one.set_item(v.name, n)?,
+                Value::Text(t) => one.set_item(v.name, t)?,
+                Value::PerSystem(of, otherwise) => {
+                    let per = PyDict::new(py);
+                    for (system, x) in of {
+                        per.set_item(*system, *x)?;
+                    }
+                    one.set_item(v.name, (per, otherwise))?;
+                }
+            }
+        }
+        out.set_item(d.study, one)?;
+    }
+    Ok(out)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(studies, m)?)?;
     m.add_function(wrap_pyfunction!(run_study, m)?)
 }

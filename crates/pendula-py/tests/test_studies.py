@@ -80,3 +80,32 @@ def test_a_report_plots_with_matplotlib():
     assert ax.get_xlabel() == "t (s)"
     with pytest.raises(UnknownNameError):
         r.plot("nope")
+
+
+def test_every_study_signature_takes_its_defaults_from_the_library():
+    # The keyword defaults of the hand-written study functions are the library's
+    # (pendula::study::defaults), the same values the CLI's help states: none typed twice.
+    import inspect
+
+    from pendula import _core
+
+    library = _core.defaults()
+    checked = 0
+    for name, study in [
+        ("lyapunov", "lyapunov"),
+        ("poincare", "poincare"),
+        ("fractal", "fractal"),
+        ("bifurcation", "bifurcation"),
+        ("divergence", "divergence"),
+        ("convergence", "convergence"),
+        ("work_precision", "work-precision"),
+        ("sweep", "sweep"),
+    ]:
+        for p in inspect.signature(getattr(pendula, name)).parameters.values():
+            if p.name in library[study] and library[study][p.name] is not None and p.name not in ("section", "param") and p.default is not p.empty and p.default is not None:
+                assert p.default == library[study][p.name], (name, p.name)
+                checked += 1
+    assert checked >= 25, checked
+    assert pendula.poincare.__kwdefaults__["section"] + "=0" == library["poincare"]["section"]
+    # The bifurcation's axis on defaults is the library's text, parsed.
+    assert pendula.bifurcation(samples=1, transient=0, steps_per_period=4, progress=False).values.size == 800

@@ -257,6 +257,18 @@ impl Error {
     }
 }
 
+/// A number in a table: four decimals, or four significant digits in exponent form below
+/// 1e-3 and from 1e5 ("-" for a non-finite one).
+pub fn short(v: f64) -> String {
+    if !v.is_finite() {
+        "-".into()
+    } else if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
 /// The candidates closest to a misspelt `name`, best first (ties in the candidates' order), at
 /// most three; empty when none is close.
 ///

@@ -34,11 +34,11 @@ pub struct AnimateArgs {
     /// Add a second pendulum whose first angle starts DELTA radians (or `1e-3deg`) away.
     #[arg(long, value_name = "DELTA", allow_hyphen_values = true)]
     pub compare: Option<String>,
-    /// Frames per second of simulated time [default: 30]. A GIF plays 1 to 50 exactly (its
+    /// Frames per second of simulated time. A GIF plays 1 to 50 exactly (its
     /// delays are whole centiseconds, alternated, e.g. 3, 3, 4 cs for 30 fps); MP4 up to 240.
     #[arg(long, value_name = "N")]
     pub fps: Option<String>,
-    /// Frame size in pixels, WIDTHxHEIGHT [default: 480x480].
+    /// Frame size in pixels, WIDTHxHEIGHT.
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
     #[command(flatten)]
@@ -46,17 +46,14 @@ pub struct AnimateArgs {
 }
 
 /// What animate runs without arguments.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: Some(10.0),
-    notes: &[
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::ANIMATE,
+    &[
         ("system", "A pendulum or the double pendulum."),
         ("t_end", "The length of the animation in simulated seconds."),
         ("set", "`--set theta1=120deg` for the double pendulum, `--set theta=120deg` for the pendulum."),
     ],
-};
+);
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
@@ -70,9 +67,9 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         Some(text) => {
             crate::parse::parse_count("--fps", text, 1, 240, "frames per second (1 to 50 for a GIF)")? as u32
         }
-        None => 30,
+        None => DEFAULTS.of.count("fps") as u32,
     };
-    let size = parse_size(args.size.as_deref().unwrap_or("480x480"))?;
+    let size = parse_size(args.size.as_deref().unwrap_or(DEFAULTS.of.text("size")))?;
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from("pendula-out/animate/animation.gif"));
     if out == Path::new("-") {
         bail!("invalid --out -: animate writes a GIF or MP4 file, not stdout; give FILE.gif or FILE.mp4");

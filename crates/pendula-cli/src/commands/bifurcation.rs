@@ -22,19 +22,18 @@ use crate::study::{self, OutDir, num};
 pub struct BifurcationArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// The swept parameter: NAME=LO:HI:N, N cell centres as in `pendula sweep`
-    /// [default: drive_amplitude=1.0:1.5:800 for driven-pendulum].
+    /// The swept parameter: NAME=LO:HI:N, N cell centres as in `pendula sweep`.
     #[arg(long, value_name = "NAME=LO:HI:N")]
     pub param: Option<String>,
     #[command(flatten)]
     pub preset: PresetArg,
-    /// Time discarded before sampling, s, rounded up to whole drive periods [default: 1000].
+    /// Time discarded before sampling, s, rounded up to whole drive periods.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub transient: Option<String>,
-    /// Samples (drive periods) per parameter value, 1 to 10^6 [default: 150].
+    /// Samples (drive periods) per parameter value, 1 to 10^6.
     #[arg(long, value_name = "N")]
     pub samples: Option<String>,
-    /// RK4 steps per drive period, 4 to 10^6 [default: 100].
+    /// RK4 steps per drive period, 4 to 10^6.
     #[arg(long, value_name = "M")]
     pub steps_per_period: Option<String>,
     /// The state variable plotted against the parameter [default: the first velocity].
@@ -47,13 +46,10 @@ pub struct BifurcationArgs {
 }
 
 /// What bifurcation runs on without a system or preset named.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "driven-pendulum",
-    method: None,
-    dt: None,
-    t_end: None,
-    notes: &[("system", "A driven system; with --preset, the preset's.")],
-};
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::BIFURCATION,
+    &[("system", "A driven system; with --preset, the preset's.")],
+);
 
 pub fn run(args: &BifurcationArgs) -> Result<()> {
     // Validate everything first.
@@ -67,7 +63,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
     if info.quantity("drive_frequency").is_err() {
         bail!("invalid system `{system}`: bifurcation needs a driven system (a drive_frequency parameter)");
     }
-    let default_param = (system == "driven-pendulum").then_some("drive_amplitude=1.0:1.5:800");
+    let default_param = (system == "driven-pendulum").then_some(DEFAULTS.of.text("param"));
     let Some(param_text) = args.param.as_deref().or(default_param) else {
         bail!("--param NAME=LO:HI:N is required for {system}");
     };
@@ -86,17 +82,22 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         std::slice::from_ref(&axis),
         "--param",
     )?;
-    let transient = f64_arg("--transient", args.transient.as_deref(), 1000.0, "a time in seconds")?;
+    let transient = f64_arg(
+        "--transient",
+        args.transient.as_deref(),
+        DEFAULTS.of.number("transient"),
+        "a time in seconds",
+    )?;
     if transient < 0.0 {
         bail!("invalid --transient {}: must be finite and >= 0", pendula::error::Short(transient));
     }
     let samples = match &args.samples {
         Some(t) => parse_count("--samples", t, 1, limits::MAX_SAMPLES, "samples")? as usize,
-        None => 150,
+        None => DEFAULTS.of.count("samples") as usize,
     };
     let m = match &args.steps_per_period {
         Some(t) => parse_count("--steps-per-period", t, 4, limits::MAX_STEPS_PER_PERIOD, "steps")? as u32,
-        None => 100,
+        None => DEFAULTS.of.count("steps_per_period") as u32,
     };
     let threads = args.threads.resolve(args.common.large.allow_large)?;
     // What it costs, before the values are made: every value's transient and samples, at the

@@ -43,13 +43,12 @@ pub fn note(r: &MethodConvergence) -> String {
 }
 
 /// What convergence runs on without a system named (its methods and steps are its own).
-pub const DEFAULTS: Defaults =
-    Defaults { system: "oscillator", method: None, dt: None, t_end: None, notes: &[] };
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::CONVERGENCE, &[]);
 
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
-    let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values))?;
+    let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values), &DEFAULTS)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, None)?;
     let (runs, levels) = methods.iter().fold((0.0, 0), |(n, k), m| {

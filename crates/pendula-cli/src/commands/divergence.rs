@@ -18,7 +18,7 @@ use crate::study::{self, Common, OutDir, num};
 pub struct DivergenceArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// The initial separation, added to the first state variable (or `--variable`) [default: 1e-9].
+    /// The initial separation, added to the first state variable (or `--variable`).
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub delta: Option<String>,
     /// The state variable to perturb [default: the first, e.g. theta1].
@@ -28,12 +28,11 @@ pub struct DivergenceArgs {
     pub stepping: MethodArgs,
     #[command(flatten)]
     pub end: EndArg,
-    /// The fit uses the distances before they first exceed this [default: 0.01].
+    /// The fit uses the distances before they first exceed this.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub saturation: Option<String>,
     /// The fit uses only the distances above this, leaving out the start, where the
-    /// separation has not yet turned along the most unstable direction [default: 0, the
-    /// whole run before saturation].
+    /// separation has not yet turned along the most unstable direction.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub fit_from: Option<String>,
     #[command(flatten)]
@@ -41,18 +40,18 @@ pub struct DivergenceArgs {
 }
 
 /// What divergence runs without arguments.
-pub const DEFAULTS: Defaults =
-    Defaults { system: "double", method: Some("rk4"), dt: Some(1e-3), t_end: Some(30.0), notes: &[] };
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::DIVERGENCE, &[]);
 
 pub fn run(args: &DivergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
     let info = values.info();
-    let delta = f64_arg("--delta", args.delta.as_deref(), 1e-9, "a separation")?;
+    let delta = f64_arg("--delta", args.delta.as_deref(), DEFAULTS.of.number("delta"), "a separation")?;
     if delta == 0.0 {
         bail!("invalid --delta 0: the two trajectories must start apart (a separation not 0)");
     }
-    let saturation = f64_arg("--saturation", args.saturation.as_deref(), 1e-2, "a distance")?;
+    let saturation =
+        f64_arg("--saturation", args.saturation.as_deref(), DEFAULTS.of.number("saturation"), "a distance")?;
     if saturation <= delta.abs() {
         bail!(
             "invalid --saturation {}: must be finite and larger than |delta| = {}",
@@ -60,7 +59,8 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             Short(delta.abs())
         );
     }
-    let fit_from = f64_arg("--fit-from", args.fit_from.as_deref(), 0.0, "a distance")?;
+    let fit_from =
+        f64_arg("--fit-from", args.fit_from.as_deref(), DEFAULTS.of.number("fit_from"), "a distance")?;
     if !(fit_from >= 0.0 && fit_from < saturation) {
         bail!(
             "invalid --fit-from {}: must be finite, >= 0 and smaller than --saturation {}",

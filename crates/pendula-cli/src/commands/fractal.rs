@@ -33,18 +33,17 @@ use crate::study::OutDir;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
 pub struct FractalArgs {
-    /// An axis, theta1=LO:HI:N or theta2=LO:HI:N (cell centres, `pi` and `deg` accepted)
-    /// [default: theta1=-pi:pi:512 and theta2=-pi:pi:512].
+    /// An axis, theta1=LO:HI:N or theta2=LO:HI:N (cell centres, `pi` and `deg` accepted).
     #[arg(long = "grid", value_name = "NAME=LO:HI:N")]
     pub grids: Vec<String>,
-    /// Longest time followed, s; no flip by then is NaN [default: 100].
+    /// Longest time followed, s; no flip by then is NaN.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_max: Option<String>,
     #[command(flatten)]
     #[serde(flatten)]
     pub stepping: MethodArgs,
     /// A pixel is converged when its flip times at dt and dt/2 differ by at most this, s
-    /// (and both or neither flip) [default: 0.01].
+    /// (and both or neither flip).
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub tolerance: Option<String>,
     #[command(flatten)]
@@ -99,17 +98,14 @@ fn beside(path: &Path, suffix: &str) -> PathBuf {
 }
 
 /// What fractal runs without arguments (always on the double pendulum).
-pub const DEFAULTS: Defaults = Defaults {
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(0.01),
-    t_end: None,
-    notes: &[
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::FRACTAL,
+    &[
         ("dt", "The convergence check runs at half of it."),
         ("method", "rk4, tao-2 or tao-4 (the ensemble engine's)."),
         ("set", "Parameters only (m1, m2, l1, l2, g): the pendulum starts at rest."),
     ],
-};
+);
 
 pub fn run(args: &FractalArgs) -> Result<()> {
     execute(args, None)
@@ -301,12 +297,18 @@ fn parse(args: &FractalArgs) -> Result<Parsed> {
         *target = GridAxis { lo: axis.lo, hi: axis.hi, n: axis.n };
         seen.push(axis.name);
     }
-    let t_max = positive_arg("--t-max", args.t_max.as_deref(), 100.0, "a time in seconds")?;
+    let t_max =
+        positive_arg("--t-max", args.t_max.as_deref(), DEFAULTS.of.number("t_max"), "a time in seconds")?;
     let h = args.stepping.positive_dt(&DEFAULTS)?;
     if h > t_max {
         bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
     }
-    let tolerance = f64_arg("--tolerance", args.tolerance.as_deref(), 0.01, "a time in seconds")?;
+    let tolerance = f64_arg(
+        "--tolerance",
+        args.tolerance.as_deref(),
+        DEFAULTS.of.number("tolerance"),
+        "a time in seconds",
+    )?;
     if tolerance < 0.0 {
         bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
     }

@@ -25,10 +25,10 @@ pub struct LyapunovArgs {
     pub stepping: MethodArgs,
     #[command(flatten)]
     pub end: EndArg,
-    /// Time run first and discarded, s [default: 10].
+    /// Time run first and discarded, s.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub transient: Option<String>,
-    /// Interval between re-orthonormalisations, s [default: 0.5].
+    /// Interval between re-orthonormalisations, s.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub renormalise: Option<String>,
     /// All exponents (QR re-orthonormalisation of as many tangent vectors as the state has).
@@ -39,12 +39,9 @@ pub struct LyapunovArgs {
 }
 
 /// What lyapunov runs without arguments.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: Some(200.0),
-    notes: &[
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::LYAPUNOV,
+    &[
         ("system", "With --preset, the preset's system."),
         (
             "method",
@@ -52,7 +49,7 @@ pub const DEFAULTS: Defaults = Defaults {
         ),
         ("t_end", "The time over which the exponents are averaged."),
     ],
-};
+);
 
 pub fn run(args: &LyapunovArgs) -> Result<()> {
     let values = study::preset_values(
@@ -66,11 +63,21 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let method = args.stepping.method(&DEFAULTS)?;
     let h = args.stepping.positive_dt(&DEFAULTS)?;
     let t_end = args.end.positive_t_end(&DEFAULTS)?;
-    let transient = f64_arg("--transient", args.transient.as_deref(), 10.0, "a time in seconds")?;
+    let transient = f64_arg(
+        "--transient",
+        args.transient.as_deref(),
+        DEFAULTS.of.number("transient"),
+        "a time in seconds",
+    )?;
     if transient < 0.0 {
         bail!("invalid --transient {}: must be finite and >= 0", Short(transient));
     }
-    let renormalise = positive_arg("--renormalise", args.renormalise.as_deref(), 0.5, "a time in seconds")?;
+    let renormalise = positive_arg(
+        "--renormalise",
+        args.renormalise.as_deref(),
+        DEFAULTS.of.number("renormalise"),
+        "a time in seconds",
+    )?;
     let dim = info.state.len();
     let count = if args.spectrum { dim } else { 1 };
     let spec = LyapunovSpec { h, transient, t_end, renormalise, count, blocks: 10 };

@@ -19,8 +19,7 @@ pub struct PeriodArgs {
     #[command(flatten)]
     pub stepping: MethodArgs,
     /// Largest amplitude, degrees, from 5 to below 180 (a libration: at 180 the pendulum
-    /// balances upright and never swings back); amplitudes run in 5° steps up to it
-    /// [default: 175].
+    /// balances upright and never swings back); amplitudes run in 5° steps up to it.
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub max_amplitude: Option<String>,
     #[command(flatten)]
@@ -36,23 +35,19 @@ pub struct PeriodRow {
 }
 
 /// What period runs without arguments (always on the simple pendulum).
-pub const DEFAULTS: Defaults = Defaults {
-    system: "pendulum",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: None,
-    notes: &[("method", "For the simulated periods.")],
-};
+pub const DEFAULTS: Defaults =
+    crate::args::Defaults::of(&pendula::study::defaults::PERIOD, &[("method", "For the simulated periods.")]);
 
 pub fn run(args: &PeriodArgs) -> Result<()> {
     let method = args.stepping.method(&DEFAULTS)?;
     let h = args.stepping.dt(&DEFAULTS)?;
-    let text = args.max_amplitude.as_deref().unwrap_or("175");
-    let max = f64_arg("--max-amplitude", args.max_amplitude.as_deref(), 175.0, "degrees (5 to < 180)")?;
+    let default = DEFAULTS.of.number("max_amplitude");
+    let max = f64_arg("--max-amplitude", args.max_amplitude.as_deref(), default, "degrees (5 to < 180)")?;
+    let text = args.max_amplitude.clone().unwrap_or_else(|| default.to_string());
     if !(5.0..180.0).contains(&max) {
         anyhow::bail!(
             "invalid --max-amplitude {}: must be from 5 (the first amplitude) to below 180 degrees; the period is of a libration, and at 180 the pendulum balances upright and never swings back",
-            crate::parse::clip(text)
+            crate::parse::clip(&text)
         );
     }
     crate::parse::refuse_settings(

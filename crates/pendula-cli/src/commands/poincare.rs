@@ -21,22 +21,21 @@ use crate::study::{self, Common, OutDir, num};
 pub struct PoincareArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// Energy of every orbit, J [default: -15, regular and chaotic orbits side by side].
+    /// Energy of every orbit, J.
     #[arg(long, value_name = "E", allow_hyphen_values = true)]
     pub energy: Option<String>,
-    /// Number of orbits, 1 to 10000 [default: 30].
+    /// Number of orbits, 1 to 10000.
     #[arg(long, value_name = "N")]
     pub count: Option<String>,
     /// The section, an angle and its value (deg accepted); crossings count when that angle
-    /// increases through the value (mod 2 pi) [default: theta1=0].
+    /// increases through the value (mod 2 pi).
     #[arg(long, value_name = "NAME=VALUE")]
     pub section: Option<String>,
     #[command(flatten)]
     pub end: EndArg,
     #[command(flatten)]
     pub stepping: MethodArgs,
-    /// Relative and absolute tolerance of adaptive methods, 1e-15 (round-off) to 1 [default:
-    /// 1e-10].
+    /// Relative and absolute tolerance of adaptive methods, 1e-15 (round-off) to 1.
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub tol: Option<String>,
     #[command(flatten)]
@@ -44,12 +43,9 @@ pub struct PoincareArgs {
 }
 
 /// What poincare runs without arguments.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "double",
-    method: Some("dop853"),
-    dt: None,
-    t_end: Some(300.0),
-    notes: &[
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::POINCARE,
+    &[
         ("system", "The double pendulum, or the chain with --set links=2."),
         (
             "method",
@@ -58,7 +54,7 @@ pub const DEFAULTS: Defaults = Defaults {
         ("dt", "Required by fixed-step methods; given, every method takes fixed steps of it."),
         ("t_end", "The length of each orbit."),
     ],
-};
+);
 
 pub fn run(args: &PoincareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
@@ -74,7 +70,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     // The system first: a section of a system without an energy surface is no question of
     // which section.
     pendula::analysis::poincare::check_system(&*model)?;
-    let energy = f64_arg("--energy", args.energy.as_deref(), -15.0, "an energy in J")?;
+    let energy = f64_arg("--energy", args.energy.as_deref(), DEFAULTS.of.number("energy"), "an energy in J")?;
     // The energy's domain before the work it implies: a huge energy is no question of cost.
     let most = pendula::analysis::poincare::max_energy(&*model);
     if energy > most {
@@ -86,9 +82,9 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     }
     let count = match &args.count {
         Some(t) => parse_count("--count", t, 1, limits::MAX_ORBITS, "orbits")? as usize,
-        None => 30,
+        None => DEFAULTS.of.count("count") as usize,
     };
-    let section_text = args.section.as_deref().unwrap_or("theta1=0");
+    let section_text = args.section.as_deref().unwrap_or(DEFAULTS.of.text("section"));
     let (name, value) = section_text.split_once('=').ok_or_else(|| {
         anyhow::anyhow!("invalid --section `{}`: expected NAME=VALUE, e.g. theta1=0", clip(section_text))
     })?;
@@ -115,7 +111,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
             Stepping::Fixed(h)
         }
         (None, Scheme::Embedded(_)) => {
-            let tol = f64_arg("--tol", args.tol.as_deref(), 1e-10, "a tolerance")?;
+            let tol = f64_arg("--tol", args.tol.as_deref(), DEFAULTS.of.number("tol"), "a tolerance")?;
             let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
             tol.validate()
                 .map_err(|e| crate::parse::flag_error(e, &[("rtol", "--tol"), ("atol", "--tol")]))?;

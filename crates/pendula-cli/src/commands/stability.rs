@@ -20,7 +20,7 @@ pub struct StabilityArgs {
     pub methods: Option<String>,
     #[command(flatten)]
     pub end: EndArg,
-    /// Largest allowed relative energy error for a run to count as stable [default: 0.1].
+    /// Largest allowed relative energy error for a run to count as stable.
     #[arg(long, value_name = "X", allow_hyphen_values = true)]
     pub max_energy_error: Option<String>,
     #[command(flatten)]
@@ -28,20 +28,21 @@ pub struct StabilityArgs {
 }
 
 /// What stability runs without arguments.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "pendulum",
-    method: None,
-    dt: None,
-    t_end: Some(20.0),
-    notes: &[("t_end", "The length of each test run.")],
-};
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::STABILITY,
+    &[("t_end", "The length of each test run.")],
+);
 
 pub fn run(args: &StabilityArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
     let t_end = args.end.t_end(&DEFAULTS)?;
-    let bound =
-        positive_arg("--max-energy-error", args.max_energy_error.as_deref(), 0.1, "a relative error > 0")?;
+    let bound = positive_arg(
+        "--max-energy-error",
+        args.max_energy_error.as_deref(),
+        DEFAULTS.of.number("max_energy_error"),
+        "a relative error > 0",
+    )?;
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
     crate::parse::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();

@@ -258,13 +258,10 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
 }
 
 /// What sweep runs without arguments.
-pub const DEFAULTS: Defaults = Defaults {
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(0.01),
-    t_end: Some(10.0),
-    notes: &[("set", "The same for every cell, e.g. `--set m2=2`.")],
-};
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(
+    &pendula::study::defaults::SWEEP,
+    &[("set", "The same for every cell, e.g. `--set m2=2`.")],
+);
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     execute(args, None)

@@ -23,14 +23,13 @@ pub struct WorkPrecisionArgs {
     pub methods: Option<String>,
     #[command(flatten)]
     pub steps: StepRange,
-    /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853) [default: 1e-3].
+    /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_max: Option<String>,
-    /// Tightest tolerance for the adaptive methods, at least 1e-15 (round-off) [default:
-    /// 1e-12].
+    /// Tightest tolerance for the adaptive methods, at least 1e-15 (round-off).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_min: Option<String>,
-    /// Number of tolerances, geometrically spaced, 2 to 30 [default: 10].
+    /// Number of tolerances, geometrically spaced, 2 to 30.
     #[arg(long, value_name = "N")]
     pub tol_levels: Option<String>,
     #[command(flatten)]
@@ -41,10 +40,20 @@ pub struct WorkPrecisionArgs {
 fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
     let levels = match &args.tol_levels {
         Some(text) => parse_count("--tol-levels", text, 2, crate::limits::MAX_LEVELS, "tolerances")? as usize,
-        None => 10,
+        None => DEFAULTS.of.count("tol_levels") as usize,
     };
-    let hi = f64_arg("--tol-max", args.tol_max.as_deref(), 1e-3, "a tolerance in (0, 1)")?;
-    let lo = f64_arg("--tol-min", args.tol_min.as_deref(), 1e-12, "a tolerance in (0, 1)")?;
+    let hi = f64_arg(
+        "--tol-max",
+        args.tol_max.as_deref(),
+        DEFAULTS.of.number("tol_max"),
+        "a tolerance in (0, 1)",
+    )?;
+    let lo = f64_arg(
+        "--tol-min",
+        args.tol_min.as_deref(),
+        DEFAULTS.of.number("tol_min"),
+        "a tolerance in (0, 1)",
+    )?;
     if !(lo > 0.0 && lo < hi && hi < 1.0) {
         bail!(
             "invalid tolerance range --tol-min {} --tol-max {}: need 0 < tol-min < tol-max < 1",
@@ -64,13 +73,12 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
 }
 
 /// What work-precision runs on without a system named (its methods and steps are its own).
-pub const DEFAULTS: Defaults =
-    Defaults { system: "pendulum", method: None, dt: None, t_end: None, notes: &[] };
+pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::WORK_PRECISION, &[]);
 
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
-    let (ladder, t_end) = args.steps.resolve_or_default(crate::study::default_t_end(&values))?;
+    let (ladder, t_end) = args.steps.resolve_or_default(crate::study::default_t_end(&values), &DEFAULTS)?;
     let tols = tolerances(args)?;
     let model = values.build();
     let methods = study::methods(args.methods.as_deref(), &*model, None)?;

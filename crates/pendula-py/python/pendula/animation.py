@@ -67,7 +67,11 @@ def _lengths(solution: Solution, links: int) -> list[float]:
     return [1.0] * links  # dimensionless (the driven pendulum): unit length
 
 
-def animate(solution: Solution, *, fps: int = 30, speed: float = 1.0, size: tuple[int, int] = (480, 480)) -> Animation:
+_ANIMATE = _core.defaults()["animate"]
+_SIZE = tuple(int(x) for x in _ANIMATE["size"].split("x"))
+
+
+def animate(solution: Solution, *, fps: int = _ANIMATE["fps"], speed: float = 1.0, size: tuple[int, int] = _SIZE) -> Animation:
     """The run as an animation: one frame every ``speed``/``fps`` s of simulated time (the
     state from ``sol`` when the solution has it, else the nearest recorded step), the rods
     and bobs with a fading trail, the time and the relative energy error on a log gauge."""

@@ -34,6 +34,14 @@ from . import _core
 from .dense import counted, timed
 from .errors import InvalidValueError, PendulaError, UnknownNameError
 
+#: Every study's defaults, declared once in the library (``pendula::study::defaults``): the
+#: signatures below take theirs from here, so that each equals its CLI flag's.
+_DEFAULTS = _core.defaults()
+_POINCARE_SECTION = (
+    _DEFAULTS["poincare"]["section"].split("=")[0],
+    float(_DEFAULTS["poincare"]["section"].split("=")[1]),
+)
+
 if TYPE_CHECKING:
     from . import System
 
@@ -198,13 +206,13 @@ class LyapunovResult(_Pickled):
 
 
 def lyapunov(
-    system: "System | str" = "double",
+    system: "System | str" = _DEFAULTS["lyapunov"]["system"],
     *,
-    method: str = "rk4",
-    dt: float = 1e-3,
-    t_end: float = 200.0,
-    transient: float = 10.0,
-    renormalise: float = 0.5,
+    method: str = _DEFAULTS["lyapunov"]["method"],
+    dt: float = _DEFAULTS["lyapunov"]["dt"],
+    t_end: float = _DEFAULTS["lyapunov"]["t_end"],
+    transient: float = _DEFAULTS["lyapunov"]["transient"],
+    renormalise: float = _DEFAULTS["lyapunov"]["renormalise"],
     spectrum: bool = False,
     progress: Any = None,
 ) -> LyapunovResult:
@@ -314,16 +322,16 @@ class PoincareResult(_Pickled):
 
 
 def poincare(
-    system: "System | str" = "double",
+    system: "System | str" = _DEFAULTS["poincare"]["system"],
     *,
-    energy: float = -15.0,
-    count: int = 30,
-    section: str = "theta1",
-    value: float = 0.0,
-    t_end: float = 300.0,
-    method: str = "dop853",
+    energy: float = _DEFAULTS["poincare"]["energy"],
+    count: int = _DEFAULTS["poincare"]["count"],
+    section: str = _POINCARE_SECTION[0],
+    value: float = _POINCARE_SECTION[1],
+    t_end: float = _DEFAULTS["poincare"]["t_end"],
+    method: str = _DEFAULTS["poincare"]["method"],
     dt: Optional[float] = None,
-    tol: float = 1e-10,
+    tol: float = _DEFAULTS["poincare"]["tol"],
     progress: Any = None,
 ) -> PoincareResult:
     """A Poincaré section of a conservative two-degree-of-freedom ``system`` (the double
@@ -464,14 +472,14 @@ class FractalResult(_Pickled):
 
 
 def fractal(
-    system: "System | str" = "double",
+    system: "System | str" = _DEFAULTS["fractal"]["system"],
     *,
     theta1: Tuple[float, float, int] = (-math.pi, math.pi, 512),
     theta2: Tuple[float, float, int] = (-math.pi, math.pi, 512),
-    t_max: float = 100.0,
-    method: str = "rk4",
-    dt: float = 0.01,
-    tolerance: float = 0.01,
+    t_max: float = _DEFAULTS["fractal"]["t_max"],
+    method: str = _DEFAULTS["fractal"]["method"],
+    dt: float = _DEFAULTS["fractal"]["dt"],
+    tolerance: float = _DEFAULTS["fractal"]["tolerance"],
     threads: Optional[int] = None,
     progress: Any = None,
 ) -> FractalResult:
@@ -581,12 +589,12 @@ class BifurcationResult(_Pickled):
 
 
 def bifurcation(
-    system: "System | str" = "driven-pendulum",
+    system: "System | str" = _DEFAULTS["bifurcation"]["system"],
     *,
     param: Optional[Tuple[str, float, float, int]] = None,
-    transient: float = 1000.0,
-    samples: int = 150,
-    steps_per_period: int = 100,
+    transient: float = _DEFAULTS["bifurcation"]["transient"],
+    samples: int = _DEFAULTS["bifurcation"]["samples"],
+    steps_per_period: int = _DEFAULTS["bifurcation"]["steps_per_period"],
     variable: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Any = None,
@@ -607,7 +615,7 @@ def bifurcation(
     if param is None:
         if system.name != "driven-pendulum":
             raise InvalidValueError(f"give param=(name, lo, hi, n) for {system.name}: the parameter to sweep")
-        param = ("drive_amplitude", 1.0, 1.5, 800)
+        param = _core.parse_axis(system.name, [], _DEFAULTS["bifurcation"]["param"])
     try:
         name, lo, hi, n = param
     except (TypeError, ValueError):
@@ -716,7 +724,7 @@ class ConvergenceResult(_Pickled):
 
 
 def convergence(
-    system: "System | str" = "oscillator",
+    system: "System | str" = _DEFAULTS["convergence"]["system"],
     *,
     methods: "Sequence[str] | str | None" = None,
     dts: Any = None,
@@ -827,7 +835,7 @@ class WorkPrecisionResult(_Pickled):
 
 
 def work_precision(
-    system: "System | str" = "pendulum",
+    system: "System | str" = _DEFAULTS["work-precision"]["system"],
     *,
     methods: "Sequence[str] | str | None" = None,
     dts: Any = None,
@@ -847,7 +855,8 @@ def work_precision(
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    tols = _core.tolerance_ladder(1e-3, 1e-12, 10) if tols is None else _steps("tols", tols)
+    wp = _DEFAULTS["work-precision"]
+    tols = _core.tolerance_ladder(wp["tol_max"], wp["tol_min"], wp["tol_levels"]) if tols is None else _steps("tols", tols)
     args = (
         system._core,
         tols,
@@ -920,14 +929,14 @@ class DivergenceResult(_Pickled):
 
 
 def divergence(
-    system: "System | str" = "double",
+    system: "System | str" = _DEFAULTS["divergence"]["system"],
     *,
-    method: str = "rk4",
-    dt: float = 1e-3,
-    t_end: float = 30.0,
-    delta: float = 1e-9,
+    method: str = _DEFAULTS["divergence"]["method"],
+    dt: float = _DEFAULTS["divergence"]["dt"],
+    t_end: float = _DEFAULTS["divergence"]["t_end"],
+    delta: float = _DEFAULTS["divergence"]["delta"],
     variable: Optional[str] = None,
-    saturation: float = 1e-2,
+    saturation: float = _DEFAULTS["divergence"]["saturation"],
     progress: Any = None,
 ) -> DivergenceResult:
     """The divergence of nearby trajectories, as ``pendula divergence``: ``system`` from its

@@ -35,8 +35,9 @@ PICKLE_VERSION = 1
 SHARD_FORMAT = _core.SHARD_FORMAT
 
 #: What `pendula sweep` runs without those arguments.
-DEFAULT_DT = 0.01
-DEFAULT_T_END = 10.0
+_SWEEP = _core.defaults()["sweep"]
+DEFAULT_DT = _SWEEP["dt"]
+DEFAULT_T_END = _SWEEP["t_end"]
 
 
 def _value(system: Optional[str], name: str, value: Any) -> float:
@@ -204,7 +205,7 @@ def sweep(
     grid: Any,
     *,
     set: Optional[Mapping[str, Any]] = None,
-    method: str = "rk4",
+    method: str = _SWEEP["method"],
     dt: float = DEFAULT_DT,
     steps: Optional[int] = None,
     t_end: Optional[float] = None,

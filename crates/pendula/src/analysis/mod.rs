@@ -31,6 +31,7 @@
 //! `crates/pendula/src/analysis/strobe.rs` (stroboscopic samples on the scalar path).
 
 pub mod accuracy;
+pub mod compare;
 pub mod convergence;
 pub mod divergence;
 pub mod energy;

@@ -16,6 +16,7 @@
 //! the `120deg`/`pi` value syntax is a front end's (the format crate's) job, so inputs
 //! arrive here as numbers and names.
 
+pub mod defaults;
 pub mod energy_budget;
 pub mod round_trip;
 
