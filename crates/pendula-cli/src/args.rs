@@ -51,6 +51,26 @@ impl Defaults {
         Defaults { of, system: of.system, method: of.method, dt: of.dt, t_end: of.t_end, notes }
     }
 
+    /// The number given to the study's own flag `id` (`--` and the id with `-` for `_`), or
+    /// its default ([`pendula::study::defaults`]); `what` says what the flag takes.
+    pub fn number(&self, id: &str, given: &Option<String>, what: &str) -> Result<f64> {
+        f64_arg(&flag(id), given.as_deref(), self.of.number(id), what)
+    }
+
+    /// [`Defaults::number`] of a flag that must be > 0.
+    pub fn positive(&self, id: &str, given: &Option<String>, what: &str) -> Result<f64> {
+        positive_arg(&flag(id), given.as_deref(), self.of.number(id), what)
+    }
+
+    /// [`Defaults::number`] of a flag that must be >= 0 (a time discarded, a tolerance).
+    pub fn non_negative(&self, id: &str, given: &Option<String>, what: &str) -> Result<f64> {
+        let v = self.number(id, given, what)?;
+        if v < 0.0 {
+            anyhow::bail!("invalid {} {}: must be finite and >= 0", flag(id), Short(v));
+        }
+        Ok(v)
+    }
+
     /// `arg` with its help stating this command's default, when it is one of the shared
     /// arguments; other arguments unchanged.
     pub fn document(&self, arg: clap::Arg) -> clap::Arg {
@@ -88,6 +108,35 @@ impl Defaults {
         let default = default.map_or(String::new(), |d| format!(" [default: {d}]"));
         let note = note.map_or(String::new(), |(_, text)| format!(". {text}"));
         arg.help(format!("{what}{default}{note}"))
+    }
+}
+
+/// The flag of argument id `id`: `--steps-per-period` for `steps_per_period`.
+fn flag(id: &str) -> String {
+    format!("--{}", id.replace('_', "-"))
+}
+
+/// Several methods, by name: the accuracy and comparison studies'.
+#[derive(Debug, Clone, Default, Args)]
+pub struct MethodsArg {
+    /// Comma-separated methods [default: every method that applies].
+    #[arg(long, value_name = "LIST")]
+    pub methods: Option<String>,
+}
+
+impl MethodsArg {
+    /// The methods named ([`pendula::model::named_methods`]: each must apply, named once),
+    /// or every method that applies to `model` ([`pendula::model::applicable`]).
+    pub fn resolve(&self, model: &dyn pendula::model::DynModel) -> Result<Vec<&'static Method>> {
+        match self.methods.as_deref() {
+            Some(text) => pendula::model::named_methods(model, text.split(',')).map_err(|e| match e {
+                pendula::Error::InvalidInput { allowed, .. } => {
+                    anyhow::anyhow!("invalid --methods `{}`: {allowed}", crate::parse::clip(text))
+                }
+                other => other.into(),
+            }),
+            None => Ok(pendula::model::applicable(model, integrator::METHODS, None)),
+        }
     }
 }
 

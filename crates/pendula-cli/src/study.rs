@@ -17,8 +17,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis;
-use pendula::integrator::{METHODS, Method};
-use pendula::model::DynModel;
+use pendula::integrator::Method;
 use pendula::system::{self, Values};
 use pendula_viz::Figure;
 
@@ -58,6 +57,18 @@ pub struct Common {
     pub summary: SummaryArg,
     #[command(flatten)]
     pub large: LargeArg,
+}
+
+/// What the accuracy studies (convergence, work-precision) both take: the system, the
+/// methods and their steps.
+#[derive(Debug, Clone, Args)]
+pub struct Accuracy {
+    #[command(flatten)]
+    pub system: crate::args::SystemArg,
+    #[command(flatten)]
+    pub methods: crate::args::MethodsArg,
+    #[command(flatten)]
+    pub steps: StepRange,
 }
 
 /// A geometric range of step sizes and an end time, as convergence and work-precision take
@@ -219,21 +230,6 @@ pub fn preset_settings(
     };
     settings.extend(parse_settings(info, set)?);
     Ok((info, settings))
-}
-
-/// Methods from a comma-separated list ([`pendula::model::named_methods`]: each must apply,
-/// named once), or every method that applies to `model` at steps up to `max_h` when `None`
-/// ([`pendula::model::applicable`]).
-pub fn methods(list: Option<&str>, model: &dyn DynModel, max_h: Option<f64>) -> Result<Vec<&'static Method>> {
-    match list {
-        Some(text) => pendula::model::named_methods(model, text.split(',')).map_err(|e| match e {
-            pendula::Error::InvalidInput { allowed, .. } => {
-                anyhow::anyhow!("invalid --methods `{}`: {allowed}", crate::parse::clip(text))
-            }
-            other => other.into(),
-        }),
-        None => Ok(pendula::model::applicable(model, METHODS, max_h)),
-    }
 }
 
 /// The files each command writes in its study directory (`*` stands for any text: compare's

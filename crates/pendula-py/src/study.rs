@@ -597,6 +597,65 @@ fn horizon_and_steps(
     Ok((t_end, dts))
 }
 
+/// What both accuracy studies share: the end time (default: the study horizon) and the
+/// steps checked, the methods, a refusal when no method has a run to do, the reference
+/// state, and `study` run on them with the GIL released.
+#[allow(clippy::too_many_arguments)] // the studies' shared description
+fn accuracy_study<'py, T: Send>(
+    py: Python<'py>,
+    system: &CoreSystem,
+    methods: Option<Vec<String>>,
+    dts: Option<Vec<f64>>,
+    t_end: Option<f64>,
+    tolerances: bool,
+    progress: Option<&Bound<'py, PyAny>>,
+    study: impl Fn(
+        &analysis::Problem<'_>,
+        &[&'static Method],
+        &dyn Fn(&Method) -> Vec<f64>,
+    ) -> Result<Vec<T>, Error>
+    + Sync,
+) -> PyResult<(f64, analysis::Reference, Vec<T>)> {
+    let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
+    let model = &*system.model;
+    let methods = methods_of(py, model, methods)?;
+    let ladder =
+        |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
+    if analysis::nothing_to_run(&methods, ladder, tolerances) {
+        return Err(raise(
+            py,
+            "InvalidValueError",
+            format!(
+                "invalid t_end {}: no step of the methods' default ladders fits within their cost caps (at most 2e6 steps a run); give a shorter t_end, or dts",
+                Short(t_end)
+            ),
+        ));
+    }
+    let y0 = system.values.initial_state();
+    let run = || -> Result<_, Error> {
+        let reference = analysis::reference_state(model, y0, t_end)?;
+        let results =
+            study(&analysis::Problem { model, y0, t_end, reference: &reference }, &methods, &ladder)?;
+        Ok((reference, results))
+    };
+    let (reference, results) = interruptible(py, false, progress, |_| run())?.map_err(|e| to_py(py, &e))?;
+    Ok((t_end, reference, results))
+}
+
+/// An accuracy study's result: `t_end`, the `reference`'s source and the `methods`.
+fn accuracy_result<'py>(
+    py: Python<'py>,
+    t_end: f64,
+    reference: &analysis::Reference,
+    methods: Bound<'py, PyList>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    out.set_item("t_end", t_end)?;
+    out.set_item("reference", reference.source)?;
+    out.set_item("methods", methods)?;
+    Ok(out)
+}
+
 /// A convergence study as `pendula convergence`: each method's steps (`dts`, or its default
 /// ladder) to `t_end` (default: the study horizon), the max-norm error against the exact
 /// solution or a dop853 reference, and the order fitted in the asymptotic range.
@@ -611,29 +670,10 @@ pub(crate) fn convergence<'py>(
     t_end: Option<f64>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
-    let model = &*system.model;
-    let methods = methods_of(py, model, methods)?;
-    let ladder =
-        |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
-    if analysis::nothing_to_run(&methods, ladder, false) {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid t_end {}: no step of the methods' default ladders fits within their cost caps (at most 2e6 steps a run); give a shorter t_end, or dts",
-                Short(t_end)
-            ),
-        ));
-    }
-    let y0 = system.values.initial_state();
-    let run = || -> Result<_, Error> {
-        let reference = analysis::reference_state(model, y0, t_end)?;
-        let results = analysis::convergence_study(model, y0, t_end, &reference, &methods, ladder, || ())?;
-        Ok((reference, results))
-    };
-    let (reference, results) =
-        interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
+    let (t_end, reference, results) =
+        accuracy_study(py, system, methods, dts, t_end, false, progress.as_ref(), |p, m, ladder| {
+            analysis::convergence_study(p, m, ladder, || ())
+        })?;
     let produced = results.iter().any(|r| !r.hs.is_empty());
     all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
     let list = PyList::empty(py);
@@ -656,11 +696,7 @@ pub(crate) fn convergence<'py>(
         d.set_item("error", r.errors.into_pyarray(py))?;
         list.append(d)?;
     }
-    let out = PyDict::new(py);
-    out.set_item("t_end", t_end)?;
-    out.set_item("reference", reference.source)?;
-    out.set_item("methods", list)?;
-    Ok(out)
+    accuracy_result(py, t_end, &reference, list)
 }
 
 /// A work-precision study as `pendula work-precision`: fixed-step methods at their steps
@@ -679,7 +715,6 @@ pub(crate) fn work_precision<'py>(
     t_end: Option<f64>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (t_end, dts) = horizon_and_steps(py, system, t_end, dts)?;
     if tols.is_empty() {
         return Err(raise(
             py,
@@ -700,29 +735,10 @@ pub(crate) fn work_precision<'py>(
             ));
         }
     }
-    let model = &*system.model;
-    let methods = methods_of(py, model, methods)?;
-    let ladder =
-        |m: &Method| dts.clone().unwrap_or_else(|| analysis::method_ladder(m, model.time_scale(), t_end));
-    if analysis::nothing_to_run(&methods, ladder, true) {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid t_end {}: no step of the methods' default ladders fits within their cost caps (at most 2e6 steps a run); give a shorter t_end, or dts",
-                Short(t_end)
-            ),
-        ));
-    }
-    let y0 = system.values.initial_state();
-    let run = || -> Result<_, Error> {
-        let reference = analysis::reference_state(model, y0, t_end)?;
-        let results =
-            analysis::work_precision_study(model, y0, t_end, &reference, &methods, ladder, &tols, || ())?;
-        Ok((reference, results))
-    };
-    let (reference, results) =
-        interruptible(py, false, progress.as_ref(), |_| run())?.map_err(|e| to_py(py, &e))?;
+    let (t_end, reference, results) =
+        accuracy_study(py, system, methods, dts, t_end, true, progress.as_ref(), |p, m, ladder| {
+            analysis::work_precision_study(p, m, ladder, &tols, || ())
+        })?;
     let produced = results.iter().any(|r| !r.points.is_empty());
     all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
     let list = PyList::empty(py);
@@ -740,11 +756,7 @@ pub(crate) fn work_precision<'py>(
         d.set_item("failure", r.dropped.last().map(|f| failure_note(r.method, f)))?;
         list.append(d)?;
     }
-    let out = PyDict::new(py);
-    out.set_item("t_end", t_end)?;
-    out.set_item("reference", reference.source)?;
-    out.set_item("methods", list)?;
-    Ok(out)
+    accuracy_result(py, t_end, &reference, list)
 }
 
 /// The divergence of two runs `delta` apart in state variable `variable`, as `pendula

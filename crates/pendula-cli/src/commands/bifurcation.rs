@@ -15,7 +15,7 @@ use serde_json::json;
 use crate::args::{Defaults, PresetArg, SystemArg, ThreadsArg};
 use crate::commands::sweep::{parse_axis, refuse_set_and_swept};
 use crate::limits::{self, Cost, Estimate};
-use crate::parse::{f64_arg, parse_count};
+use crate::parse::parse_count;
 use crate::study::{self, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -82,15 +82,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
         std::slice::from_ref(&axis),
         "--param",
     )?;
-    let transient = f64_arg(
-        "--transient",
-        args.transient.as_deref(),
-        DEFAULTS.of.number("transient"),
-        "a time in seconds",
-    )?;
-    if transient < 0.0 {
-        bail!("invalid --transient {}: must be finite and >= 0", pendula::error::Short(transient));
-    }
+    let transient = DEFAULTS.non_negative("transient", &args.transient, "a time in seconds")?;
     let samples = match &args.samples {
         Some(t) => parse_count("--samples", t, 1, limits::MAX_SAMPLES, "samples")? as usize,
         None => DEFAULTS.of.count("samples") as usize,

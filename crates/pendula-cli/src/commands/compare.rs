@@ -27,9 +27,8 @@ use crate::study::{self, Common, OutDir, num, short};
 pub struct CompareArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// Comma-separated methods [default: every method that applies].
-    #[arg(long, value_name = "LIST")]
-    pub methods: Option<String>,
+    #[command(flatten)]
+    pub methods: crate::args::MethodsArg,
     /// The cost given to every method: right-hand-side evaluations per simulated second
     /// (a Jacobian counts as one evaluation per state variable); each method's step is
     /// chosen to spend it.
@@ -63,7 +62,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let t_end =
         positive_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
+    let methods = args.methods.resolve(&*model)?;
     // What it costs: at one step, every method's steps; at equal cost, every method's
     // evaluations, each counted as a step (a step costs at least one).
     let per_method = match steps {

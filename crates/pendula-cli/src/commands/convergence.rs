@@ -16,18 +16,13 @@ use pendula::system::Values;
 use pendula_viz::{Figure, GUIDE, Kind, Scale, axis_label, method_style, with_unit};
 use serde_json::json;
 
-use crate::args::{Defaults, SystemArg};
-use crate::study::{self, Common, Ladder, OutDir, StepRange, default_t_end, num, short, steps_for};
+use crate::args::Defaults;
+use crate::study::{self, Common, Ladder, OutDir, default_t_end, num, short, steps_for};
 
 #[derive(Debug, Clone, Args)]
 pub struct ConvergenceArgs {
     #[command(flatten)]
-    pub system: SystemArg,
-    /// Comma-separated methods [default: every method that applies].
-    #[arg(long, value_name = "LIST")]
-    pub methods: Option<String>,
-    #[command(flatten)]
-    pub steps: StepRange,
+    pub accuracy: crate::study::Accuracy,
     #[command(flatten)]
     pub common: Common,
 }
@@ -46,11 +41,11 @@ pub fn note(r: &MethodConvergence) -> String {
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::CONVERGENCE, &[]);
 
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
-    let system = args.system.name(&DEFAULTS);
+    let system = args.accuracy.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
-    let (ladder, t_end) = args.steps.resolve_or_default(default_t_end(&values), &DEFAULTS)?;
+    let (ladder, t_end) = args.accuracy.steps.resolve_or_default(default_t_end(&values), &DEFAULTS)?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
+    let methods = args.accuracy.methods.resolve(&*model)?;
     let (runs, levels) = methods.iter().fold((0.0, 0), |(n, k), m| {
         let hs = steps_for(&values, m, &ladder, t_end);
         (n + hs.iter().map(|h| crate::limits::steps(t_end, *h)).sum::<f64>(), k + hs.len())
@@ -123,11 +118,9 @@ pub fn study_orders(
     let reference =
         analysis::reference_state(&*model, y0, t_end).map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "convergence");
+    let problem = analysis::Problem { model: &*model, y0, t_end, reference: &reference };
     let results = analysis::convergence_study(
-        &*model,
-        y0,
-        t_end,
-        &reference,
+        &problem,
         methods,
         |m| steps_for(values, m, ladder, t_end),
         || bar.inc(1),

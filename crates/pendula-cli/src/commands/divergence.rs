@@ -8,7 +8,6 @@ use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, number, palette, pretty, with_unit};
 use serde_json::json;
 
-use crate::parse::f64_arg;
 use pendula::error::Short;
 
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
@@ -46,12 +45,11 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
     let info = values.info();
-    let delta = f64_arg("--delta", args.delta.as_deref(), DEFAULTS.of.number("delta"), "a separation")?;
+    let delta = DEFAULTS.number("delta", &args.delta, "a separation")?;
     if delta == 0.0 {
         bail!("invalid --delta 0: the two trajectories must start apart (a separation not 0)");
     }
-    let saturation =
-        f64_arg("--saturation", args.saturation.as_deref(), DEFAULTS.of.number("saturation"), "a distance")?;
+    let saturation = DEFAULTS.number("saturation", &args.saturation, "a distance")?;
     if saturation <= delta.abs() {
         bail!(
             "invalid --saturation {}: must be finite and larger than |delta| = {}",
@@ -59,8 +57,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             Short(delta.abs())
         );
     }
-    let fit_from =
-        f64_arg("--fit-from", args.fit_from.as_deref(), DEFAULTS.of.number("fit_from"), "a distance")?;
+    let fit_from = DEFAULTS.number("fit_from", &args.fit_from, "a distance")?;
     if !(fit_from >= 0.0 && fit_from < saturation) {
         bail!(
             "invalid --fit-from {}: must be finite, >= 0 and smaller than --saturation {}",

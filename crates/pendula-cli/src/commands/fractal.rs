@@ -28,7 +28,7 @@ use pendula::error::Short;
 
 use crate::limits::{self, Cost, Estimate};
 use crate::output::AtomicFile;
-use crate::parse::{f64_arg, parse_settings, positive_arg};
+use crate::parse::parse_settings;
 use crate::study::OutDir;
 
 #[derive(Debug, Clone, Args, serde::Serialize, serde::Deserialize)]
@@ -297,21 +297,12 @@ fn parse(args: &FractalArgs) -> Result<Parsed> {
         *target = GridAxis { lo: axis.lo, hi: axis.hi, n: axis.n };
         seen.push(axis.name);
     }
-    let t_max =
-        positive_arg("--t-max", args.t_max.as_deref(), DEFAULTS.of.number("t_max"), "a time in seconds")?;
+    let t_max = DEFAULTS.positive("t_max", &args.t_max, "a time in seconds")?;
     let h = args.stepping.positive_dt(&DEFAULTS)?;
     if h > t_max {
         bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
     }
-    let tolerance = f64_arg(
-        "--tolerance",
-        args.tolerance.as_deref(),
-        DEFAULTS.of.number("tolerance"),
-        "a time in seconds",
-    )?;
-    if tolerance < 0.0 {
-        bail!("invalid --tolerance {}: must be finite and >= 0", Short(tolerance));
-    }
+    let tolerance = DEFAULTS.non_negative("tolerance", &args.tolerance, "a time in seconds")?;
     let method = args.stepping.method(&DEFAULTS)?;
     let Some(batch) = pendula::ensemble::BatchMethod::of(method) else {
         bail!(

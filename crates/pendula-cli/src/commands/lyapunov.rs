@@ -10,7 +10,6 @@ use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
 use serde_json::json;
 
 use crate::args::{Defaults, EndArg, MethodArgs, PresetArg, SystemArg};
-use crate::parse::{f64_arg, positive_arg};
 use pendula::error::Short;
 
 use crate::study::{self, Common, OutDir, num};
@@ -63,21 +62,8 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let method = args.stepping.method(&DEFAULTS)?;
     let h = args.stepping.positive_dt(&DEFAULTS)?;
     let t_end = args.end.positive_t_end(&DEFAULTS)?;
-    let transient = f64_arg(
-        "--transient",
-        args.transient.as_deref(),
-        DEFAULTS.of.number("transient"),
-        "a time in seconds",
-    )?;
-    if transient < 0.0 {
-        bail!("invalid --transient {}: must be finite and >= 0", Short(transient));
-    }
-    let renormalise = positive_arg(
-        "--renormalise",
-        args.renormalise.as_deref(),
-        DEFAULTS.of.number("renormalise"),
-        "a time in seconds",
-    )?;
+    let transient = DEFAULTS.non_negative("transient", &args.transient, "a time in seconds")?;
+    let renormalise = DEFAULTS.positive("renormalise", &args.renormalise, "a time in seconds")?;
     let dim = info.state.len();
     let count = if args.spectrum { dim } else { 1 };
     let spec = LyapunovSpec { h, transient, t_end, renormalise, count, blocks: 10 };

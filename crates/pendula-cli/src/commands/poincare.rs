@@ -14,7 +14,7 @@ use serde_json::json;
 
 use crate::args::{Defaults, EndArg, MethodArgs, SystemArg};
 use crate::limits::{self, Cost, Estimate};
-use crate::parse::{clip, f64_arg, parse_count, parse_float, parse_value, refuse_settings};
+use crate::parse::{clip, parse_count, parse_float, parse_value, refuse_settings};
 use crate::study::{self, Common, OutDir, num};
 
 #[derive(Debug, Clone, Args)]
@@ -70,7 +70,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     // The system first: a section of a system without an energy surface is no question of
     // which section.
     pendula::analysis::poincare::check_system(&*model)?;
-    let energy = f64_arg("--energy", args.energy.as_deref(), DEFAULTS.of.number("energy"), "an energy in J")?;
+    let energy = DEFAULTS.number("energy", &args.energy, "an energy in J")?;
     // The energy's domain before the work it implies: a huge energy is no question of cost.
     let most = pendula::analysis::poincare::max_energy(&*model);
     if energy > most {
@@ -111,7 +111,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
             Stepping::Fixed(h)
         }
         (None, Scheme::Embedded(_)) => {
-            let tol = f64_arg("--tol", args.tol.as_deref(), DEFAULTS.of.number("tol"), "a tolerance")?;
+            let tol = DEFAULTS.number("tol", &args.tol, "a tolerance")?;
             let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
             tol.validate()
                 .map_err(|e| crate::parse::flag_error(e, &[("rtol", "--tol"), ("atol", "--tol")]))?;

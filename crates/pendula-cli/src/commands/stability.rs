@@ -8,16 +8,14 @@ use serde_json::json;
 
 use crate::args::{Defaults, EndArg, SystemArg};
 use crate::limits::{self, Cost, Estimate};
-use crate::parse::positive_arg;
 use crate::study::{self, Common, OutDir, num, short};
 
 #[derive(Debug, Clone, Args)]
 pub struct StabilityArgs {
     #[command(flatten)]
     pub system: SystemArg,
-    /// Comma-separated methods [default: every method that applies].
-    #[arg(long, value_name = "LIST")]
-    pub methods: Option<String>,
+    #[command(flatten)]
+    pub methods: crate::args::MethodsArg,
     #[command(flatten)]
     pub end: EndArg,
     /// Largest allowed relative energy error for a run to count as stable.
@@ -37,16 +35,11 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
     let t_end = args.end.t_end(&DEFAULTS)?;
-    let bound = positive_arg(
-        "--max-energy-error",
-        args.max_energy_error.as_deref(),
-        DEFAULTS.of.number("max_energy_error"),
-        "a relative error > 0",
-    )?;
+    let bound = DEFAULTS.positive("max_energy_error", &args.max_energy_error, "a relative error > 0")?;
     let spec = pendula::RunSpec { t0: 0.0, h: 1.0, end: pendula::End::Time(t_end) };
     crate::parse::schedule(&spec, "--t-end", "--t-end")?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
+    let methods = args.methods.resolve(&*model)?;
     // What it costs, at most: per method, the bisection's runs (both ends of the range, then
     // halvings of log h to 1%), each as long as a run at the smallest step.
     let runs = 2.0 + ((H_RANGE.1 / H_RANGE.0).ln() / 1.01f64.ln()).log2().ceil();

@@ -8,21 +8,16 @@ use pendula::analysis::{self, WorkPoint};
 use pendula_viz::{Figure, Kind, Scale, method_style, with_unit};
 use serde_json::json;
 
-use crate::args::{Defaults, SystemArg};
-use crate::parse::{f64_arg, parse_count};
-use crate::study::{self, Common, OutDir, StepRange, num, short};
+use crate::args::Defaults;
+use crate::parse::parse_count;
+use crate::study::{self, Common, OutDir, num, short};
 use pendula::integrator::Method;
 use pendula::integrator::Scheme;
 
 #[derive(Debug, Clone, Args)]
 pub struct WorkPrecisionArgs {
     #[command(flatten)]
-    pub system: SystemArg,
-    /// Comma-separated methods [default: every method that applies].
-    #[arg(long, value_name = "LIST")]
-    pub methods: Option<String>,
-    #[command(flatten)]
-    pub steps: StepRange,
+    pub accuracy: crate::study::Accuracy,
     /// Loosest tolerance (rtol = atol) for the adaptive methods (dopri5, dop853).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol_max: Option<String>,
@@ -42,18 +37,8 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
         Some(text) => parse_count("--tol-levels", text, 2, crate::limits::MAX_LEVELS, "tolerances")? as usize,
         None => DEFAULTS.of.count("tol_levels") as usize,
     };
-    let hi = f64_arg(
-        "--tol-max",
-        args.tol_max.as_deref(),
-        DEFAULTS.of.number("tol_max"),
-        "a tolerance in (0, 1)",
-    )?;
-    let lo = f64_arg(
-        "--tol-min",
-        args.tol_min.as_deref(),
-        DEFAULTS.of.number("tol_min"),
-        "a tolerance in (0, 1)",
-    )?;
+    let hi = DEFAULTS.number("tol_max", &args.tol_max, "a tolerance in (0, 1)")?;
+    let lo = DEFAULTS.number("tol_min", &args.tol_min, "a tolerance in (0, 1)")?;
     if !(lo > 0.0 && lo < hi && hi < 1.0) {
         bail!(
             "invalid tolerance range --tol-min {} --tol-max {}: need 0 < tol-min < tol-max < 1",
@@ -76,12 +61,13 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::WORK_PRECISION, &[]);
 
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
-    let system = args.system.name(&DEFAULTS);
+    let system = args.accuracy.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
-    let (ladder, t_end) = args.steps.resolve_or_default(crate::study::default_t_end(&values), &DEFAULTS)?;
+    let (ladder, t_end) =
+        args.accuracy.steps.resolve_or_default(crate::study::default_t_end(&values), &DEFAULTS)?;
     let tols = tolerances(args)?;
     let model = values.build();
-    let methods = study::methods(args.methods.as_deref(), &*model, None)?;
+    let methods = args.accuracy.methods.resolve(&*model)?;
     // Fixed-step methods run their steps; the adaptive ones are estimated per tolerance.
     let period = crate::limits::motion_period(&*model, values.initial_state());
     let runs: f64 = methods
@@ -116,16 +102,9 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         .map_err(|e| study::reference_failed(e, t_end))?;
     let bar = study::progress(methods.len() as u64, "work-precision");
     let ladder = |m: &Method| crate::study::steps_for(&values, m, &ladder, t_end);
-    let results = analysis::work_precision_study(
-        &*model,
-        values.initial_state(),
-        t_end,
-        &reference,
-        &methods,
-        ladder,
-        &tols,
-        || bar.inc(1),
-    )?;
+    let problem =
+        analysis::Problem { model: &*model, y0: values.initial_state(), t_end, reference: &reference };
+    let results = analysis::work_precision_study(&problem, &methods, ladder, &tols, || bar.inc(1))?;
     bar.finish_and_clear();
     let produced = results.iter().any(|r| !r.points.is_empty());
     let first = analysis::all_dropped(produced, results.iter().map(|r| &r.dropped[..]));

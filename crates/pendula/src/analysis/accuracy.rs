@@ -29,6 +29,20 @@ pub struct Dropped {
     pub error: Error,
 }
 
+/// The problem both studies solve: `model` from `y0` to `t_end`, against the state
+/// `reference` there.
+#[derive(Clone, Copy)]
+pub struct Problem<'a> {
+    /// The system.
+    pub model: &'a dyn DynModel,
+    /// The initial state.
+    pub y0: &'a [f64],
+    /// The end time, s.
+    pub t_end: f64,
+    /// The reference state at `t_end`.
+    pub reference: &'a Reference,
+}
+
 /// What a convergence study found for one method.
 #[derive(Debug, Clone)]
 pub struct MethodConvergence {
@@ -76,6 +90,24 @@ pub struct MethodWork {
     pub dropped: Vec<Dropped>,
 }
 
+/// A run's result, or `None` with the run added to `dropped` when it failed on its own
+/// ([`Error::is_per_run`]) at step or tolerance `x`.
+fn kept<T>(
+    run: Result<T, Error>,
+    x: f64,
+    adaptive: bool,
+    dropped: &mut Vec<Dropped>,
+) -> Result<Option<T>, Error> {
+    match run {
+        Ok(v) => Ok(Some(v)),
+        Err(error) if error.is_per_run() => {
+            dropped.push(Dropped { x, adaptive, error });
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
+}
+
 /// The first dropped run of a study whose every method lost every point: what its front end
 /// reports as the study's error. `None` when some run gave a point.
 pub fn all_dropped<'a>(
@@ -95,34 +127,29 @@ pub fn nothing_to_run(
     !methods.iter().any(|m| (tolerances && matches!(m.scheme, Scheme::Embedded(_))) || !ladder(m).is_empty())
 }
 
-/// The convergence study: each method at the steps `ladder` gives it, from `y0` to `t_end`,
-/// its errors against `reference` and the order fitted where they are in the asymptotic
+/// The convergence study: each method at the steps `ladder` gives it, on the `problem`,
+/// its errors against the reference and the order fitted where they are in the asymptotic
 /// range ([`estimate_order`]). `done` is called after each method (for progress).
 ///
 /// # Errors
 /// The first error of a run that is not a per-run failure ([`Error::is_per_run`]).
 pub fn convergence_study(
-    model: &dyn DynModel,
-    y0: &[f64],
-    t_end: f64,
-    reference: &Reference,
+    problem: &Problem<'_>,
     methods: &[&'static Method],
     ladder: impl Fn(&Method) -> Vec<f64>,
     mut done: impl FnMut(),
 ) -> Result<Vec<MethodConvergence>, Error> {
+    let Problem { model, y0, t_end, reference } = *problem;
     let scale = reference.scale();
     let mut results = Vec::with_capacity(methods.len());
     for &method in methods {
         let (mut hs, mut errors, mut dropped) = (Vec::new(), Vec::new(), Vec::new());
         for h in ladder(method) {
-            match convergence_errors(model, method, y0, t_end, &[h], &reference.state) {
-                Ok(e) => {
-                    hs.push(h);
-                    errors.push(e[0]);
-                }
-                // Large steps may be refused or blow up where smaller ones work: keep going.
-                Err(error) if error.is_per_run() => dropped.push(Dropped { x: h, adaptive: false, error }),
-                Err(e) => return Err(e),
+            // Large steps may be refused or blow up where smaller ones work: keep going.
+            let run = convergence_errors(model, method, y0, t_end, &[h], &reference.state);
+            if let Some(e) = kept(run, h, false, &mut dropped)? {
+                hs.push(h);
+                errors.push(e[0]);
             }
         }
         let estimate = estimate_order(&hs, &errors, scale, t_end, reference.accuracy);
@@ -139,17 +166,14 @@ pub fn convergence_study(
 ///
 /// # Errors
 /// The first error of a run that is not a per-run failure ([`Error::is_per_run`]).
-#[allow(clippy::too_many_arguments)] // the study's description
 pub fn work_precision_study(
-    model: &dyn DynModel,
-    y0: &[f64],
-    t_end: f64,
-    reference: &Reference,
+    problem: &Problem<'_>,
     methods: &[&'static Method],
     ladder: impl Fn(&Method) -> Vec<f64>,
     tolerances: &[f64],
     mut done: impl FnMut(),
 ) -> Result<Vec<MethodWork>, Error> {
+    let Problem { model, y0, t_end, reference } = *problem;
     let mut results = Vec::with_capacity(methods.len());
     for &method in methods {
         let adaptive = matches!(method.scheme, Scheme::Embedded(_));
@@ -161,11 +185,7 @@ pub fn work_precision_study(
             } else {
                 work_precision(model, method, y0, t_end, &[x], &reference.state)
             };
-            match point {
-                Ok(p) => points.extend(p),
-                Err(error) if error.is_per_run() => dropped.push(Dropped { x, adaptive, error }),
-                Err(e) => return Err(e),
-            }
+            points.extend(kept(point, x, adaptive, &mut dropped)?.into_iter().flatten());
         }
         results.push(MethodWork { method, points, dropped });
         done();

@@ -43,7 +43,7 @@ pub mod stability;
 pub mod strobe;
 
 pub use accuracy::{
-    Dropped, MethodConvergence, MethodWork, all_dropped, convergence_study, nothing_to_run,
+    Dropped, MethodConvergence, MethodWork, Problem, all_dropped, convergence_study, nothing_to_run,
     work_precision_study,
 };
 pub use convergence::{

@@ -10,10 +10,7 @@
 
 use std::ops::ControlFlow;
 
-use super::{
-    Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study, Style,
-    Table, Unit, sig, unit_suffix,
-};
+use super::prelude::*;
 use crate::analysis::EnergyBalance;
 use crate::error::Short;
 use crate::observe::{Flow, Observer, Sample};
@@ -24,23 +21,11 @@ pub const STUDY: Study = Study {
     name: "energy-budget",
     about: "The energy balance E(t) - E(0) - W(t) of one run: the energy, the work of damping and drive, and what the integrator leaves of their balance",
     params: &[
-        Param {
-            name: "system",
-            help: "The system to run",
-            // A damped double pendulum: the forces do work, so each term of the budget shows.
-            kind: Kind::System { default: "double", preset: &[("damping", 0.1)] },
-        },
-        Param { name: "method", help: "The integration method", kind: Kind::Method { default: "rk4" } },
-        Param {
-            name: "dt",
-            help: "The step size",
-            kind: Kind::Real { default: 1e-3, unit: Unit::Time, domain: Domain::Positive },
-        },
-        Param {
-            name: "t_end",
-            help: "The end time",
-            kind: Kind::Real { default: 20.0, unit: Unit::Time, domain: Domain::Positive },
-        },
+        // A damped double pendulum: the forces do work, so each term of the budget shows.
+        Param::system("double", &[("damping", 0.1)]),
+        Param::method("rk4"),
+        Param::time("dt", "The step size", 1e-3),
+        Param::time("t_end", "The end time", 20.0),
     ],
     files: &["energy-budget", "energy-balance"],
     run,
@@ -50,11 +35,7 @@ pub const STUDY: Study = Study {
 const SAMPLES: u64 = 2000;
 
 fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
-    let args = Args::new(&STUDY, inputs)?;
-    let values = args.system("system")?;
-    let method = args.method("method")?;
-    let dt = args.real("dt")?;
-    let t_end = args.real("t_end")?;
+    let (values, method, dt, t_end) = Args::new(&STUDY, inputs)?.one_run()?;
     let spec = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
     let schedule = super::schedule(dt, t_end)?;
     budget.afford(schedule.steps as f64, format!("a run of {} steps", schedule.steps))?;
@@ -149,12 +130,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     };
     Ok(Report {
         study: STUDY.name,
-        inputs: vec![
-            ("system", Input::Name(info.name.into())),
-            ("method", Input::Name(method.name.into())),
-            ("dt", Input::Number(dt)),
-            ("t_end", Input::Number(t_end)),
-        ],
+        inputs: run_inputs(&values, method, dt, t_end),
         summary,
         numbers,
         tables: vec![table],

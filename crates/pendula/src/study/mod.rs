@@ -112,6 +112,41 @@ pub struct Param {
     pub kind: Kind,
 }
 
+impl Param {
+    /// The system run, `default` with the settings `preset` over its defaults.
+    pub const fn system(default: &'static str, preset: &'static [(&'static str, f64)]) -> Param {
+        Param { name: "system", help: "The system to run", kind: Kind::System { default, preset } }
+    }
+
+    /// The integration method.
+    pub const fn method(default: &'static str) -> Param {
+        Param { name: "method", help: "The integration method", kind: Kind::Method { default } }
+    }
+
+    /// A time `name` (s, or the system's time unit), > 0.
+    pub const fn time(name: &'static str, help: &'static str, default: f64) -> Param {
+        Param { name, help, kind: Kind::Real { default, unit: Unit::Time, domain: Domain::Positive } }
+    }
+}
+
+/// The inputs of one run, as a report states them: `system`, `method`, `dt`, `t_end`.
+pub fn run_inputs(values: &Values, method: &Method, dt: f64, t_end: f64) -> Vec<(&'static str, Input)> {
+    vec![
+        ("system", Input::Name(values.info().name.into())),
+        ("method", Input::Name(method.name.into())),
+        ("dt", Input::Number(dt)),
+        ("t_end", Input::Number(t_end)),
+    ]
+}
+
+/// What a study module needs of this one, in one import.
+pub mod prelude {
+    pub use super::{
+        Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study,
+        Style, Table, Unit, run_inputs, sig, unit_suffix,
+    };
+}
+
 /// What a parameter takes.
 #[derive(Debug, Clone, Copy)]
 pub enum Kind {
@@ -408,6 +443,14 @@ impl<'a> Args<'a> {
             panic!("{name} is not a method parameter of {}", self.study.name)
         };
         integrator::find(self.text(name)?.unwrap_or(default))
+    }
+
+    /// One run's inputs, as the parameters `system`, `method`, `dt` and `t_end` give them.
+    ///
+    /// # Errors
+    /// As [`Args::system`], [`Args::method`] and [`Args::real`].
+    pub fn one_run(&self) -> Result<(Values, &'static Method, f64, f64), Error> {
+        Ok((self.system("system")?, self.method("method")?, self.real("dt")?, self.real("t_end")?))
     }
 
     /// The system parameter `name` with the study's preset (for its default system) and the

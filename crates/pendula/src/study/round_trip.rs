@@ -9,10 +9,7 @@
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! §II.3 (symmetric methods) and §V.1.
 
-use super::{
-    Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study, Style,
-    Table, Unit, sig, unit_suffix,
-};
+use super::prelude::*;
 use crate::analysis::divergence::state_distance;
 use crate::error::Short;
 use crate::integrator::Method;
@@ -24,33 +21,17 @@ pub const STUDY: Study = Study {
     name: "round-trip",
     about: "Time reversibility: a run to t_end and back with the step negated, and how far from its start it returns",
     params: &[
-        Param {
-            name: "system",
-            help: "The system to run",
-            kind: Kind::System { default: "pendulum", preset: &[] },
-        },
-        Param { name: "method", help: "The integration method", kind: Kind::Method { default: "verlet" } },
-        Param {
-            name: "dt",
-            help: "The step size (the way back steps with -dt)",
-            kind: Kind::Real { default: 0.01, unit: Unit::Time, domain: Domain::Positive },
-        },
-        Param {
-            name: "t_end",
-            help: "How far the run goes before it turns back",
-            kind: Kind::Real { default: 20.0, unit: Unit::Time, domain: Domain::Positive },
-        },
+        Param::system("pendulum", &[]),
+        Param::method("verlet"),
+        Param::time("dt", "The step size (the way back steps with -dt)", 0.01),
+        Param::time("t_end", "How far the run goes before it turns back", 20.0),
     ],
     files: &["round-trip"],
     run,
 };
 
 fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
-    let args = Args::new(&STUDY, inputs)?;
-    let values = args.system("system")?;
-    let method = args.method("method")?;
-    let dt = args.real("dt")?;
-    let t_end = args.real("t_end")?;
+    let (values, method, dt, t_end) = Args::new(&STUDY, inputs)?.one_run()?;
     let forward = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
     let schedule = super::schedule(dt, t_end)?;
     budget.afford(2.0 * schedule.steps as f64, format!("2 runs of {} steps", schedule.steps))?;
@@ -110,12 +91,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     };
     Ok(Report {
         study: STUDY.name,
-        inputs: vec![
-            ("system", Input::Name(info.name.into())),
-            ("method", Input::Name(method.name.into())),
-            ("dt", Input::Number(dt)),
-            ("t_end", Input::Number(t_end)),
-        ],
+        inputs: run_inputs(&values, method, dt, t_end),
         summary,
         numbers: vec![
             Number {
