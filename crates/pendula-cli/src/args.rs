@@ -76,7 +76,8 @@ impl Defaults {
     pub fn document(&self, arg: clap::Arg) -> clap::Arg {
         let id = arg.get_id().as_str().to_owned();
         // The study's own default: written after the flag's own help.
-        if let Some(d) = self.of.values.iter().find(|d| d.name == id) {
+        let long = arg.get_long().map(|l| l.replace('-', "_"));
+        if let Some(d) = self.of.values.iter().find(|d| d.name == id || Some(d.name) == long.as_deref()) {
             let own =
                 arg.get_help().map(|h| h.to_string().trim_end_matches('.').to_owned()).unwrap_or_default();
             let why = if d.why.is_empty() { String::new() } else { format!(", {}", d.why) };
@@ -296,6 +297,18 @@ mod tests {
         }
         // The shared step and end times of eight commands, and some thirty of their own.
         assert!(checked >= 40, "only {checked} numeric defaults checked");
+        // And the other way: every default the library declares for a command is in its help.
+        for d in pendula::study::defaults::ALL {
+            let command = cli.find_subcommand(d.study).expect("a command per study");
+            for v in d.values {
+                let arg = command
+                    .get_arguments()
+                    .find(|a| a.get_long().map(|l| l.replace('-', "_")).as_deref() == Some(v.name))
+                    .unwrap_or_else(|| panic!("`pendula {}` has no --{}", d.study, v.name));
+                let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+                assert!(help.contains(&format!("[default: {}", v.value)), "`pendula {}`: {help}", d.study);
+            }
+        }
     }
 
     /// What the help states is what the conversion uses.
