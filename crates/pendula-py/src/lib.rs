@@ -57,6 +57,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 mod animate;
+mod dense;
 mod io;
 mod serve;
 mod studies;
@@ -964,6 +965,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     studies::register(m)?;
     sweep::register(m)?;
     io::register(m)?;
+    dense::register(m)?;
     serve::register(m)?;
     m.add_function(wrap_pyfunction!(animate::animation_gif, m)?)?;
     m.add_class::<CoreSystem>()?;

@@ -26,7 +26,7 @@ use std::ops::ControlFlow;
 
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
-use crate::observe::{Flow, Observer, Sample, Stop};
+use crate::observe::{DenseStep, Flow, Observer, Sample, Stop};
 use crate::system::DynSystem;
 
 /// Which crossings of zero count.
@@ -245,8 +245,10 @@ fn hermite_basis(s: f64) -> [f64; 4] {
     [2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2]
 }
 
-/// The cubic Hermite interpolant at fraction s of a step of size h.
-fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: &mut [f64]) {
+/// The cubic Hermite interpolant at fraction s of a step of size h, through the states `y0`,
+/// `y1` and their derivatives `f0`, `f1` at its ends (error O(h⁴)): the continuous solution of
+/// a method without dense output of its own.
+pub fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: &mut [f64]) {
     let [h00, h10, h01, h11] = hermite_basis(s);
     for (i, o) in out.iter_mut().enumerate() {
         *o = h00 * y0[i] + h10 * h * f0[i] + h01 * y1[i] + h11 * h * f1[i];
@@ -255,8 +257,9 @@ fn hermite(s: f64, h: f64, y0: &[f64], f0: &[f64], y1: &[f64], f1: &[f64], out: 
 
 /// Bisection for the fraction s ∈ [0, 1] of a step of size h, ending at time t, where g
 /// changes sign; `sign` is g's sign at s = 0. It stops when the bracket is 1e-13 relative
-/// in time (absolute below t = 1 s), or at round-off in s.
-fn bisect(h: f64, t: f64, sign: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
+/// in time (absolute below t = 1 s), or at round-off in s. The locator's, and Python's for
+/// its callable events.
+pub fn bisect(h: f64, t: f64, sign: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
     let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
     while (hi - lo) * h.abs() > 1e-13 * t.abs().max(1.0) && hi - lo > f64::EPSILON {
         let mid = 0.5 * (lo + hi);
@@ -280,6 +283,51 @@ pub(crate) fn hermite_crossing(h: f64, t: f64, start: [f64; 2], end: [f64; 2], l
         let [h00, h10, h01, h11] = hermite_basis(s);
         h00 * start[0] + h10 * h * start[1] + h01 * end[0] + h11 * h * end[1] - level
     })
+}
+
+/// A run's continuous solution from its recorded steps: each step's own dense output where
+/// the method has one ([`DenseStep`], Hairer's form), else the cubic Hermite interpolant
+/// ([`hermite`]) through the states and their derivatives at both ends. What Python's
+/// `Solution.sol` evaluates.
+#[derive(Debug, Clone, Copy)]
+pub struct Continuous<'a> {
+    /// The times of the recorded states, s: increasing, or decreasing on a run backward.
+    pub ts: &'a [f64],
+    /// The states, one row of the state's length per time.
+    pub states: &'a [f64],
+    /// Their derivatives f(t, y), as `states`.
+    pub f: &'a [f64],
+    /// Per step between consecutive times, the method's dense output: (t₀, h) pairs, and
+    /// the coefficients r₀, r₁, … of each step one after the other; `None`: Hermite.
+    pub dense: Option<(&'a [f64], &'a [f64])>,
+}
+
+impl Continuous<'_> {
+    /// The state at time t into `out` (the state's length): on the step containing t, a
+    /// time beyond the run's ends on its first or last step.
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        let (n, count) = (out.len(), self.ts.len());
+        if count < 2 {
+            out.copy_from_slice(&self.states[..n]);
+            return;
+        }
+        // The last time at or before t (in the run's direction), on a step [i, i + 1].
+        let d = if self.ts[count - 1] >= self.ts[0] { 1.0 } else { -1.0 };
+        let i = self.ts.partition_point(|&x| d * x <= d * t).saturating_sub(1).min(count - 2);
+        match self.dense {
+            Some((steps, coefficients)) => {
+                let per = coefficients.len() / (count - 1);
+                DenseStep::new(steps[2 * i], steps[2 * i + 1], &coefficients[i * per..(i + 1) * per])
+                    .at(t, out)
+            }
+            None => {
+                let (t0, t1) = (self.ts[i], self.ts[i + 1]);
+                let (now, next) = (i * n..(i + 1) * n, (i + 1) * n..(i + 2) * n);
+                let (y0, y1) = (&self.states[now.clone()], &self.states[next.clone()]);
+                hermite((t - t0) / (t1 - t0), t1 - t0, y0, &self.f[now], y1, &self.f[next], out);
+            }
+        }
+    }
 }
 
 impl EventLocator<'_> {

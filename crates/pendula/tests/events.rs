@@ -122,3 +122,30 @@ fn event_names_are_checked() {
     assert!(e.contains("did you mean `section:x=0.5+`"), "{e}");
     assert!(EventSpec::parse("section:x=0.5", &*model, false).is_ok());
 }
+
+/// The continuous solution from recorded steps reproduces a cubic exactly on Hermite steps
+/// (y = t³ − 2t, y' = 3t² − 2), forward and on a run backward in time, and evaluates a
+/// step's dense coefficients where given (r₀ + θ r₁: a line).
+#[test]
+fn ref_the_continuous_solution_is_exact_for_a_cubic_and_uses_dense_steps() {
+    use pendula::events::Continuous;
+    let y = |t: f64| t * t * t - 2.0 * t;
+    let dy = |t: f64| 3.0 * t * t - 2.0;
+    for ts in [vec![0.0, 0.3, 0.7, 1.5, 2.0], vec![2.0, 1.5, 0.7, 0.3, 0.0]] {
+        let states: Vec<f64> = ts.iter().map(|&t| y(t)).collect();
+        let f: Vec<f64> = ts.iter().map(|&t| dy(t)).collect();
+        let c = Continuous { ts: &ts, states: &states, f: &f, dense: None };
+        for t in [0.0, 0.1, 0.3, 0.55, 1.0, 1.9, 2.0] {
+            let mut out = [0.0];
+            c.at(t, &mut out);
+            assert!((out[0] - y(t)).abs() < 1e-13, "t = {t}: {} against {}", out[0], y(t));
+        }
+    }
+    // One step from t = 1 of size 2 whose dense output is 5 + θ·4 (θ = (t − 1)/2).
+    let (ts, states, f) = ([1.0, 3.0], [5.0, 9.0], [0.0, 0.0]);
+    let (steps, coefficients) = ([1.0, 2.0], [5.0, 4.0]);
+    let c = Continuous { ts: &ts, states: &states, f: &f, dense: Some((&steps, &coefficients)) };
+    let mut out = [0.0];
+    c.at(2.0, &mut out);
+    assert_eq!(out[0], 7.0);
+}

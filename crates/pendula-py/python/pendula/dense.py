@@ -10,6 +10,7 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
+from . import _core
 from .errors import InvalidValueError, PendulaError
 
 #: The version of DenseOutput's pickled form.
@@ -67,33 +68,18 @@ class DenseOutput:
         return out[:, 0] if scalar else out
 
     def _at(self, tq: np.ndarray) -> np.ndarray:
-        if len(self.ts) == 1:
-            return np.repeat(self.states[0][:, None], len(tq), axis=1)
-        # The step containing each time: ts increase on a forward run and decrease on a
-        # backward one, where the search runs on −ts.
-        d = 1.0 if self.ts[-1] >= self.ts[0] else -1.0
-        i = np.clip(np.searchsorted(d * self.ts, d * tq, side="right") - 1, 0, len(self.ts) - 2)
-        if self.coefficients is not None:
-            # Hairer's form: r₀ + θ(r₁ + (1−θ)(r₂ + θ(r₃ + …))), θ = (t − t₀)/h.
-            t0, h = self.steps[i, 0], self.steps[i, 1]
-            theta = ((tq - t0) / h)[:, None]
-            c = self.coefficients[i]
-            terms = c.shape[1]
-            acc = c[:, terms - 1, :]
-            for j in range(terms - 2, -1, -1):
-                acc = c[:, j, :] + (theta if j % 2 == 0 else 1.0 - theta) * acc
-            return acc.T
-        t0, t1 = self.ts[i], self.ts[i + 1]
-        h = (t1 - t0)[:, None]
-        s = ((tq - t0) / (t1 - t0))[:, None]
-        s2, s3 = s * s, s * s * s
-        y = (
-            (2 * s3 - 3 * s2 + 1) * self.states[i]
-            + (s3 - 2 * s2 + s) * h * self.f[i]
-            + (-2 * s3 + 3 * s2) * self.states[i + 1]
-            + (s3 - s2) * h * self.f[i + 1]
+        # The library's continuous solution (pendula::events::Continuous): the step's own
+        # dense output, or the cubic Hermite interpolant.
+        c = np.ascontiguousarray
+        dense = self.coefficients is not None
+        return _core.dense_at(
+            c(self.ts, dtype=np.float64),
+            c(self.states, dtype=np.float64),
+            c(self.f, dtype=np.float64),
+            c(self.steps, dtype=np.float64) if dense else None,
+            c(self.coefficients, dtype=np.float64) if dense else None,
+            c(tq, dtype=np.float64),
         )
-        return y.T
 
     def __reduce__(self):
         return (
@@ -117,9 +103,9 @@ def _dense_from_pickle(version, t, states, f, steps, coefficients, order):
 def locate(g: Callable[[float, np.ndarray], float], sol: DenseOutput, t: np.ndarray, y: np.ndarray):
     """The crossings of zero of ``g(t, y)`` along a run (scipy's event convention:
     ``g.direction`` > 0 counts rising crossings only, < 0 falling only, 0 both), each
-    bisected on the step's interpolant to 1e-13 relative in t (absolute below 1 s), as the
-    library locates its own events. On a run backward in time ``t`` decreases, and rising
-    means rising as the run goes (scipy's convention). Returns a list of (t, state)."""
+    bisected on the step's interpolant by the library's own locator (``pendula::events::bisect``:
+    to 1e-13 relative in t, absolute below 1 s). On a run backward in time ``t`` decreases,
+    and rising means rising as the run goes (scipy's convention). Returns a list of (t, state)."""
     direction = float(getattr(g, "direction", 0.0))
     found = []
     values = np.array([float(g(float(ti), yi)) for ti, yi in zip(t, y)])
@@ -128,17 +114,10 @@ def locate(g: Callable[[float, np.ndarray], float], sol: DenseOutput, t: np.ndar
         up, down = a < 0.0 and b >= 0.0, a > 0.0 and b <= 0.0
         if not ((up and direction >= 0) or (down and direction <= 0)):
             continue
-        lo, hi = float(t[k - 1]), float(t[k])
-        sign = math.copysign(1.0, a)
-        while abs(hi - lo) > 1e-13 * max(1.0, abs(hi)):
-            mid = 0.5 * (lo + hi)
-            if mid in (lo, hi):
-                break
-            if math.copysign(1.0, float(g(mid, sol(mid)))) == sign:
-                lo = mid
-            else:
-                hi = mid
-        te = 0.5 * (lo + hi)
+        t0, t1 = float(t[k - 1]), float(t[k])
+        h = t1 - t0
+        s = _core.bisect(h, t1, math.copysign(1.0, a), lambda s: float(g(t0 + s * h, sol(t0 + s * h))))
+        te = t0 + s * h
         found.append((te, sol(te)))
     return found
 

@@ -235,7 +235,7 @@ pub const PERIOD: Defaults = Defaults {
     values: &[num("max_amplitude", 175.0)],
 };
 
-/// The separation of two nearby runs ([`crate::analysis::divergence`]).
+/// The separation of two nearby runs ([`mod@crate::analysis::divergence`]).
 pub const DIVERGENCE: Defaults = Defaults {
     study: "divergence",
     system: "double",
@@ -249,7 +249,7 @@ pub const DIVERGENCE: Defaults = Defaults {
     ],
 };
 
-/// The largest Lyapunov exponent or the spectrum ([`crate::analysis::lyapunov`]).
+/// The largest Lyapunov exponent or the spectrum ([`mod@crate::analysis::lyapunov`]).
 pub const LYAPUNOV: Defaults = Defaults {
     study: "lyapunov",
     system: "double",
