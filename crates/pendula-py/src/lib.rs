@@ -163,6 +163,13 @@ fn quantity<'py>(py: Python<'py>, q: &Quantity) -> PyResult<Bound<'py, PyDict>> 
     Ok(d)
 }
 
+/// The method `method="auto"` picks for `system`, and why ([`pendula::model::auto_method`]).
+#[pyfunction]
+fn auto_method(system: &CoreSystem) -> (&'static str, &'static str) {
+    let (method, why) = pendula::model::auto_method(&*system.model);
+    (method.name, why)
+}
+
 /// The catalogue as plain data: `{"systems": [...], "methods": [...]}`. A system's
 /// `separable` and `conservative` are those of its defaults.
 #[pyfunction]
@@ -753,6 +760,7 @@ fn solve<'py>(
                     .expect("s steps")
                     .into_pyarray(py),
             )?;
+            out.set_item("dense_order", method.dense_order())?;
         }
     }
     match result {
@@ -959,6 +967,7 @@ fn ensemble<'py>(
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
+    m.add_function(wrap_pyfunction!(auto_method, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     study::register(m)?;

@@ -190,6 +190,20 @@ pub fn applicable(
     methods.iter().copied().filter(|m| model.check(m).is_ok() && within(m)).collect()
 }
 
+/// The method `auto` picks for `model`, and why: a symplectic explicit method where the
+/// system has a Hamiltonian form — yoshida-4 when it is separable, tao-4 otherwise (a
+/// bounded energy error on long runs) — else the adaptive dop853 (damped or driven).
+pub fn auto_method(model: &dyn DynModel) -> (&'static Method, &'static str) {
+    use crate::integrator::{composition::YOSHIDA_4, embedded::DOP853, partitioned::VERLET, tao::TAO_4};
+    if model.separable() {
+        (&YOSHIDA_4, "separable Hamiltonian: explicit symplectic, order 4")
+    } else if model.check(&VERLET).is_ok() {
+        (&TAO_4, "non-separable Hamiltonian: explicit symplectic (Tao), order 4")
+    } else {
+        (&DOP853, "not Hamiltonian (damped): adaptive, order 8")
+    }
+}
+
 /// The methods named, in order: each a known method ([`crate::integrator::find`]) that
 /// applies to `model`, each named once.
 ///

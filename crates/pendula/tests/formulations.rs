@@ -115,3 +115,15 @@ fn ref_lagrangian_and_hamiltonian_forms_agree_over_10_s() {
     eprintln!("Lagrangian vs Hamiltonian after 10 s: {diff:.2e}");
     assert!(diff < 2e-12, "{diff:e}");
 }
+
+/// `auto` picks an explicit symplectic method where the system has a Hamiltonian form
+/// (yoshida-4 separable, tao-4 not), and dop853 for a damped system.
+#[test]
+fn auto_picks_a_symplectic_method_where_there_is_a_hamiltonian() {
+    use pendula::model::auto_method;
+    let pick =
+        |system, set: &[(&str, f64)]| auto_method(&*crate::support::values(system, set).build()).0.name;
+    assert_eq!(pick("pendulum", &[]), "yoshida-4");
+    assert_eq!(pick("double", &[]), "tao-4");
+    assert_eq!(pick("pendulum", &[("damping", 0.1)]), "dop853");
+}

@@ -324,12 +324,9 @@ def _system(system: System | str) -> System:
 def auto_method(system: System) -> tuple[str, str]:
     """The method ``method="auto"`` picks for ``system``, and why: a symplectic explicit
     method where the system has a Hamiltonian form (yoshida-4 when separable, tao-4
-    otherwise: bounded energy error on long runs), else adaptive dop853."""
-    if system.separable:
-        return "yoshida-4", "separable Hamiltonian: explicit symplectic, order 4"
-    if system.hamiltonian:
-        return "tao-4", "non-separable Hamiltonian: explicit symplectic (Tao), order 4"
-    return "dop853", "not Hamiltonian (damped): adaptive, order 8"
+    otherwise: bounded energy error on long runs), else adaptive dop853 (the library's rule,
+    ``pendula::model::auto_method``)."""
+    return _core.auto_method(system._core)
 
 
 class Solution:
@@ -594,7 +591,7 @@ def solve(
     sol = None
     if dense and len(t):
         coefficients = raw.get("dense_coefficients")
-        order = 3 if coefficients is None else {"dop853": 7, "dopri5": 4}.get(raw["method"], 3)
+        order = 3 if coefficients is None else raw["dense_order"]
         sol = DenseOutput(t, states, raw["f"], raw.get("dense_steps"), coefficients, order)
     status, message = 0, "the run reached the end of the interval"
     if raw["stopped"] is not None:

@@ -65,6 +65,8 @@ pub struct EmbeddedTableau {
     /// Hermite part), and r₄, r₅, … = h Σ dᵢ kᵢ, one row of d each (Hairer, Nørsett, Wanner
     /// §II.6).
     pub dense: &'static [&'static [f64]],
+    /// Order of the dense output: its error within a step is O(h^(order + 1)).
+    pub dense_order: u32,
     /// The step-size controller's parameters.
     pub control: &'static ControlParams,
 }
@@ -129,6 +131,7 @@ pub static DOPRI5: Method = Method {
             -1453857185.0 / 822651844.0,
             69997945.0 / 29380423.0,
         ]],
+        dense_order: 4,
         control: &DOPRI5_CONTROL,
     }),
 };
@@ -415,6 +418,7 @@ pub static DOP853: Method = Method {
                 -0.14972683625798562581422125276e+03,
             ],
         ],
+        dense_order: 7,
         control: &DOP853_CONTROL,
     }),
 };

@@ -116,6 +116,16 @@ pub struct Method {
 }
 
 impl Method {
+    /// The order of the method's own dense output (the embedded pairs: dopri5 4, dop853 7);
+    /// `None` for a method without one, whose continuous solution is the cubic Hermite
+    /// interpolant of order 3 ([`crate::events::hermite`]).
+    pub fn dense_order(&self) -> Option<u32> {
+        match &self.scheme {
+            Scheme::Embedded(t) => Some(t.dense_order),
+            _ => None,
+        }
+    }
+
     /// The largest step this method is run at, s: for Tao's maps
     /// [`tao::MAX_BINDING_STEP`] / ω (above it they are unstable, and refused); `None` for
     /// the others, whose stable step depends on the system.
