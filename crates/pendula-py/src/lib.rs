@@ -656,8 +656,8 @@ fn solve<'py>(
         return Err(raise(py, "InvalidValueError", format!("invalid value {v} in `y0`: finite numbers")));
     }
     system.model.check(method).map_err(|e| to_py(py, &e))?;
-    // As the CLI: an embedded pair runs adaptive steps (dt, if given, the first to try).
-    let adaptive = matches!(method.scheme, Scheme::Embedded(_));
+    // An embedded pair controls its step (dt, if given, the first to try).
+    let adaptive = method.adaptive();
     if !adaptive && (rtol.is_some() || atol.is_some()) {
         return Err(raise(
             py,

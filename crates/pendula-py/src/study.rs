@@ -1,9 +1,10 @@
 //! The studies (`pendula.lyapunov`, `poincare`, `fractal`, `bifurcation`, `convergence`,
-//! `work_precision`, `divergence`): the library's analyses with the CLI's defaults, their
+//! `work_precision`, `divergence`): the library's analyses with the library's defaults, their
 //! results as plain dicts of numbers and arrays for `pendula.study` to wrap.
 //!
-//! The arguments arrive with the defaults filled in by Python; what the library does not
-//! check itself (the CLI's own checks) is checked here, naming the Python argument. Every
+//! The arguments arrive with the defaults filled in by Python (from the library's
+//! `study::defaults`); what the library does not yet check itself is checked here, naming
+//! the Python argument (the ports onto `pendula::study` move those checks below). Every
 //! study runs with the GIL released. Only the fractal stops early on Ctrl-C (between slices
 //! of pixels); the others have no cancellation hook in the library, so a Ctrl-C is raised
 //! once they return.
@@ -13,6 +14,7 @@ use std::sync::atomic::Ordering;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
+use pendula::analysis::lyapunov::Mismatch;
 use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
 use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
 use pendula::analysis::{self, LyapunovSpec, OrderEstimate};
@@ -94,8 +96,9 @@ pub(crate) fn lyapunov<'py>(
         return Err(invalid(py, "transient", Short(transient), "a finite time >= 0 (s)"));
     }
     let renormalise = positive(py, "renormalise", renormalise)?;
-    // As the CLI: the step is blamed before the interval, and the uncertainty needs blocks.
-    if dt > renormalise {
+    let count = if spectrum { system.values.info().state.len() } else { 1 };
+    let spec = LyapunovSpec { h: dt, transient, t_end, renormalise, count, blocks: 10 };
+    if let Some(Mismatch::StepOverInterval) = spec.mismatch() {
         return Err(invalid(
             py,
             "dt",
@@ -106,19 +109,18 @@ pub(crate) fn lyapunov<'py>(
             ),
         ));
     }
-    if t_end / renormalise < 20.0 {
+    if let Some(Mismatch::TooFewIntervals) = spec.mismatch() {
         return Err(invalid(
             py,
             "t_end",
             Short(t_end),
             &format!(
-                "at least 20 re-orthonormalisations (every renormalise = {} s) are needed for the uncertainty",
+                "at least {} re-orthonormalisations (every renormalise = {} s) are needed for the uncertainty",
+                analysis::lyapunov::MIN_INTERVALS,
                 Short(renormalise)
             ),
         ));
     }
-    let count = if spectrum { system.values.info().state.len() } else { 1 };
-    let spec = LyapunovSpec { h: dt, transient, t_end, renormalise, count, blocks: 10 };
     let model = &*system.model;
     let y0 = system.values.initial_state();
     let result = interruptible(py, false, progress.as_ref(), |_| {
@@ -800,9 +802,8 @@ pub(crate) fn divergence<'py>(
             to_py(py, &Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name)))
         })?,
     };
-    // As the CLI: the separation must survive being added to the start.
     let start = system.values.initial_state()[index];
-    if (((start + delta) - start) - delta).abs() > 1e-3 * delta.abs() {
+    if !analysis::divergence::survives_rounding(start, delta) {
         return Err(invalid(
             py,
             "delta",

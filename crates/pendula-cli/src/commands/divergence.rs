@@ -71,11 +71,8 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             pendula::Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name))
         })?,
     };
-    // The separation must survive being added to the start: at a large value the floats
-    // are further apart than it, and the two runs would start (nearly) at the same state.
     let start = values.initial_state()[index];
-    let moved = (start + delta) - start;
-    if (moved - delta).abs() > 1e-3 * delta.abs() {
+    if !pendula::analysis::divergence::survives_rounding(start, delta) {
         let spacing = (start.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
         bail!(
             "invalid --delta {}: added to {} = {} it is lost in rounding (floats there are {} apart); use a larger --delta or a smaller start",

@@ -4,6 +4,7 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
+use pendula::analysis::lyapunov::Mismatch;
 use pendula::analysis::{LyapunovSpec, lyapunov};
 use pendula::system::AsSystem;
 use pendula_viz::{Figure, Kind, Scale, axis_label, palette, pretty, with_unit};
@@ -69,19 +70,19 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
     let spec = LyapunovSpec { h, transient, t_end, renormalise, count, blocks: 10 };
     // The step is checked first, so that a step longer than the interval is blamed on --dt
     // (the library, seeing both, names the interval).
-    if h > renormalise {
-        bail!(
+    match spec.mismatch() {
+        Some(Mismatch::StepOverInterval) => bail!(
             "invalid --dt {}: must be at most --renormalise {} s (the tangent vectors are re-orthonormalised that often, at whole steps)",
             Short(h),
             Short(renormalise)
-        );
-    }
-    if (t_end / renormalise) < 20.0 {
-        bail!(
-            "invalid --t-end {}: at least 20 re-orthonormalisations (every --renormalise {} s) are needed for the uncertainty",
+        ),
+        Some(Mismatch::TooFewIntervals) => bail!(
+            "invalid --t-end {}: at least {} re-orthonormalisations (every --renormalise {} s) are needed for the uncertainty",
             Short(t_end),
+            pendula::analysis::lyapunov::MIN_INTERVALS,
             Short(renormalise)
-        );
+        ),
+        None => {}
     }
     let names =
         [("h", "--dt"), ("t_end", "--t-end"), ("transient", "--transient"), ("renormalise", "--renormalise")];

@@ -17,6 +17,13 @@ pub struct Divergence {
     pub distance: Vec<f64>,
 }
 
+/// Whether a separation `delta` survives being added to a state variable at `start`: at a
+/// large value the floats are further apart than it, and the two runs would start (nearly)
+/// at the same state. It survives when (start + δ) − start is δ to 1e-3.
+pub fn survives_rounding(start: f64, delta: f64) -> bool {
+    (((start + delta) - start) - delta).abs() <= 1e-3 * delta.abs()
+}
+
 /// About how many samples of a run [`sample_every`] keeps.
 pub const SAMPLES: u64 = 2000;
 

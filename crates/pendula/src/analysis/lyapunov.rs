@@ -66,6 +66,34 @@ pub struct LyapunovSpec {
     pub blocks: usize,
 }
 
+/// The fewest re-orthonormalisations an averaging time must hold: the batch-means
+/// uncertainty needs that many intervals.
+pub const MIN_INTERVALS: f64 = 20.0;
+
+/// Why a Lyapunov spec's step, interval and averaging time do not fit together
+/// ([`LyapunovSpec::mismatch`]); the front ends phrase it in their arguments' names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mismatch {
+    /// The step is longer than the interval between re-orthonormalisations.
+    StepOverInterval,
+    /// The averaging time holds fewer than [`MIN_INTERVALS`] intervals.
+    TooFewIntervals,
+}
+
+impl LyapunovSpec {
+    /// The first way the step, the interval and the averaging time do not fit, in the
+    /// order a user fixes them: the step is blamed before the interval.
+    pub fn mismatch(&self) -> Option<Mismatch> {
+        if self.h > self.renormalise {
+            Some(Mismatch::StepOverInterval)
+        } else if self.t_end / self.renormalise < MIN_INTERVALS {
+            Some(Mismatch::TooFewIntervals)
+        } else {
+            None
+        }
+    }
+}
+
 /// The result of [`lyapunov`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lyapunov {

@@ -126,6 +126,12 @@ impl Method {
         }
     }
 
+    /// Whether the method controls its step (the embedded pairs): a given step is only the
+    /// first to try.
+    pub fn adaptive(&self) -> bool {
+        matches!(self.scheme, Scheme::Embedded(_))
+    }
+
     /// The largest step this method is run at, s: for Tao's maps
     /// [`tao::MAX_BINDING_STEP`] / ω (above it they are unstable, and refused); `None` for
     /// the others, whose stable step depends on the system.
