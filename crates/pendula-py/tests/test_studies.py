@@ -107,5 +107,8 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
                 checked += 1
     assert checked >= 25, checked
     assert pendula.poincare.__kwdefaults__["section"] + "=0" == library["poincare"]["section"]
-    # The bifurcation's axis on defaults is the library's text, parsed.
+    # The fractal's grid and the bifurcation's axis on defaults are the library's texts.
+    for text in library["fractal"]["grid"].split(" and "):
+        name, *axis = _core.parse_axis("double", [], text)
+        assert pendula.fractal.__kwdefaults__[name] == tuple(axis), (name, axis)
     assert pendula.bifurcation(samples=1, transient=0, steps_per_period=4, progress=False).values.size == 800

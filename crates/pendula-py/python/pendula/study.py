@@ -23,7 +23,6 @@ Units are SI: times in s, rates in 1/s, energies in J, angles in rad.
 
 from __future__ import annotations
 
-import math
 import operator
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
@@ -37,6 +36,11 @@ from .errors import InvalidValueError, PendulaError, UnknownNameError
 #: Every study's defaults, declared once in the library (``pendula::study::defaults``): the
 #: signatures below take theirs from here, so that each equals its CLI flag's.
 _DEFAULTS = _core.defaults()
+#: The flip fractal's default grid, the library's text ("theta1=-pi:pi:512 and …") read by
+#: the one value parser: {axis name: (lo, hi, n)}.
+_FRACTAL_GRID = {
+    a[0]: tuple(a[1:]) for a in (_core.parse_axis("double", [], t) for t in _DEFAULTS["fractal"]["grid"].split(" and "))
+}
 _POINCARE_SECTION = (
     _DEFAULTS["poincare"]["section"].split("=")[0],
     float(_DEFAULTS["poincare"]["section"].split("=")[1]),
@@ -474,8 +478,8 @@ class FractalResult(_Pickled):
 def fractal(
     system: "System | str" = _DEFAULTS["fractal"]["system"],
     *,
-    theta1: Tuple[float, float, int] = (-math.pi, math.pi, 512),
-    theta2: Tuple[float, float, int] = (-math.pi, math.pi, 512),
+    theta1: Tuple[float, float, int] = _FRACTAL_GRID["theta1"],
+    theta2: Tuple[float, float, int] = _FRACTAL_GRID["theta2"],
     t_max: float = _DEFAULTS["fractal"]["t_max"],
     method: str = _DEFAULTS["fractal"]["method"],
     dt: float = _DEFAULTS["fractal"]["dt"],
