@@ -20,26 +20,24 @@ use pendula::integrator::{self, Method};
 
 use crate::parse::{f64_arg, positive_arg};
 
-/// A command's defaults: the library's for its study ([`pendula::study::defaults`]), and a
-/// sentence the command adds to an argument's help, by argument id (`dt`, `t_end`, …).
-/// Fields the command does not take are not shown (`document` touches only the arguments
-/// the command has).
+/// A command's defaults: the library's for its study ([`pendula::study::defaults`], read
+/// through `Deref`: `DEFAULTS.system`, `DEFAULTS.dt`, …), and a sentence the command adds
+/// to an argument's help, by argument id (`dt`, `t_end`, …). Fields the command does not
+/// take are not shown (`document` touches only the arguments the command has).
 #[derive(Debug, Clone, Copy)]
 pub struct Defaults {
     /// The library's defaults of the study.
     pub of: &'static pendula::study::defaults::Defaults,
-    /// The system run without a name (`pendula list systems`).
-    pub system: &'static str,
-    /// The method run without `--method` (`pendula list methods`; `None`: the command
-    /// takes none).
-    pub method: Option<&'static str>,
-    /// The step without `--dt`, s (`None`: the command needs none, or says in a note what
-    /// it does without one).
-    pub dt: Option<f64>,
-    /// The end time without `--t-end`, s (`None`: as for `dt`).
-    pub t_end: Option<f64>,
     /// A sentence the command adds to an argument's help, by argument id (`dt`, `t_end`, …).
     pub notes: &'static [(&'static str, &'static str)],
+}
+
+impl std::ops::Deref for Defaults {
+    type Target = pendula::study::defaults::Defaults;
+
+    fn deref(&self) -> &Self::Target {
+        self.of
+    }
 }
 
 impl Defaults {
@@ -48,7 +46,7 @@ impl Defaults {
         of: &'static pendula::study::defaults::Defaults,
         notes: &'static [(&'static str, &'static str)],
     ) -> Self {
-        Defaults { of, system: of.system, method: of.method, dt: of.dt, t_end: of.t_end, notes }
+        Defaults { of, notes }
     }
 
     /// The number given to the study's own flag `id` (`--` and the id with `-` for `_`), or

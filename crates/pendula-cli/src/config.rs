@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use pendula::control::Tolerances;
 use pendula::error::Short;
-use pendula::integrator::{self, Method, Scheme};
+use pendula::integrator::{self, Method};
 use pendula::system::{self, SystemInfo, Values};
 use pendula::{End, RunSpec};
 
@@ -251,7 +251,7 @@ pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<Simulate
     };
     // An adaptive run's --dt is only its first step: it does not count the run's steps
     // (estimated below), and is checked only as a step.
-    let checked = match (matches!(method.scheme, Scheme::Embedded(_)), end) {
+    let checked = match (method.adaptive(), end) {
         (true, End::Time(t)) if t.is_finite() && t > 0.0 && h.is_finite() && h > 0.0 => {
             RunSpec { h: t, ..spec }
         }
@@ -272,7 +272,7 @@ pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<Simulate
         })
     };
     let asked = args.rtol.is_some() || args.atol.is_some() || args.h_min.is_some() || args.h_max.is_some();
-    let tolerances = if matches!(method.scheme, Scheme::Embedded(_)) || asked {
+    let tolerances = if method.adaptive() || asked {
         let tol = Tolerances {
             rtol: number("--rtol", &args.rtol, scenario.rtol, SIMULATE.of.number("rtol"))?,
             atol: number("--atol", &args.atol, scenario.atol, SIMULATE.of.number("atol"))?,
@@ -297,7 +297,7 @@ pub fn simulate_with(args: &SimulateArgs, scenario: Scenario) -> Result<Simulate
                 ],
             )
         })?;
-        if !matches!(method.scheme, Scheme::Embedded(_)) {
+        if !method.adaptive() {
             bail!(
                 "--rtol, --atol, --h-min and --h-max apply to adaptive methods (dopri5, dop853); {} takes fixed steps (--dt)",
                 method.name

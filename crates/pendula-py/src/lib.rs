@@ -205,7 +205,7 @@ fn catalogue(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         d.set_item("order", m.order)?;
         d.set_item("symplectic", m.symplectic)?;
         d.set_item("symmetric", m.symmetric)?;
-        d.set_item("adaptive", matches!(m.scheme, Scheme::Embedded(_)))?;
+        d.set_item("adaptive", m.adaptive())?;
         d.set_item("requirement", m.requirement.describe())?;
         d.set_item("description", m.description)?;
         d.set_item("reference", m.reference)?;

@@ -532,13 +532,13 @@ fn methods_of(
 /// Why a step of a study's ladder was dropped, in the words of Python's arguments: the step
 /// is `dt`, and Tao's step limit names the largest dt (the library's message speaks of h and
 /// of the binding constant, which the studies do not set).
-fn dropped(method: &Method, d: &analysis::Dropped) -> String {
+fn dropped(d: &analysis::Dropped) -> String {
     let e = &d.error;
     if d.adaptive {
         return e.to_string();
     }
     if let Error::InvalidValue { .. } = e
-        && let Some(why) = crate::tao_step_refusal(method, d.x)
+        && let Some(why) = crate::tao_step_refusal(d.method, d.x)
     {
         return why;
     }
@@ -551,21 +551,21 @@ fn dropped(method: &Method, d: &analysis::Dropped) -> String {
 }
 
 /// A method's note on its dropped run: where (`dt` or `tol`) and why ([`dropped`]).
-fn failure_note(method: &Method, d: &analysis::Dropped) -> String {
-    format!("at {} = {}: {}", if d.adaptive { "tol" } else { "dt" }, Short(d.x), dropped(method, d))
+fn failure_note(d: &analysis::Dropped) -> String {
+    format!("at {} = {}: {}", if d.adaptive { "tol" } else { "dt" }, Short(d.x), dropped(d))
 }
 
 /// The error of a study whose every run was dropped ([`analysis::all_dropped`]), in the
-/// words of [`dropped`]; `None` when some run gave a point.
+/// words of [`dropped`]; `Ok` when some run gave a point.
 fn all_dropped<'a>(
     py: Python<'_>,
     produced: bool,
-    runs: impl IntoIterator<Item = (&'static Method, &'a [analysis::Dropped])>,
+    dropped: impl IntoIterator<Item = &'a [analysis::Dropped]>,
 ) -> PyResult<()> {
-    let runs: Vec<_> = runs.into_iter().collect();
-    let Some(first) = analysis::all_dropped(produced, runs.iter().map(|(_, d)| *d)) else { return Ok(()) };
-    let method = runs.iter().find(|(_, d)| !d.is_empty()).map(|(m, _)| *m).expect("the failed method");
-    Err(refused(py, &first.error, dropped(method, first)))
+    match analysis::all_dropped(produced, dropped) {
+        Some(first) => Err(refused(py, &first.error, self::dropped(first))),
+        None => Ok(()),
+    }
 }
 
 /// The error of a study whose every step was dropped, with the message of [`dropped`].
@@ -677,7 +677,7 @@ pub(crate) fn convergence<'py>(
             analysis::convergence_study(p, m, ladder, || ())
         })?;
     let produced = results.iter().any(|r| !r.hs.is_empty());
-    all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
+    all_dropped(py, produced, results.iter().map(|r| &r.dropped[..]))?;
     let list = PyList::empty(py);
     for r in results {
         let d = PyDict::new(py);
@@ -690,9 +690,9 @@ pub(crate) fn convergence<'py>(
             _ => d.set_item("fit", py.None())?,
         }
         d.set_item("reason", r.estimate.reason())?;
-        d.set_item("failure", r.dropped.last().map(|f| failure_note(r.method, f)))?;
+        d.set_item("failure", r.dropped.last().map(failure_note))?;
         // The table's note and the legend's label, as the library words them.
-        d.set_item("note", r.note(pendula::study::sig, |f| failure_note(r.method, f)))?;
+        d.set_item("note", r.note(pendula::study::sig, failure_note))?;
         d.set_item("label", r.estimate.label())?;
         d.set_item("dt", r.hs.into_pyarray(py))?;
         d.set_item("error", r.errors.into_pyarray(py))?;
@@ -742,7 +742,7 @@ pub(crate) fn work_precision<'py>(
             analysis::work_precision_study(p, m, ladder, &tols, || ())
         })?;
     let produced = results.iter().any(|r| !r.points.is_empty());
-    all_dropped(py, produced, results.iter().map(|r| (r.method, &r.dropped[..])))?;
+    all_dropped(py, produced, results.iter().map(|r| &r.dropped[..]))?;
     let list = PyList::empty(py);
     for r in results {
         let (d, points) = (PyDict::new(py), &r.points);
@@ -755,7 +755,7 @@ pub(crate) fn work_precision<'py>(
         d.set_item("error", points.iter().map(|p| p.error).collect::<Vec<_>>().into_pyarray(py))?;
         d.set_item("rhs_evals", points.iter().map(|p| p.rhs_evals).collect::<Vec<_>>().into_pyarray(py))?;
         d.set_item("wall_s", points.iter().map(|p| p.wall_s).collect::<Vec<_>>().into_pyarray(py))?;
-        d.set_item("failure", r.dropped.last().map(|f| failure_note(r.method, f)))?;
+        d.set_item("failure", r.dropped.last().map(failure_note))?;
         list.append(d)?;
     }
     accuracy_result(py, t_end, &reference, list)

@@ -102,7 +102,7 @@ fn sweep<'py>(
         RecordError::Unknown { name, suggestions } => invalid(format!(
             "invalid record {name:?}{}: expected {}",
             did_you_mean(&suggestions),
-            pendula::sweep::RECORD_NAMES
+            pendula::sweep::record_names()
         )),
         RecordError::NoAngle => {
             invalid(format!("invalid record 'flip-time': the `{}` system has no angle", info.name))

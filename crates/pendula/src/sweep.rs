@@ -142,8 +142,12 @@ pub enum RecordError {
     Twice(String),
 }
 
-/// The valid records, in the words of an error: "final, flip-time or energy-error".
-pub const RECORD_NAMES: &str = "final, flip-time or energy-error";
+/// The valid records ([`Record::ALL`]) in the words of an error: "final, flip-time or
+/// energy-error".
+pub fn record_names() -> String {
+    let names = Record::ALL.map(Record::name);
+    format!("{} or {}", names[..names.len() - 1].join(", "), names[names.len() - 1])
+}
 
 /// What a sweep computes, as given: [`SweepSpec::validate`] checks it into a [`Sweep`].
 #[derive(Debug, Clone)]

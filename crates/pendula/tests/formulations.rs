@@ -127,3 +127,19 @@ fn auto_picks_a_symplectic_method_where_there_is_a_hamiltonian() {
     assert_eq!(pick("double", &[]), "tao-4");
     assert_eq!(pick("pendulum", &[("damping", 0.1)]), "dop853");
 }
+
+/// Without methods named, a study runs those that apply: Tao's maps only at steps up to
+/// their limit 1/ω (5 ms at ω = 200 1/s), the others at any step.
+#[test]
+fn applicable_methods_keep_taos_maps_only_within_their_step_limit() {
+    use pendula::integrator::METHODS;
+    use pendula::model::applicable;
+    let model = crate::support::values("double", &[]).build();
+    let names = |max_h| applicable(&*model, METHODS, max_h).iter().map(|m| m.name).collect::<Vec<_>>();
+    assert!(names(None).contains(&"tao-4") && names(Some(0.005)).contains(&"tao-4"));
+    let coarse = names(Some(0.01));
+    assert!(
+        !coarse.contains(&"tao-4") && !coarse.contains(&"tao-2") && coarse.contains(&"rk4"),
+        "{coarse:?}"
+    );
+}

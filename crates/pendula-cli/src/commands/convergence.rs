@@ -136,10 +136,7 @@ pub fn study_orders(
 /// fixed steps, without its error control, so its curve measures the order of the formula it
 /// advances with, not its behaviour at a tolerance (that is work-precision's).
 pub fn fixed_steps(method: &str) -> &'static str {
-    match pendula::integrator::find(method).map(|m| m.scheme) {
-        Ok(pendula::integrator::Scheme::Embedded(_)) => ", fixed steps",
-        _ => "",
-    }
+    if pendula::integrator::find(method).is_ok_and(|m| m.adaptive()) { ", fixed steps" } else { "" }
 }
 
 /// Error against step on log-log axes, with guides of slope 1, 2 and 4 (thin, dashed, grey,

@@ -28,7 +28,6 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use pendula::ensemble;
 use pendula::error::{Short, did_you_mean, suggestions};
-use pendula::integrator;
 use pendula::model::EnsemblePath;
 pub(crate) use pendula::sweep::Axis;
 use pendula::sweep::{CellError, Record, RecordError, Sweep, SweepSpec};
@@ -159,7 +158,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         );
     }
     let method = args.stepping.method(&DEFAULTS)?;
-    if matches!(method.scheme, integrator::Scheme::Embedded(_)) {
+    if method.adaptive() {
         bail!("sweep takes fixed steps: {} runs here as a fixed-step method only with --dt", method.name);
     }
     let h = args.stepping.dt(&DEFAULTS)?;
@@ -189,7 +188,7 @@ fn parse(args: &SweepArgs) -> Result<Sweep> {
         RecordError::Unknown { name, suggestions } => anyhow::anyhow!(
             "invalid --record `{name}`{}: expected {}",
             did_you_mean(&suggestions),
-            pendula::sweep::RECORD_NAMES
+            pendula::sweep::record_names()
         ),
         RecordError::NoAngle => {
             anyhow::anyhow!("invalid --record flip-time: the `{}` system has no angle", info.name)

@@ -41,10 +41,10 @@ _DEFAULTS = _core.defaults()
 _FRACTAL_GRID = {
     a[0]: tuple(a[1:]) for a in (_core.parse_axis("double", [], t) for t in _DEFAULTS["fractal"]["grid"].split(" and "))
 }
-_POINCARE_SECTION = (
-    _DEFAULTS["poincare"]["section"].split("=")[0],
-    float(_DEFAULTS["poincare"]["section"].split("=")[1]),
-)
+#: The Poincaré section on defaults, the library's `NAME=VALUE` text read by the one value
+#: parser (`deg` and `pi` accepted): (angle, value in rad).
+_SECTION_NAME, _SECTION_VALUE = _DEFAULTS["poincare"]["section"].split("=", 1)
+_POINCARE_SECTION = (_SECTION_NAME, _core.parse_value("double", _SECTION_NAME, _SECTION_VALUE))
 
 if TYPE_CHECKING:
     from . import System

@@ -14,13 +14,15 @@ use crate::analysis::convergence::{
     OrderEstimate, Reference, WorkPoint, convergence_errors, estimate_order, work_precision,
     work_precision_adaptive,
 };
-use crate::integrator::{Method, Scheme};
+use crate::integrator::Method;
 use crate::model::DynModel;
 
-/// A dropped run: the step (s) or, for an embedded pair in work-precision, the tolerance it
-/// ran at, and why it failed.
-#[derive(Debug, Clone, PartialEq)]
+/// A dropped run: its method, the step (s) or, for an embedded pair in work-precision, the
+/// tolerance it ran at, and why it failed.
+#[derive(Debug, Clone)]
 pub struct Dropped {
+    /// The method that ran.
+    pub method: &'static Method,
     /// The step, s, or the tolerance ([`Dropped::adaptive`]).
     pub x: f64,
     /// Whether `x` is a tolerance (an embedded pair's run) rather than a step.
@@ -94,6 +96,7 @@ pub struct MethodWork {
 /// ([`Error::is_per_run`]) at step or tolerance `x`.
 fn kept<T>(
     run: Result<T, Error>,
+    method: &'static Method,
     x: f64,
     adaptive: bool,
     dropped: &mut Vec<Dropped>,
@@ -101,7 +104,7 @@ fn kept<T>(
     match run {
         Ok(v) => Ok(Some(v)),
         Err(error) if error.is_per_run() => {
-            dropped.push(Dropped { x, adaptive, error });
+            dropped.push(Dropped { method, x, adaptive, error });
             Ok(None)
         }
         Err(e) => Err(e),
@@ -124,7 +127,7 @@ pub fn nothing_to_run(
     ladder: impl Fn(&Method) -> Vec<f64>,
     tolerances: bool,
 ) -> bool {
-    !methods.iter().any(|m| (tolerances && matches!(m.scheme, Scheme::Embedded(_))) || !ladder(m).is_empty())
+    !methods.iter().any(|m| (tolerances && m.adaptive()) || !ladder(m).is_empty())
 }
 
 /// The convergence study: each method at the steps `ladder` gives it, on the `problem`,
@@ -147,7 +150,7 @@ pub fn convergence_study(
         for h in ladder(method) {
             // Large steps may be refused or blow up where smaller ones work: keep going.
             let run = convergence_errors(model, method, y0, t_end, &[h], &reference.state);
-            if let Some(e) = kept(run, h, false, &mut dropped)? {
+            if let Some(e) = kept(run, method, h, false, &mut dropped)? {
                 hs.push(h);
                 errors.push(e[0]);
             }
@@ -176,7 +179,7 @@ pub fn work_precision_study(
     let Problem { model, y0, t_end, reference } = *problem;
     let mut results = Vec::with_capacity(methods.len());
     for &method in methods {
-        let adaptive = matches!(method.scheme, Scheme::Embedded(_));
+        let adaptive = method.adaptive();
         let xs = if adaptive { tolerances.to_vec() } else { ladder(method) };
         let (mut points, mut dropped) = (Vec::new(), Vec::new());
         for x in xs {
@@ -185,7 +188,7 @@ pub fn work_precision_study(
             } else {
                 work_precision(model, method, y0, t_end, &[x], &reference.state)
             };
-            points.extend(kept(point, x, adaptive, &mut dropped)?.into_iter().flatten());
+            points.extend(kept(point, method, x, adaptive, &mut dropped)?.into_iter().flatten());
         }
         results.push(MethodWork { method, points, dropped });
         done();
