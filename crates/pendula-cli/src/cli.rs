@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, CommandFactory, Parser, Subcommand};
 
 use crate::config::SimulateArgs;
 use crate::list::ListWhat;
@@ -23,101 +23,213 @@ for another request, an output path that cannot be written or that is another ou
 over the limits without --allow-large); 130, 143, 129 interrupted by SIGINT, SIGTERM, SIGHUP \
 (unfinished files removed; with --checkpoint, the checkpoint written first, for `pendula resume`).";
 
-#[derive(Debug, Subcommand)]
-pub enum Command {
+/// One command's entry in the list ([`COMMANDS`]): its name, the files it writes in its study
+/// directory, and cheap valid requests.
+#[derive(Debug)]
+pub struct CommandInfo {
+    /// Its name on the command line; empty for the library's studies (one subcommand each,
+    /// listed by [`pendula::study::STUDIES`]).
+    pub name: &'static str,
+    /// The files it writes in its study directory (`*` stands for any text: compare's phase
+    /// portraits are named after the methods). A `--summary` or other output of the run that
+    /// would be one of them is refused before the run, and so is a directory in their place.
+    pub files: &'static [&'static str],
+    /// Valid requests that cost milliseconds (without `pendula`): mutated by the fuzz harness
+    /// (`tests/fuzz/`), they reach the command's later checks.
+    pub examples: &'static [&'static str],
+}
+
+/// The commands, declared once each: the doc and clap attributes of the variant, its arguments,
+/// the function that runs it, its files and examples. The clap enum [`Command`], its dispatch
+/// ([`Command::run`]) and [`COMMANDS`] are derived from this one list; completions and man
+/// pages from clap's definition; the fuzz harness's requests from [`COMMANDS`].
+macro_rules! commands {
+    ($(
+        $(#[$meta:meta])*
+        $name:literal $variant:ident($args:ty) => $run:expr,
+        files: $files:expr, examples: $examples:expr;
+    )*) => {
+        #[derive(Debug, Subcommand)]
+        pub enum Command {
+            $( $(#[$meta])* $variant($args), )*
+        }
+
+        impl Command {
+            /// Runs the command (within the output scope [`dispatch`] opens).
+            pub(crate) fn run(&self) -> anyhow::Result<()> {
+                match self {
+                    $( Command::$variant(args) => ($run)(args), )*
+                }
+            }
+        }
+
+        /// Every command, in the order of [`Command`].
+        pub const COMMANDS: &[CommandInfo] =
+            &[$( CommandInfo { name: $name, files: $files, examples: $examples }, )*];
+    };
+}
+
+use crate::commands::{animate, compare, convergence, divergence, fractal, lyapunov, poincare};
+use crate::commands::{bifurcation, merge, plot, report, resume, serve, sweep, work_precision};
+
+commands! {
     /// Integrate one system with one method and write its trajectory and a summary.
     #[command(mut_args(|a| crate::config::SIMULATE.document(a)))]
-    Simulate(Box<SimulateArgs>),
+    "simulate" Simulate(Box<SimulateArgs>) => crate::simulate::run,
+    files: &[],
+    examples: &[
+        "simulate --steps 100 --out t.csv",
+        "simulate pendulum --method dopri5 --t-end 1 --out t.npy --summary s.json",
+        "simulate --method tao-2 --binding 50 --steps 10 --every 0 --event flip --event zero:theta1",
+        "simulate oscillator --method dop853 --t-end 2 --output-dt 0.5 --rtol 1e-8 --atol 0 --h-max 1",
+        "simulate driven-pendulum --preset baker-gollub-chaotic --steps 10 --set q=4 --plot p.png",
+        "simulate chain --set links=3 --steps 5 --t-eval 0,0.5 --method dopri5",
+    ];
     /// Compare methods on one problem: energy error, trajectories, phase portraits, cost.
     #[command(mut_arg("set", |a| a.help(SET_COMPARE)))]
-    #[command(mut_args(|a| crate::commands::compare::DEFAULTS.document(a)))]
-    Compare(Box<crate::commands::compare::CompareArgs>),
+    #[command(mut_args(|a| compare::DEFAULTS.document(a)))]
+    "compare" Compare(Box<compare::CompareArgs>) => compare::run,
+    files: compare::FILES,
+    examples: &["compare oscillator --dt 0.1 --t-end 1 --methods rk4,verlet"];
     /// Global error against step size, with the fitted order of each method.
     #[command(mut_arg("set", |a| a.help(SET_CONVERGENCE)))]
-    #[command(mut_args(|a| crate::commands::convergence::DEFAULTS.document(a)))]
-    Convergence(Box<crate::commands::convergence::ConvergenceArgs>),
-    /// The largest stable step of each method.
-    #[command(mut_arg("set", |a| a.help(SET_STABILITY)))]
-    #[command(mut_args(|a| crate::commands::stability::DEFAULTS.document(a)))]
-    Stability(Box<crate::commands::stability::StabilityArgs>),
+    #[command(mut_args(|a| convergence::DEFAULTS.document(a)))]
+    "convergence" Convergence(Box<convergence::ConvergenceArgs>) => convergence::run,
+    files: convergence::FILES,
+    examples: &["convergence --t-end 0.5 --levels 2 --methods rk4"];
     /// Error against cost (rhs evaluations, wall time) of each method over a range of steps.
     #[command(mut_arg("set", |a| a.help(SET_WORK_PRECISION)))]
-    #[command(mut_args(|a| crate::commands::work_precision::DEFAULTS.document(a)))]
-    WorkPrecision(Box<crate::commands::work_precision::WorkPrecisionArgs>),
-    /// The simple pendulum's period against amplitude: simulated, exact and small-angle.
-    #[command(mut_arg("set", |a| a.help(SET_PERIOD)))]
-    #[command(mut_args(|a| crate::commands::period::DEFAULTS.document(a)))]
-    Period(Box<crate::commands::period::PeriodArgs>),
-    /// The oscillator's damping regimes and forced resonance, exact and simulated.
-    #[command(mut_arg("set", |a| a.help(SET_OSCILLATOR_REGIMES)))]
-    OscillatorRegimes(Box<crate::commands::regimes::RegimesArgs>),
+    #[command(mut_args(|a| work_precision::DEFAULTS.document(a)))]
+    "work-precision" WorkPrecision(Box<work_precision::WorkPrecisionArgs>) => work_precision::run,
+    files: work_precision::FILES,
+    examples: &["work-precision --t-end 0.5 --methods rk4 --levels 2 --tol-levels 2"];
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
-    #[command(mut_args(|a| crate::commands::animate::DEFAULTS.document(a)))]
-    Animate(Box<crate::commands::animate::AnimateArgs>),
+    #[command(mut_args(|a| animate::DEFAULTS.document(a)))]
+    "animate" Animate(Box<animate::AnimateArgs>) => animate::run,
+    files: &[],
+    examples: &["animate --t-end 0.1 --fps 5 --size 160x160 --out a.gif"];
     /// The library's studies (`pendula::study::STUDIES`), one subcommand each.
     #[command(flatten)]
-    Study(crate::studies::StudyCommand),
+    "" Study(crate::studies::StudyCommand) => crate::studies::StudyCommand::run,
+    files: &[],
+    examples: &[];
     /// Distance between two trajectories started close together, and its growth rate.
     #[command(mut_arg("set", |a| a.help(SET_DIVERGENCE)))]
-    #[command(mut_args(|a| crate::commands::divergence::DEFAULTS.document(a)))]
-    Divergence(Box<crate::commands::divergence::DivergenceArgs>),
+    #[command(mut_args(|a| divergence::DEFAULTS.document(a)))]
+    "divergence" Divergence(Box<divergence::DivergenceArgs>) => divergence::run,
+    files: divergence::FILES,
+    examples: &["divergence --t-end 0.1 --dt 0.01"];
     /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
     /// plot of the running estimate and an uncertainty.
     #[command(mut_arg("set", |a| a.help(SET_LYAPUNOV)))]
-    #[command(mut_args(|a| crate::commands::lyapunov::DEFAULTS.document(a)))]
-    Lyapunov(Box<crate::commands::lyapunov::LyapunovArgs>),
+    #[command(mut_args(|a| lyapunov::DEFAULTS.document(a)))]
+    "lyapunov" Lyapunov(Box<lyapunov::LyapunovArgs>) => lyapunov::run,
+    files: lyapunov::FILES,
+    examples: &["lyapunov --t-end 1 --transient 0 --renormalise 0.05 --dt 0.01"];
     /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
     /// surface and their crossings of a section, located by events.
     #[command(mut_arg("set", |a| a.help(SET_POINCARE)))]
-    #[command(mut_args(|a| crate::commands::poincare::DEFAULTS.document(a)))]
-    Poincare(Box<crate::commands::poincare::PoincareArgs>),
+    #[command(mut_args(|a| poincare::DEFAULTS.document(a)))]
+    "poincare" Poincare(Box<poincare::PoincareArgs>) => poincare::run,
+    files: poincare::FILES,
+    examples: &["poincare --count 1 --t-end 10"];
     /// Stroboscopic orbit diagram of a driven system against a swept parameter (SIMD lanes for
     /// the driven pendulum).
     #[command(mut_arg("set", |a| a.help(SET_BIFURCATION)))]
-    #[command(mut_args(|a| crate::commands::bifurcation::DEFAULTS.document(a)))]
-    Bifurcation(Box<crate::commands::bifurcation::BifurcationArgs>),
+    #[command(mut_args(|a| bifurcation::DEFAULTS.document(a)))]
+    "bifurcation" Bifurcation(Box<bifurcation::BifurcationArgs>) => bifurcation::run,
+    files: bifurcation::FILES,
+    examples: &["bifurcation --param drive_amplitude=1:1.5:3 --transient 0 --samples 2 --steps-per-period 4"];
     /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
-    #[command(mut_args(|a| crate::commands::fractal::DEFAULTS.document(a)))]
-    Fractal(Box<crate::commands::fractal::FractalArgs>),
+    #[command(mut_args(|a| fractal::DEFAULTS.document(a)))]
+    "fractal" Fractal(Box<fractal::FractalArgs>) => fractal::run,
+    files: fractal::FILES,
+    examples: &["fractal --grid theta1=0:1:4 --grid theta2=0:1:4 --t-max 0.1 --out-dir fr"];
     /// Integrate a grid of initial states or parameters in parallel (SIMD lanes for every
     /// system with an explicit Runge-Kutta method, and for separable systems with the explicit
     /// symplectic methods) into one .npy array, or one shard of it.
-    #[command(mut_args(|a| crate::commands::sweep::DEFAULTS.document(a)))]
-    Sweep(Box<crate::commands::sweep::SweepArgs>),
+    #[command(mut_args(|a| sweep::DEFAULTS.document(a)))]
+    "sweep" Sweep(Box<sweep::SweepArgs>) => sweep::run,
+    files: &[],
+    examples: &[
+        "sweep --grid theta1=0:1:4 --steps 10 --out g.npy",
+        "sweep pendulum --grid theta=0:1:3 --grid l=1:2:2 --t-end 0.1 --record final,energy-error --shard 1/2",
+    ];
     /// Assemble the shards of a sweep into the full array.
-    Merge(Box<crate::commands::merge::MergeArgs>),
+    "merge" Merge(Box<merge::MergeArgs>) => merge::run,
+    files: &[],
+    examples: &["merge s1.npy s2.npy --out m.npy"];
     /// Continue a run of simulate, sweep or fractal from its --checkpoint FILE: the outputs
     /// are byte-identical to an uninterrupted run's.
-    Resume(Box<crate::commands::resume::ResumeArgs>),
+    "resume" Resume(Box<resume::ResumeArgs>) => resume::run,
+    files: &[],
+    examples: &[];
     /// Plot a pendula CSV or .npy file: time series, a phase portrait, the energy error, or
     /// a heat map of a sweep or fractal grid.
-    Plot(Box<crate::commands::plot::PlotArgs>),
+    "plot" Plot(Box<plot::PlotArgs>) => plot::run,
+    files: &[],
+    examples: &["plot t.csv --out p.png"];
     /// The pendulum lab in the browser: live simulation, energy, integrator race, butterfly
     /// mode, graphs and the flip-fractal explorer, computed by this program on this machine
     /// (prints the page's URL, with its access token).
-    Serve(Box<crate::commands::serve::ServeArgs>),
+    "serve" Serve(Box<serve::ServeArgs>) => serve::run,
+    files: &[],
+    examples: &[];
     /// The paper's whole numerical study as one self-contained HTML page.
-    Report(Box<crate::commands::report::ReportArgs>),
+    "report" Report(Box<report::ReportArgs>) => |args: &report::ReportArgs| report::run(args, run_line),
+    files: report::FILES,
+    examples: &["report --out-dir r"];
     /// List the systems, the methods or the presets, with parameters, units, defaults,
     /// requirements and sources.
-    List {
-        /// What to list.
-        what: ListWhat,
-    },
+    "list" List(ListArgs) => |args: &ListArgs| crate::list::run(args.what),
+    files: &[],
+    examples: &["list systems"];
     /// Print a completion script for SHELL on stdout, e.g. `pendula completions bash >
     /// ~/.local/share/bash-completion/completions/pendula`.
-    Completions {
-        /// The shell to complete in.
-        shell: clap_complete::Shell,
-    },
+    "completions" Completions(CompletionsArgs) => |args: &CompletionsArgs| crate::generate::completions(Cli::command(), args.shell),
+    files: &[],
+    examples: &["completions bash"];
     /// Write the man pages: pendula.1 on stdout, or with --out-dir one page per command
     /// (pendula.1, pendula-simulate.1, ...), e.g. `pendula man --out-dir ~/.local/share/man/man1`.
-    Man {
-        /// Directory for the pages [default: pendula.1 on stdout].
-        #[arg(long, value_name = "DIR")]
-        out_dir: Option<PathBuf>,
-    },
+    "man" Man(ManArgs) => |args: &ManArgs| crate::generate::man(Cli::command(), args.out_dir.as_deref()),
+    files: crate::generate::FILES,
+    examples: &[];
+}
+
+/// Runs one parsed command (the report runs others through it).
+pub fn dispatch(command: &Command) -> anyhow::Result<()> {
+    // The outputs this command claims; two of them that are the same file are refused.
+    let _outputs = crate::output::scope();
+    command.run()
+}
+
+/// `pendula ARGS...` parsed and run (the report runs its commands so); clap's error when the
+/// arguments do not parse.
+fn run_line(args: &[String]) -> anyhow::Result<()> {
+    dispatch(&Cli::try_parse_from(args)?.command)
+}
+
+/// `pendula list`'s argument.
+#[derive(Debug, Args)]
+pub struct ListArgs {
+    /// What to list.
+    pub what: ListWhat,
+}
+
+/// `pendula completions`' argument.
+#[derive(Debug, Args)]
+pub struct CompletionsArgs {
+    /// The shell to complete in.
+    pub shell: clap_complete::Shell,
+}
+
+/// `pendula man`'s argument.
+#[derive(Debug, Args)]
+pub struct ManArgs {
+    /// Directory for the pages [default: pendula.1 on stdout].
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: Option<PathBuf>,
 }
 
 // `--set` help for each study command: the example names quantities of the system that
@@ -126,14 +238,8 @@ const SET_COMPARE: &str = "Set a parameter or initial-state variable of the syst
 --set m2=2` for the double pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
 const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the system, e.g. `--set c=0.5` \
 (the oscillator's damping, kg/s) or `--set x=0.2` (m).";
-const SET_STABILITY: &str = "Set a parameter or initial-state variable of the system, e.g. `--set theta=30deg` \
-for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
 const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
 `--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_PERIOD: &str = "Set a parameter of the simple pendulum, e.g. `--set l=2` (m) or `--set g=1.62` \
-(m/s^2); the amplitude is swept (--max-amplitude) from rest.";
-const SET_OSCILLATOR_REGIMES: &str = "Set a parameter of the oscillator, e.g. `--set k=4` (N/m) or `--set m=2` (kg); \
-the damping, the drive and the start are the study's own.";
 const SET_DIVERGENCE: &str = "Set a parameter or initial-state variable of the system, e.g. `--set \
 theta1=120deg --set m2=2` for the double pendulum (bare angles are radians).";
 const SET_LYAPUNOV: &str = "Set a parameter or initial-state variable, over the preset if one is given: \
@@ -142,3 +248,31 @@ const SET_POINCARE: &str = "Set a parameter of the system, e.g. `--set m2=2` (kg
 pendulum; every orbit starts on the energy surface (--energy).";
 const SET_BIFURCATION: &str = "Set a parameter over the preset or the defaults, e.g. `--set q=4` \
 (the driven pendulum's quality factor) or `--set drive_frequency=0.5`.";
+
+#[cfg(test)]
+mod tests {
+    use clap::{CommandFactory, Parser};
+
+    use super::{COMMANDS, Cli};
+
+    /// The list names every subcommand clap knows, once, in clap's order; the library's
+    /// studies come in where its empty entry stands.
+    #[test]
+    fn the_list_of_commands_is_clap_s_list_of_subcommands() {
+        let clap: Vec<String> = Cli::command().get_subcommands().map(|c| c.get_name().to_owned()).collect();
+        let listed: Vec<String> = COMMANDS
+            .iter()
+            .flat_map(|c| match c.name {
+                "" => pendula::study::STUDIES.iter().map(|s| s.name.to_owned()).collect(),
+                name => vec![name.to_owned()],
+            })
+            .collect();
+        assert_eq!(clap, listed);
+        for c in COMMANDS {
+            for example in c.examples {
+                assert!(example.split(' ').next() == Some(c.name), "{example} is not {}'s", c.name);
+                Cli::try_parse_from(std::iter::once("pendula").chain(example.split(' '))).unwrap();
+            }
+        }
+    }
+}

@@ -24,7 +24,7 @@
 //! refused. Every output is *claimed* in the run's list (`output::scope`, one per dispatched
 //! command, so `report`'s inner runs have their own): two that are one file (device and inode where
 //! it exists, directory and name otherwise; a character device may be shared), one onto a study
-//! directory's own names (`study::FILES`, claimed by `OutDir`) or onto an input (`claim_input`:
+//! directory's own names (`cli::COMMANDS`, claimed by `OutDir`) or onto an input (`claim_input`:
 //! merge's shards, plot's file) are refused before any work. Write errors are `WriteError`s, naming
 //! the option and the user's path with the OS error; a full disk, quota or I/O error exits 1,
 //! everything else 2. Every live temporary file and every directory created for a run
@@ -119,7 +119,8 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use cli::{Cli, Command};
+use cli::Cli;
+pub use cli::dispatch;
 
 /// The command: parses the process's arguments, runs the command they name, prints an error
 /// and turns it into the exit status (2 for what the user can fix, 1 for a numerical or
@@ -147,43 +148,6 @@ pub fn run() -> ExitCode {
             ExitCode::from(exit_code(&err))
         }
     }
-}
-
-/// Runs one parsed command (the report runs others through it).
-pub fn dispatch(command: &Command) -> anyhow::Result<()> {
-    // The outputs this command claims; two of them that are the same file are refused.
-    let _outputs = output::scope();
-    match command {
-        Command::Simulate(args) => simulate::run(args),
-        Command::Compare(args) => commands::compare::run(args),
-        Command::Convergence(args) => commands::convergence::run(args),
-        Command::Stability(args) => commands::stability::run(args),
-        Command::WorkPrecision(args) => commands::work_precision::run(args),
-        Command::Period(args) => commands::period::run(args),
-        Command::OscillatorRegimes(args) => commands::regimes::run(args),
-        Command::Animate(args) => commands::animate::run(args),
-        Command::Report(args) => commands::report::run(args, run_line),
-        Command::Sweep(args) => commands::sweep::run(args),
-        Command::Divergence(args) => commands::divergence::run(args),
-        Command::Lyapunov(args) => commands::lyapunov::run(args),
-        Command::Fractal(args) => commands::fractal::run(args),
-        Command::Bifurcation(args) => commands::bifurcation::run(args),
-        Command::Poincare(args) => commands::poincare::run(args),
-        Command::Merge(args) => commands::merge::run(args),
-        Command::Study(study) => study.run(),
-        Command::Resume(args) => commands::resume::run(args),
-        Command::Plot(args) => commands::plot::run(args),
-        Command::Serve(args) => commands::serve::run(args),
-        Command::List { what } => list::run(*what),
-        Command::Completions { shell } => generate::completions(*shell),
-        Command::Man { out_dir } => generate::man(out_dir.as_deref()),
-    }
-}
-
-/// `pendula ARGS...` parsed and run (the report runs its commands so); clap's error when the
-/// arguments do not parse.
-fn run_line(args: &[String]) -> anyhow::Result<()> {
-    dispatch(&Cli::try_parse_from(args)?.command)
 }
 
 /// 1 when the computation itself failed or the environment did (a full disk while writing),

@@ -8,7 +8,7 @@
 
 use anyhow::Result;
 use clap::{Arg, ArgMatches, Args, FromArgMatches};
-use pendula::study::{Budget, Input, Inputs, Kind, Param, Report, STUDIES, Study, Unit};
+use pendula::study::{Budget, Cells, Input, Inputs, Kind, Param, Report, STUDIES, Study, Unit};
 use serde_json::{Map, Value, json};
 
 use crate::study::{Common, OutDir, num};
@@ -41,8 +41,11 @@ pub fn command(study: &'static Study) -> clap::Command {
     let mut cmd = clap::Command::new(study.name);
     for p in study.params {
         let arg = match p.kind {
+            // The one system it runs: nothing to choose.
+            Kind::System { fixed: true, .. } => continue,
             Kind::System { .. } => Arg::new(p.name).value_name("SYSTEM"),
             Kind::Method { .. } => Arg::new(p.name).long(p.name).value_name("NAME"),
+            Kind::Methods => Arg::new(p.name).long(p.name).value_name("LIST"),
             Kind::Real { .. } | Kind::Count { .. } => Arg::new(p.name)
                 .long(p.name.replace('_', "-"))
                 .value_name(p.name.to_uppercase())
@@ -51,7 +54,30 @@ pub fn command(study: &'static Study) -> clap::Command {
         cmd = cmd.arg(arg.help(help(p)));
     }
     // After the shared arguments, whose own doc would otherwise be the command's about.
-    Common::augment_args(cmd).about(study.about)
+    let cmd = Common::augment_args(cmd).about(study.about);
+    match set_help(study) {
+        Some(help) => cmd.mut_arg("set", |a| a.help(help)),
+        None => cmd,
+    }
+}
+
+/// `--set` help with an example on the study's default system: its first parameter at twice
+/// its default (`--set l=2` for the pendulum), which is always in its domain.
+fn set_help(study: &Study) -> Option<String> {
+    let (default, fixed) = study.params.iter().find_map(|p| match p.kind {
+        Kind::System { default, fixed, .. } => Some((default, fixed)),
+        _ => None,
+    })?;
+    let info = pendula::model::find(default).ok()?;
+    let q = info.parameters.iter().find(|q| q.default > 0.0)?;
+    let what = if fixed { "a parameter" } else { "a parameter or initial-state variable" };
+    Some(format!(
+        "Set {what} of the {default} system, e.g. `--set {}={}`{}; `pendula list systems` names them{}",
+        q.name,
+        pendula::error::Short(2.0 * q.default),
+        pendula::study::unit_suffix(q.unit).replacen(' ', " (", 1) + if q.unit.is_empty() { "" } else { ")" },
+        if fixed { "" } else { "; angles take a `deg` or `pi` suffix (bare numbers are radians)" }
+    ))
 }
 
 impl FromArgMatches for StudyCommand {
@@ -100,17 +126,30 @@ impl StudyCommand {
         let budget =
             Budget { max_steps: (!common.large.allow_large).then_some(crate::limits::MAX_SCALAR_STEPS) };
         // Checked before the output directory is touched: bad input leaves no trace.
-        let mut out = OutDir::new(common.out_dir.as_deref(), self.study.name)?;
+        let files: Vec<String> =
+            self.study.files.iter().flat_map(|f| ["csv", "png", "svg"].map(|e| format!("{f}.{e}"))).collect();
+        let files: Vec<&str> = files.iter().map(String::as_str).collect();
+        let mut out = OutDir::new(common.out_dir.as_deref(), self.study.name, &files)?;
         let summary = common.summary.open()?;
         let report = (self.study.run)(&inputs, &budget).map_err(|e| self.error(e))?;
         for line in &report.summary {
             sayln!(summary, "{line}");
         }
+        for table in report.tables.iter().filter(|t| t.shown) {
+            let header: Vec<String> =
+                table
+                    .columns
+                    .iter()
+                    .map(|c| {
+                        if c.unit.is_empty() { c.name.to_owned() } else { format!("{} ({})", c.name, c.unit) }
+                    })
+                    .collect();
+            let header: Vec<&str> = header.iter().map(String::as_str).collect();
+            say!(summary, "\n{}", crate::study::table(&header, &rows(table)));
+        }
         for table in &report.tables {
             let header: Vec<&str> = table.columns.iter().map(|c| c.name).collect();
-            let rows: Vec<Vec<String>> =
-                (0..table.rows()).map(|i| table.columns.iter().map(|c| num(c.values[i])).collect()).collect();
-            out.csv(&format!("{}.csv", table.name), &header, &rows)?;
+            out.csv(&format!("{}.csv", table.name), &header, &rows(table))?;
         }
         for plot in &report.plots {
             out.figure(plot.name, &pendula_viz::Figure::from(plot))?;
@@ -124,9 +163,9 @@ impl StudyCommand {
         let mut inputs = Inputs::default();
         let mut system = None;
         for p in self.study.params {
-            let Some(text) = self.matches.get_one::<String>(p.name) else { continue };
+            let Ok(Some(text)) = self.matches.try_get_one::<String>(p.name) else { continue };
             let value = match p.kind {
-                Kind::System { .. } | Kind::Method { .. } => Input::Name(text.clone()),
+                Kind::System { .. } | Kind::Method { .. } | Kind::Methods => Input::Name(text.clone()),
                 Kind::Real { .. } | Kind::Count { .. } => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }
@@ -152,15 +191,17 @@ impl StudyCommand {
 
     /// A library error with parameter names spelled as flags.
     fn error(&self, e: pendula::Error) -> anyhow::Error {
-        let names: Vec<(&str, String)> = self.study.params.iter().map(|p| (p.name, flag(p))).collect();
+        let mut names: Vec<(&str, String)> = self.study.params.iter().map(|p| (p.name, flag(p))).collect();
+        names.push(("set", "--set".to_owned()));
         let names: Vec<(&str, &str)> = names.iter().map(|(n, f)| (*n, f.as_str())).collect();
         match e {
-            pendula::Error::TooLarge { what, steps, limit } => anyhow::anyhow!(
-                "{}: refusing {what} ({} steps), over the limit of {} steps; give --allow-large to run it anyway",
-                self.study.name,
-                crate::limits::sci(steps),
-                crate::limits::sci(limit)
-            ),
+            // Worded as every command's refusal over the limits (the budget's limit is the same).
+            pendula::Error::TooLarge { what, steps, .. } => {
+                let estimate = crate::limits::Estimate::new(crate::limits::Cost::Steps, steps, what);
+                crate::limits::check(self.study.name, false, &[estimate]).err().unwrap_or_else(|| {
+                    anyhow::anyhow!("{}: refusing a request over the limits", self.study.name)
+                })
+            }
             pendula::Error::InvalidInput { name, value, allowed } => {
                 let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
                 anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
@@ -170,7 +211,17 @@ impl StudyCommand {
     }
 }
 
-/// The JSON summary: every input as the run used it, then every number.
+/// A table's rows, each value as CSV and the printed tables write numbers.
+fn rows(table: &pendula::study::Table) -> Vec<Vec<String>> {
+    let cell = |c: &pendula::study::Column, i: usize| match &c.values {
+        Cells::Numbers(v) => num(v[i]),
+        Cells::Text(t) => t[i].clone(),
+    };
+    (0..table.rows()).map(|i| table.columns.iter().map(|c| cell(c, i)).collect()).collect()
+}
+
+/// The JSON summary: every input as the run used it, every number, and the rows of the
+/// tables short enough to show (`tables.NAME`, a list of {column: value}).
 fn document(report: &Report) -> Value {
     let mut doc = Map::new();
     doc.insert("study".into(), json!(report.study));
@@ -184,6 +235,22 @@ fn document(report: &Report) -> Value {
     for n in &report.numbers {
         doc.insert(n.key.into(), json!(n.value));
     }
+    let mut tables = Map::new();
+    for t in report.tables.iter().filter(|t| t.shown) {
+        let rows: Vec<Value> = (0..t.rows())
+            .map(|i| {
+                let cell = |c: &pendula::study::Column| match &c.values {
+                    Cells::Numbers(v) => json!(v[i]),
+                    Cells::Text(t) => json!(t[i]),
+                };
+                Value::Object(t.columns.iter().map(|c| (c.name.to_owned(), cell(c))).collect())
+            })
+            .collect();
+        tables.insert(t.name.into(), Value::Array(rows));
+    }
+    if !tables.is_empty() {
+        doc.insert("tables".into(), Value::Object(tables));
+    }
     Value::Object(doc)
 }
 
@@ -195,7 +262,7 @@ mod tests {
     fn every_flag_shows_the_default_its_study_declares() {
         for study in STUDIES {
             let cmd = command(study);
-            for p in study.params {
+            for p in study.params.iter().filter(|p| !matches!(p.kind, Kind::System { fixed: true, .. })) {
                 let arg =
                     cmd.get_arguments().find(|a| a.get_id() == p.name).expect("an argument per parameter");
                 let shown = arg.get_help().expect("help").to_string();

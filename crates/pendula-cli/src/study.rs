@@ -232,57 +232,6 @@ pub fn preset_settings(
     Ok((info, settings))
 }
 
-/// The files each command writes in its study directory (`*` stands for any text: compare's
-/// phase portraits are named after the methods). A `--summary` or other output of the run
-/// that would be one of them is refused before the run, and so is a directory in their place.
-pub const FILES: &[(&str, &[&str])] = &[
-    (
-        "compare",
-        &[
-            "summary.csv",
-            "energy.png",
-            "energy.svg",
-            "trajectory.png",
-            "trajectory.svg",
-            "phase_*.png",
-            "phase_*.svg",
-        ],
-    ),
-    ("convergence", &["convergence.csv", "convergence.png", "convergence.svg"]),
-    ("stability", &["stability.csv", "stability.png", "stability.svg"]),
-    (
-        "work-precision",
-        &[
-            "work_precision.csv",
-            "work_precision_evals.png",
-            "work_precision_evals.svg",
-            "work_precision_time.png",
-            "work_precision_time.svg",
-        ],
-    ),
-    ("period", &["period.csv", "period.png", "period.svg", "period_error.png", "period_error.svg"]),
-    (
-        "oscillator-regimes",
-        &[
-            "transients.csv",
-            "resonance.csv",
-            "regimes.png",
-            "regimes.svg",
-            "resonance_amplitude.png",
-            "resonance_amplitude.svg",
-            "resonance_phase.png",
-            "resonance_phase.svg",
-        ],
-    ),
-    ("divergence", &["divergence.csv", "divergence.png", "divergence.svg"]),
-    ("lyapunov", &["lyapunov.csv", "lyapunov.png", "lyapunov.svg"]),
-    ("poincare", &["poincare.csv", "poincare.png", "poincare.svg"]),
-    ("bifurcation", &["bifurcation.csv", "bifurcation.png", "bifurcation.svg"]),
-    ("fractal", &["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"]),
-    ("report", &["report.html"]),
-    ("man", &["pendula*.1"]),
-];
-
 /// The output directory: created if needed (and removed again if the run fails or is refused
 /// before writing anything into it). Its files are written under temporary names as the run
 /// goes and renamed into place together when it ends ([`OutDir::finish`]): a failed run —
@@ -306,8 +255,8 @@ pub struct OutDir {
 
 impl OutDir {
     /// `--out-dir`, or `pendula-out/<command>`: created, checked writable, and claimed with
-    /// the names the command writes there ([`FILES`]).
-    pub fn new(dir: Option<&Path>, command: &str) -> Result<Self> {
+    /// `files`, the names the command writes there (its entry in `cli::COMMANDS`).
+    pub fn new(dir: Option<&Path>, command: &str, files: &[&str]) -> Result<Self> {
         let path = dir.map_or_else(|| Path::new("pendula-out").join(command), Path::to_path_buf);
         if path == Path::new("-") {
             bail!("invalid --out-dir -: a directory of files cannot go to stdout; give a directory");
@@ -319,15 +268,7 @@ impl OutDir {
         // Fail now, not after the work, if the directory cannot be written.
         crate::output::probe(&path, "--out-dir")?;
         // A registry study's files: its tables' CSV and its plots' PNG and SVG, by stem.
-        let names: Vec<String> = match FILES.iter().find(|(c, _)| *c == command) {
-            Some((_, n)) => n.iter().map(|n| (*n).to_owned()).collect(),
-            None => pendula::study::find(command).map_or_else(
-                |_| Vec::new(),
-                |s| s.files.iter().flat_map(|f| ["csv", "png", "svg"].map(|e| format!("{f}.{e}"))).collect(),
-            ),
-        };
-        let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        let names = names.as_slice();
+        let names = files;
         // A directory in the place of one of the command's files is refused now too.
         if let Ok(entries) = std::fs::read_dir(&path) {
             for entry in entries.flatten() {

@@ -588,7 +588,7 @@ fn ref_resonance_peak_is_the_closed_form() {
     let stdout = String::from_utf8_lossy(&out.get_output().stdout).into_owned();
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
-    let peaks = s["resonance_peaks"].as_array().unwrap();
+    let peaks = s["tables"]["peaks"].as_array().unwrap();
     assert_eq!(peaks.len(), 4);
     for p in peaks {
         let zeta = p["zeta"].as_f64().unwrap();
@@ -668,10 +668,12 @@ fn set_help_examples_belong_to_the_command() {
     let commands: &[(&str, &[(&str, &str)])] = &[
         ("compare", &[("--set theta1=90deg --set m2=2", "double")]),
         ("convergence", &[("--set c=0.5", "oscillator"), ("--set x=0.2", "oscillator")]),
-        ("stability", &[("--set theta=30deg", "pendulum")]),
+        ("stability", &[("--set m=2", "pendulum")]),
         ("work-precision", &[("--set theta=90deg", "pendulum")]),
-        ("period", &[("--set l=2", "pendulum"), ("--set g=1.62", "pendulum")]),
-        ("oscillator-regimes", &[("--set k=4", "oscillator"), ("--set m=2", "oscillator")]),
+        ("period", &[("--set m=2", "pendulum")]),
+        ("energy-budget", &[("--set m1=2", "double")]),
+        ("round-trip", &[("--set m=2", "pendulum")]),
+        ("oscillator-regimes", &[("--set m=2", "oscillator")]),
         ("divergence", &[("--set theta1=120deg --set m2=2", "double")]),
         ("lyapunov", &[("--set theta1=120deg", "double"), ("--set q=4", "driven-pendulum")]),
         ("poincare", &[("--set m2=2", "double")]),

@@ -50,7 +50,7 @@ fn ref_period_at_170_degrees_matches_the_exact_period() {
     let dir = TempDir::new().unwrap();
     pendula(dir.path(), &["period", "--out-dir", "p", "--summary", "s.json"]).success();
     let s = json(&dir.path().join("s.json"));
-    let row = s["rows"].as_array().unwrap().iter().find(|r| r["amplitude_deg"] == 170.0).unwrap();
+    let row = s["tables"]["period"].as_array().unwrap().iter().find(|r| r["amplitude_deg"] == 170.0).unwrap();
     let (sim, exact) = (row["simulated"].as_f64().unwrap(), row["exact"].as_f64().unwrap());
     assert!((sim / exact - 1.0).abs() < 1e-6, "{sim} vs {exact}");
     assert!((exact - 4.893_524_274_105_486).abs() < 1e-12, "mpmath's 4 sqrt(l/g) K(sin 85°)");
@@ -158,10 +158,11 @@ fn stability_and_regimes_write_their_tables() {
     pendula(dir.path(), &["stability", "--methods", "euler,verlet", "--out-dir", "s", "--summary", "s.json"])
         .success();
     let s = json(&dir.path().join("s.json"));
-    let (euler, verlet) = (
-        s["largest_stable_dt"]["euler"].as_f64().unwrap(),
-        s["largest_stable_dt"]["verlet"].as_f64().unwrap(),
-    );
+    let step = |m: &str| {
+        let rows = s["tables"]["stability"].as_array().unwrap();
+        rows.iter().find(|r| r["method"] == m).unwrap()["largest_stable_dt"].as_f64().unwrap()
+    };
+    let (euler, verlet) = (step("euler"), step("verlet"));
     assert!(euler < verlet / 10.0, "euler {euler}, verlet {verlet}");
     assert_eq!(header(&dir.path().join("s/stability.csv")), "method,largest_stable_dt,note");
     pendula(dir.path(), &["oscillator-regimes", "--out-dir", "r", "--summary", "r.json"]).success();

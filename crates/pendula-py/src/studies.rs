@@ -4,7 +4,7 @@
 //! numpy arrays. A new study in the library needs nothing here.
 
 use numpy::IntoPyArray;
-use pendula::study::{self, Budget, Input, Inputs, Kind, Style, Unit};
+use pendula::study::{self, Budget, Cells, Input, Inputs, Kind, Style, Unit};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -25,13 +25,18 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             d.set_item("help", p.help)?;
             d.set_item("default_text", p.default_text())?;
             match p.kind {
-                Kind::System { default, .. } => {
-                    d.set_item("kind", "system")?;
+                Kind::System { default, fixed, .. } => {
+                    // The one system it runs: no argument for it.
+                    d.set_item("kind", if fixed { "fixed-system" } else { "system" })?;
                     d.set_item("default", default)?;
                 }
                 Kind::Method { default } => {
                     d.set_item("kind", "method")?;
                     d.set_item("default", default)?;
+                }
+                Kind::Methods => {
+                    d.set_item("kind", "methods")?;
+                    d.set_item("default", py.None())?;
                 }
                 Kind::Real { default, unit, .. } => {
                     d.set_item("kind", "real")?;
@@ -65,7 +70,8 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 /// Runs the study `name` with `values` ((parameter, value) pairs: a str for a system or a
 /// method, a number otherwise) and `set` ((system quantity, value) pairs). Returns `study`,
 /// `inputs`, `summary` (sentences), `numbers` and `units` (by key), `tables` (name →
-/// column → array), `columns_units` (name → column → unit) and `plots`.
+/// column → array), `columns_units` (name → column → unit), `shown` (the names of the tables
+/// short enough to print whole) and `plots`.
 #[pyfunction]
 #[pyo3(signature = (name, values, set, progress=None))]
 fn run_study<'py>(
@@ -119,11 +125,16 @@ fn run_study<'py>(
     out.set_item("numbers", numbers)?;
     out.set_item("units", units)?;
     let (tables, columns_units) = (PyDict::new(py), PyDict::new(py));
+    let shown: Vec<&str> = report.tables.iter().filter(|t| t.shown).map(|t| t.name).collect();
+    out.set_item("shown", shown)?;
     for t in report.tables {
         let (columns, units) = (PyDict::new(py), PyDict::new(py));
         for c in t.columns {
             units.set_item(c.name, c.unit)?;
-            columns.set_item(c.name, c.values.into_pyarray(py))?;
+            match c.values {
+                Cells::Numbers(v) => columns.set_item(c.name, v.into_pyarray(py))?,
+                Cells::Text(t) => columns.set_item(c.name, t)?,
+            }
         }
         tables.set_item(t.name, columns)?;
         columns_units.set_item(t.name, units)?;
@@ -152,6 +163,7 @@ fn run_study<'py>(
                     Style::Solid => "solid",
                     Style::Dashed => "dashed",
                     Style::Points => "points",
+                    Style::LineMarkers => "line-markers",
                 },
             )?;
             let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().map(|[x, y]| (*x, *y)).unzip();
@@ -160,6 +172,17 @@ fn run_study<'py>(
             series.append(l)?;
         }
         d.set_item("series", series)?;
+        let bars = PyList::empty(py);
+        for b in p.bars {
+            let e = PyDict::new(py);
+            e.set_item("label", b.label)?;
+            e.set_item("value", b.value)?;
+            e.set_item("note", b.note)?;
+            e.set_item("refused", b.refused)?;
+            bars.append(e)?;
+        }
+        d.set_item("bars", bars)?;
+        d.set_item("limits", p.limits)?;
         plots.append(d)?;
     }
     out.set_item("plots", plots)?;

@@ -112,3 +112,23 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
         name, *axis = _core.parse_axis("double", [], text)
         assert pendula.fractal.__kwdefaults__[name] == tuple(axis), (name, axis)
     assert pendula.bifurcation(samples=1, transient=0, steps_per_period=4, progress=False).values.size == 800
+
+
+def test_period_is_a_library_study_with_its_table_and_the_exact_reference():
+    r = pendula.period(max_amplitude=170)
+    t = r.tables["period"]
+    k = list(t["amplitude_deg"]).index(170.0)
+    # mpmath: 4 sqrt(l/g) K(sin 85 deg) for l = 1 m, g = 9.81 m/s^2.
+    assert abs(t["exact"][k] - 4.893524274105486) < 1e-12
+    assert abs(t["simulated"][k] / t["exact"][k] - 1) < 1e-6
+    assert r.columns_units["period"]["simulated"] == "s"
+    text = str(r)
+    assert text.startswith(r.summary[0]) and "amplitude_deg (deg)" in text and "170.0" in text
+    # Twice as long a pendulum: every period sqrt(2) times as long.
+    longer = pendula.period(pendula.System("pendulum", l=2.0), max_amplitude=170)
+    ratio = longer.tables["period"]["exact"][k] / t["exact"][k]
+    assert abs(ratio - 2**0.5) < 1e-12
+    with pytest.raises(pendula.InvalidValueError, match="pendulum only"):
+        pendula.period("double")
+    with pytest.raises(pendula.InvalidValueError, match="below 180"):
+        pendula.period(max_amplitude=180)

@@ -3,28 +3,52 @@
 
 use pendula::study::{Plot, Style};
 
-use crate::{Figure, Kind, Scale, axis_label, palette};
+use crate::{Bar, Bars, Figure, Kind, Scale, axis_label, method_color, palette};
 
 impl From<&Plot> for Figure {
     /// The plot's axes with their units (catalogue names as symbols), its series in the
     /// palette's order, solid, dashed or as markers.
     fn from(plot: &Plot) -> Self {
         let scale = |log: bool| if log { Scale::Log } else { Scale::Linear };
+        if !plot.bars.is_empty() {
+            // A bar chart: categories top to bottom, their lengths on the x axis; a method's
+            // bar in the method's colour, as in every figure.
+            let mut bars =
+                Bars::new(plot.title.clone(), axis_label(&plot.x.label, &plot.x.unit), scale(plot.x.log));
+            bars.limits = plot.limits;
+            for (i, b) in plot.bars.iter().enumerate() {
+                let color = if pendula::integrator::find(&b.label).is_ok() {
+                    method_color(&b.label)
+                } else {
+                    palette(i)
+                };
+                let bar = Bar::new(b.label.clone(), b.value, color, b.note.clone());
+                bars.bars.push(Bar { refused: b.refused, ..bar });
+            }
+            return Figure::from(bars);
+        }
         let mut figure = Figure::new(
             plot.title.clone(),
             axis_label(&plot.x.label, &plot.x.unit),
             axis_label(&plot.y.label, &plot.y.unit),
         )
         .scales(scale(plot.x.log), scale(plot.y.log));
+        // An unlabelled series continues the labelled one before it (its simulated markers
+        // beside its exact line), in its colour.
+        let mut color = 0;
         for (i, line) in plot.series.iter().enumerate() {
+            if i > 0 && !line.label.is_empty() {
+                color += 1;
+            }
             let kind = match line.style {
                 Style::Solid => Kind::Line,
                 Style::Dashed => Kind::Dashed,
                 Style::Points => Kind::Markers,
+                Style::LineMarkers => Kind::LineMarkers,
             };
             figure = figure.with(
                 line.label.clone(),
-                palette(i),
+                palette(color),
                 kind,
                 line.points.iter().map(|[x, y]| (*x, *y)).collect(),
             );
@@ -46,6 +70,8 @@ mod tests {
             title: "a title".into(),
             x: Axis { label: "t".into(), unit: "s".into(), log: false },
             y: Axis { label: "theta1".into(), unit: "rad".into(), log: true },
+            bars: Vec::new(),
+            limits: None,
             series: vec![
                 Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },
                 Line { label: "fit".into(), style: Style::Dashed, points: vec![[0.0, 1.0]] },
@@ -61,5 +87,13 @@ mod tests {
         assert_eq!(f.series[1].kind, Kind::Dashed);
         assert_eq!(f.series[0].points, vec![(0.0, 1.0), (1.0, 2.0)]);
         assert!(f.png().is_ok());
+        // An unlabelled series takes the colour of the labelled one before it.
+        let mut paired = plot.clone();
+        paired
+            .series
+            .insert(1, Line { label: String::new(), style: Style::Points, points: vec![[0.5, 1.5]] });
+        let f = Figure::from(&paired);
+        assert_eq!(f.series[0].color, f.series[1].color);
+        assert_ne!(f.series[1].color, f.series[2].color);
     }
 }

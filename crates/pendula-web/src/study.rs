@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 
 use base64::Engine as _;
-use pendula::study::{self, Budget, Input, Inputs, Kind, Unit};
+use pendula::study::{self, Budget, Cells, Input, Inputs, Kind, Unit};
 use serde::Deserialize;
 use serde_json::{Value, json};
 
@@ -36,8 +36,11 @@ pub fn list() -> Value {
                 .iter()
                 .map(|p| {
                     let (kind, unit) = match p.kind {
+                        // The one system it runs: no field in the form.
+                        Kind::System { fixed: true, .. } => ("fixed-system", ""),
                         Kind::System { .. } => ("system", ""),
                         Kind::Method { .. } => ("method", ""),
+                        Kind::Methods => ("methods", ""),
                         Kind::Real { unit: Unit::Time, .. } => ("real", "time"),
                         Kind::Real { unit: Unit::Fixed(u), .. } => ("real", u),
                         Kind::Real { unit: Unit::None, .. } => ("real", ""),
@@ -76,9 +79,15 @@ pub fn run(request: StudyRequest, max_steps: f64) -> Result<Value, Refusal> {
             let columns: Vec<Value> = t
                 .columns
                 .iter()
-                .map(|c| json!({"name": c.name, "unit": c.unit, "values": c.values}))
+                .map(|c| {
+                    let values = match &c.values {
+                        Cells::Numbers(v) => json!(v),
+                        Cells::Text(t) => json!(t),
+                    };
+                    json!({"name": c.name, "unit": c.unit, "values": values})
+                })
                 .collect();
-            json!({"name": t.name, "columns": columns})
+            json!({"name": t.name, "shown": t.shown, "columns": columns})
         })
         .collect();
     let mut plots = Vec::new();

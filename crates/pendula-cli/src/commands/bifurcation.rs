@@ -51,6 +51,9 @@ pub const DEFAULTS: Defaults = crate::args::Defaults::of(
     &[("system", "A driven system; with --preset, the preset's.")],
 );
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["bifurcation.csv", "bifurcation.png", "bifurcation.svg"];
+
 pub fn run(args: &BifurcationArgs) -> Result<()> {
     // Validate everything first.
     let (info, base) = study::preset_settings(
@@ -158,7 +161,7 @@ pub fn run(args: &BifurcationArgs) -> Result<()> {
             pendula::error::Short(v.get("drive_frequency"))
         );
     }
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "bifurcation", FILES)?;
     let summary = args.common.summary.open()?;
 
     let pool =

@@ -47,6 +47,17 @@ pub struct CompareArgs {
 /// What compare runs on without a system named (its methods and steps are its own).
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::COMPARE, &[]);
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &[
+    "summary.csv",
+    "energy.png",
+    "energy.svg",
+    "trajectory.png",
+    "trajectory.svg",
+    "phase_*.png",
+    "phase_*.svg",
+];
+
 pub fn run(args: &CompareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
@@ -93,7 +104,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         ),
         Steps::EqualCost(_) => {}
     }
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare", FILES)?;
     let summary = args.common.summary.open()?;
 
     let bar = study::progress(methods.len() as u64, "compare");

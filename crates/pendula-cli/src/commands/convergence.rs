@@ -40,6 +40,9 @@ pub fn note(r: &MethodConvergence) -> String {
 /// What convergence runs on without a system named (its methods and steps are its own).
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::CONVERGENCE, &[]);
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["convergence.csv", "convergence.png", "convergence.svg"];
+
 pub fn run(args: &ConvergenceArgs) -> Result<()> {
     let system = args.accuracy.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
@@ -64,7 +67,7 @@ pub fn run(args: &ConvergenceArgs) -> Result<()> {
         runs,
         format!("{} runs of {} methods to t = {} s", levels, methods.len(), short(t_end)),
     )?;
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "convergence", FILES)?;
     let summary = args.common.summary.open()?;
 
     let (results, reference) = study_orders(&values, &methods, &ladder, t_end)?;

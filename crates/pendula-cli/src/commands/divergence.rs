@@ -41,6 +41,9 @@ pub struct DivergenceArgs {
 /// What divergence runs without arguments.
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::DIVERGENCE, &[]);
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["divergence.csv", "divergence.png", "divergence.svg"];
+
 pub fn run(args: &DivergenceArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
@@ -96,7 +99,7 @@ pub fn run(args: &DivergenceArgs) -> Result<()> {
             format!("2 runs x {} steps", crate::limits::round(schedule.steps as f64)),
         )],
     )?;
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "divergence", FILES)?;
     let summary = args.common.summary.open()?;
     let model = values.build();
     let every = pendula::analysis::divergence::sample_every(schedule.steps);

@@ -107,6 +107,9 @@ pub const DEFAULTS: Defaults = crate::args::Defaults::of(
     ],
 );
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png"];
+
 pub fn run(args: &FractalArgs) -> Result<()> {
     execute(args, None)
 }
@@ -368,7 +371,7 @@ pub(crate) fn execute(args: &FractalArgs, resumed: Option<Checkpoint>) -> Result
     // earlier run's files like every study command's.
     let dir = match &args.out {
         Some(_) => None,
-        None => Some(OutDir::new(args.out_dir.as_deref(), "fractal")?),
+        None => Some(OutDir::new(args.out_dir.as_deref(), "fractal", FILES)?),
     };
     let names =
         ["fractal.npy", "fractal.png", "fractal-converged.npy", "fractal-converged.png", "fractal.npy.json"];

@@ -51,6 +51,9 @@ pub const DEFAULTS: Defaults = crate::args::Defaults::of(
     ],
 );
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["lyapunov.csv", "lyapunov.png", "lyapunov.svg"];
+
 pub fn run(args: &LyapunovArgs) -> Result<()> {
     let values = study::preset_values(
         args.system.system.as_deref(),
@@ -113,7 +116,7 @@ pub fn run(args: &LyapunovArgs) -> Result<()> {
         ],
     )?;
     // The outputs before the work: a path that cannot be written fails first.
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "lyapunov", FILES)?;
     let summary = args.common.summary.open()?;
     let model = values.build();
     let result = lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec)

@@ -56,6 +56,9 @@ pub const DEFAULTS: Defaults = crate::args::Defaults::of(
     ],
 );
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["poincare.csv", "poincare.png", "poincare.svg"];
+
 pub fn run(args: &PoincareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
@@ -157,7 +160,7 @@ pub fn run(args: &PoincareArgs) -> Result<()> {
     )?;
     let spec = PoincareSpec { energy, count, section, value, t_end };
     // The outputs before the work: a path that cannot be written fails first.
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "poincare", FILES)?;
     let summary = args.common.summary.open()?;
     let orbits = poincare(&*model, method, stepping, &spec)?;
 

@@ -280,6 +280,9 @@ impl Drop for Quiet {
     }
 }
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &["report.html"];
+
 pub fn run(args: &ReportArgs, run_line: RunLine) -> Result<()> {
     if args.gallery_list {
         for entry in GALLERY {
@@ -291,7 +294,7 @@ pub fn run(args: &ReportArgs, run_line: RunLine) -> Result<()> {
         return gallery(dir, run_line);
     }
     let start = Instant::now();
-    let mut out = OutDir::new(args.out_dir.as_deref(), "report")?;
+    let mut out = OutDir::new(args.out_dir.as_deref(), "report", FILES)?;
     let dir = out.path().to_path_buf();
     let _quiet = Quiet::on();
     let mut page = Page {
@@ -459,7 +462,7 @@ fn build(page: &mut Page) -> Result<()> {
         "Underdamped, critically damped and overdamped decay: exact lines, RK4 markers.",
         transients_data(&dir.join("transients.csv"))?,
     )?;
-    let peaks: Vec<Vec<String>> = r["resonance_peaks"]
+    let peaks: Vec<Vec<String>> = r["tables"]["peaks"]
         .as_array()
         .into_iter()
         .flatten()
@@ -645,7 +648,7 @@ fn build(page: &mut Page) -> Result<()> {
         ),
     );
     // Every 15° and the largest amplitude (all of them are in runs/period/period.csv).
-    let all: Vec<&Value> = p["rows"].as_array().into_iter().flatten().collect();
+    let all: Vec<&Value> = p["tables"]["period"].as_array().into_iter().flatten().collect();
     let period_rows: Vec<&Value> = all
         .iter()
         .enumerate()
@@ -938,15 +941,15 @@ fn work_precision_rows(s: &Value) -> Vec<(String, Option<u64>, f64, u64)> {
 /// Per method of a stability summary: its largest stable step, its note, and whether that
 /// step is a refusal (a limit of the method's definition) rather than a stability limit.
 fn stability_rows(s: &Value) -> Vec<(String, Option<f64>, String, bool)> {
-    s["largest_stable_dt"]
-        .as_object()
+    s["tables"]["stability"]
+        .as_array()
         .into_iter()
         .flatten()
-        .map(|(m, h)| {
-            let h = h.as_f64();
-            let limit = pendula::integrator::find(m).ok().and_then(pendula::analysis::accepted_step_limit);
+        .map(|row| {
+            let (m, h) = (row["method"].as_str().unwrap_or("").to_owned(), row["largest_stable_dt"].as_f64());
+            let limit = pendula::integrator::find(&m).ok().and_then(pendula::analysis::accepted_step_limit);
             let refused = matches!((h, limit), (Some(h), Some(l)) if h >= l / 1.01);
-            (m.clone(), h, s["notes"][m].as_str().unwrap_or("").to_owned(), refused)
+            (m, h, row["note"].as_str().unwrap_or("").to_owned(), refused)
         })
         .collect()
 }

@@ -60,6 +60,15 @@ fn tolerances(args: &WorkPrecisionArgs) -> Result<Vec<f64>> {
 /// What work-precision runs on without a system named (its methods and steps are its own).
 pub const DEFAULTS: Defaults = crate::args::Defaults::of(&pendula::study::defaults::WORK_PRECISION, &[]);
 
+/// The files it writes in its study directory (listed with the command in `cli::COMMANDS`).
+pub const FILES: &[&str] = &[
+    "work_precision.csv",
+    "work_precision_evals.png",
+    "work_precision_evals.svg",
+    "work_precision_time.png",
+    "work_precision_time.svg",
+];
+
 pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
     let system = args.accuracy.system.name(&DEFAULTS);
     let values = study::values(system, &args.common.set.items)?;
@@ -96,7 +105,7 @@ pub fn run(args: &WorkPrecisionArgs) -> Result<()> {
         runs,
         format!("the runs of {} methods to t = {} s", methods.len(), short(t_end)),
     )?;
-    let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision")?;
+    let mut out = OutDir::new(args.common.out_dir.as_deref(), "work-precision", FILES)?;
     let summary = args.common.summary.open()?;
     let reference = analysis::reference_state(&*model, values.initial_state(), t_end)
         .map_err(|e| study::reference_failed(e, t_end))?;

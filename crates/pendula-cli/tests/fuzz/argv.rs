@@ -11,7 +11,7 @@ use proptest::strategy::{BoxedStrategy, Union};
 
 use super::files::Env;
 use super::{claims, ordinary};
-use pendula_cli::cli::{Cli, Command};
+use pendula_cli::cli::{COMMANDS, Cli, Command};
 
 /// Texts a number may be given as: the edges of f64 and of the counts' ranges, and what
 /// Rust's parser reads silently as something else.
@@ -536,34 +536,16 @@ impl Mutation {
     }
 }
 
-/// Valid requests that cost milliseconds: mutated, they reach every command's later checks.
-const BASELINES: &[&str] = &[
-    "simulate --steps 100 --out t.csv",
-    "simulate pendulum --method dopri5 --t-end 1 --out t.npy --summary s.json",
-    "simulate --method tao-2 --binding 50 --steps 10 --every 0 --event flip --event zero:theta1",
-    "simulate oscillator --method dop853 --t-end 2 --output-dt 0.5 --rtol 1e-8 --atol 0 --h-max 1",
-    "simulate driven-pendulum --preset baker-gollub-chaotic --steps 10 --set q=4 --plot p.png",
-    "simulate chain --set links=3 --steps 5 --t-eval 0,0.5 --method dopri5",
-    "sweep --grid theta1=0:1:4 --steps 10 --out g.npy",
-    "sweep pendulum --grid theta=0:1:3 --grid l=1:2:2 --t-end 0.1 --record final,energy-error --shard 1/2",
-    "fractal --grid theta1=0:1:4 --grid theta2=0:1:4 --t-max 0.1 --out-dir fr",
-    "bifurcation --param drive_amplitude=1:1.5:3 --transient 0 --samples 2 --steps-per-period 4",
-    "compare oscillator --dt 0.1 --t-end 1 --methods rk4,verlet",
-    "convergence --t-end 0.5 --levels 2 --methods rk4",
-    "stability --t-end 0.5 --methods euler",
-    "work-precision --t-end 0.5 --methods rk4 --levels 2 --tol-levels 2",
-    "period --dt 0.01 --max-amplitude 10",
-    "oscillator-regimes --set k=2",
-    "animate --t-end 0.1 --fps 5 --size 160x160 --out a.gif",
-    "divergence --t-end 0.1 --dt 0.01",
-    "lyapunov --t-end 1 --transient 0 --renormalise 0.05 --dt 0.01",
-    "poincare --count 1 --t-end 10",
-    "plot t.csv --out p.png",
-    "merge s1.npy s2.npy --out m.npy",
-    "report --out-dir r",
-    "list systems",
-    "completions bash",
-];
+/// Valid requests that cost milliseconds, mutated to reach every command's later checks: each
+/// command's examples in the CLI's one list of commands (`cli::COMMANDS`), and each library
+/// study on its defaults (the harness stops every request before it runs).
+fn baselines() -> Vec<String> {
+    COMMANDS
+        .iter()
+        .flat_map(|c| c.examples.iter().map(|e| (*e).to_owned()))
+        .chain(pendula::study::STUDIES.iter().map(|s| s.name.to_owned()))
+        .collect()
+}
 
 /// The mutations of `base` (its flags' values replaced by typed ones, its subcommand's
 /// flags added, tokens moved).
@@ -648,7 +630,7 @@ fn command_lines(values: &Values) -> BoxedStrategy<Vec<String>> {
         })
         .boxed();
 
-    let bases: Vec<(Vec<String>, BoxedStrategy<Mutation>)> = BASELINES
+    let bases: Vec<(Vec<String>, BoxedStrategy<Mutation>)> = baselines()
         .iter()
         .map(|b| {
             let argv: Vec<String> = b.split_whitespace().map(str::to_owned).collect();

@@ -35,9 +35,26 @@ class StudyReport:
     tables: Mapping[str, Mapping[str, np.ndarray]]
     columns_units: Mapping[str, Mapping[str, str]]
     plots: tuple
+    #: The names of the tables short enough to print whole (``str`` prints them).
+    shown: tuple = ()
 
     def __str__(self) -> str:
-        return "\n".join(self.summary)
+        parts = ["\n".join(self.summary)]
+        for name in self.shown:
+            columns = self.tables[name]
+            units = self.columns_units[name]
+            header = [f"{c} ({units[c]})" if units[c] else c for c in columns]
+            # Numbers as the CSV writes them (shortest round trip; a missing one empty),
+            # right-aligned; text (a method, a note) left-aligned.
+            numeric = [isinstance(c, np.ndarray) for c in columns.values()]
+            cell = lambda v, n: ("" if np.isnan(v) else repr(float(v))) if n else str(v)  # noqa: E731
+            rows = [[cell(v, n) for v, n in zip(values, numeric)] for values in zip(*columns.values())]
+            widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(header)]
+            align = lambda t, w, n: t.rjust(w) if n else t.ljust(w)  # noqa: E731
+            lines = ["  ".join(align(h, w, n) for h, w, n in zip(header, widths, numeric)).rstrip()]
+            lines += ["  ".join(align(v, w, n) for v, w, n in zip(r, widths, numeric)).rstrip() for r in rows]
+            parts.append("\n".join(lines))
+        return "\n\n".join(parts)
 
     def plot(self, name: Optional[str] = None, ax=None):
         """Draws the plot ``name`` (the first when None) on ``ax`` (a new figure's when None);
@@ -54,7 +71,24 @@ class StudyReport:
             import matplotlib.pyplot as plt
 
             ax = plt.figure().gca()
-        styles = {"solid": "-", "dashed": "--", "points": "o"}
+        if p["bars"]:
+            # A bar chart: one bar a category, top to bottom, hatched where the value is a
+            # method's refusal rather than a measurement.
+            bars = p["bars"][::-1]
+            for i, b in enumerate(bars):
+                if b["value"] is not None:
+                    ax.barh(i, b["value"], fill=not b["refused"], hatch="//" if b["refused"] else None)
+                if b["note"]:
+                    ax.annotate(b["note"], (b["value"] or (p["limits"] or (1, 1))[0], i), xytext=(4, 0), textcoords="offset points", va="center")
+            ax.set_yticks(range(len(bars)), [b["label"] for b in bars])
+            a = p["x"]
+            ax.set_xlabel(a["label"] + (f" ({a['unit']})" if a["unit"] else ""))
+            ax.set_xscale("log" if a["log"] else "linear")
+            if p["limits"]:
+                ax.set_xlim(*p["limits"])
+            ax.set_title(p["title"])
+            return ax
+        styles = {"solid": "-", "dashed": "--", "points": "o", "line-markers": "o-"}
         for s in p["series"]:
             ax.plot(s["x"], s["y"], styles[s["style"]], label=s["label"])
         for axis, set_label, set_scale in (("x", ax.set_xlabel, ax.set_xscale), ("y", ax.set_ylabel, ax.set_yscale)):
@@ -78,13 +112,17 @@ def study(name: str, system: Any = None, *, progress: Any = None, **params: Any)
     (a :class:`pendula.System`, a catalogue name, or None for the study's default) with its
     parameters as keyword arguments; unknown names raise :class:`UnknownNameError` with the
     valid ones, values out of range :class:`InvalidValueError`."""
-    values = list(params.items())
+    # A list of methods may come as a sequence: the library reads them comma-separated.
+    values = [(k, ",".join(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()]
     settings: list = []
     if system is not None:
-        from . import System
+        from . import System, _defaults
 
         if isinstance(system, System):
-            settings = [(k, float(v)) for k, v in system.params.items()]
+            # What the System changed from the catalogue's defaults: a study that sets part of
+            # the state itself (period's amplitudes) refuses only what the user set.
+            defaults = _defaults(system.name)
+            settings = [(k, float(v)) for k, v in system.params.items() if v != defaults.get(k)]
             system = system.name
         values.insert(0, ("system", system))
     raw = _core.run_study(name, values, settings, progress)
@@ -97,6 +135,7 @@ def study(name: str, system: Any = None, *, progress: Any = None, **params: Any)
         tables=raw["tables"],
         columns_units=raw["columns_units"],
         plots=tuple(raw["plots"]),
+        shown=tuple(raw["shown"]),
     )
 
 
@@ -113,8 +152,12 @@ def _function(entry: Mapping[str, Any]) -> Callable[..., StudyReport]:
     parameters = []
     for p in entry["params"]:
         u = unit.get(p.get("unit", ""), p.get("unit", ""))
-        lines.append(f"    {p['name']}: {p['help']}{', ' + u if u else ''} [default: {p['default_text']}]")
-        kind = inspect.Parameter.POSITIONAL_OR_KEYWORD if p["kind"] == "system" else inspect.Parameter.KEYWORD_ONLY
+        if p["kind"] == "fixed-system":
+            lines.append(f"    {p['name']}: the {p['default']} system only (a pendula.System of it sets its parameters) [default: {p['default_text']}]")
+        else:
+            lines.append(f"    {p['name']}: {p['help']}{', ' + u if u else ''} [default: {p['default_text']}]")
+        positional = p["kind"] in ("system", "fixed-system")
+        kind = inspect.Parameter.POSITIONAL_OR_KEYWORD if positional else inspect.Parameter.KEYWORD_ONLY
         parameters.append(inspect.Parameter(p["name"], kind, default=None))
     parameters.append(inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None))
     lines += ["", "Returns a :class:`pendula.StudyReport`; ``pendula study`` and the lab run the same study."]

@@ -20,6 +20,7 @@ function buildForm() {
   const form = $('study-form');
   form.textContent = '';
   for (const p of s.params) {
+    if (p.kind === 'fixed-system') continue;
     const lbl = el('label');
     lbl.append(document.createTextNode(p.name.replace(/_/g, ' ') + ' '));
     let input;
@@ -89,6 +90,20 @@ export function onStudyResult(msg) {
     table.append(tr);
   }
   out.append(table);
+  // The tables short enough to show whole (a time series only goes to files).
+  for (const t of msg.tables.filter((x) => x.shown)) {
+    const rows = el('table', 'study-table');
+    const head = el('tr');
+    for (const c of t.columns) head.append(el('th', null, c.unit ? `${c.name} (${c.unit})` : c.name));
+    rows.append(head);
+    for (let i = 0; i < (t.columns[0] ? t.columns[0].values.length : 0); i++) {
+      const tr = el('tr');
+      // fmt shows a missing number (null) as a dash and text (a method, a note) as it is.
+      for (const c of t.columns) tr.append(el('td', null, fmt(c.values[i], 6)));
+      rows.append(tr);
+    }
+    out.append(rows);
+  }
   for (const p of msg.plots) {
     const img = el('img', 'study-plot');
     img.alt = p.title;

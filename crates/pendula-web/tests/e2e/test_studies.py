@@ -33,3 +33,25 @@ def test_a_study_runs_from_its_form_with_the_librarys_report(browser, server, sh
     assert any("invalid value -1 for `dt`" in e for e in page.evaluate("lab.errors")), page.evaluate("lab.errors")
     assert not page.js_errors, page.js_errors
     page.close()
+
+
+def test_a_short_table_is_shown_and_a_fixed_system_has_no_field(browser, server, shots):
+    page = open_lab(browser, server)
+    page.click("#tab-studies")
+    page.select_option("#study-name", "period")
+    # period runs the simple pendulum only: no system to choose.
+    assert page.query_selector("[data-param=system]") is None
+    page.fill("[data-param=max_amplitude]", "30")
+    page.click("#study-run")
+    page.wait_for_function("lab.study && lab.study.study === 'period'", timeout=15000)
+    report = pendula.period(max_amplitude=30)
+    rows = page.eval_on_selector_all(
+        "table.study-table tr", "rs => rs.map(r => [...r.children].map(c => c.textContent))"
+    )
+    assert rows[0] == ["amplitude_deg (deg)", "simulated (s)", "exact (s)", "small_angle (s)"]
+    assert [float(r[0]) for r in rows[1:]] == list(report.tables["period"]["amplitude_deg"])
+    exact = [float(r[2]) for r in rows[1:]]
+    assert all(abs(a / b - 1) < 1e-5 for a, b in zip(exact, report.tables["period"]["exact"]))
+    page.screenshot(path=str(shots / "studies-period.png"), full_page=True)
+    assert not page.js_errors, page.js_errors
+    page.close()

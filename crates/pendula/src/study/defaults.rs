@@ -215,26 +215,6 @@ pub const WORK_PRECISION: Defaults = Defaults {
     ],
 };
 
-/// The largest stable step of each method.
-pub const STABILITY: Defaults = Defaults {
-    study: "stability",
-    system: "pendulum",
-    method: None,
-    dt: None,
-    t_end: Some(20.0),
-    values: &[num("max_energy_error", 0.1)],
-};
-
-/// The pendulum's period against amplitude.
-pub const PERIOD: Defaults = Defaults {
-    study: "period",
-    system: "pendulum",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: None,
-    values: &[num("max_amplitude", 175.0)],
-};
-
 /// The separation of two nearby runs ([`mod@crate::analysis::divergence`]).
 pub const DIVERGENCE: Defaults = Defaults {
     study: "divergence",
@@ -326,9 +306,7 @@ pub static ALL: &[&Defaults] = &[
     &SIMULATE,
     &COMPARE,
     &CONVERGENCE,
-    &STABILITY,
     &WORK_PRECISION,
-    &PERIOD,
     &ANIMATE,
     &DIVERGENCE,
     &LYAPUNOV,

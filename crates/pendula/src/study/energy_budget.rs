@@ -101,9 +101,11 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             title: format!("{system}: energy change and work ({})", method.name),
             x: time.clone(),
             y: Axis { label: "energy".into(), unit: eu.into(), log: false },
+            bars: Vec::new(),
+            limits: None,
             series: vec![
-                Line { label: "E(t) - E(0)".into(), style: Style::Solid, points: points(&change) },
-                Line { label: "W(t)".into(), style: Style::Dashed, points: points(&work) },
+                Line::new("E(t) - E(0)", Style::Solid, points(&change)),
+                Line::new("W(t)", Style::Dashed, points(&work)),
             ],
         },
         Plot {
@@ -116,16 +118,19 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             ),
             x: time,
             y: Axis { label: "E - E(0) - W".into(), unit: eu.into(), log: false },
-            series: vec![Line { label: "balance".into(), style: Style::Solid, points: points(&error) }],
+            bars: Vec::new(),
+            limits: None,
+            series: vec![Line::new("balance", Style::Solid, points(&error))],
         },
     ];
     let table = Table {
         name: "energy-budget",
+        shown: false,
         columns: vec![
-            Column { name: "t", unit: tu, values: t },
-            Column { name: "energy", unit: eu, values: energy },
-            Column { name: "work", unit: eu, values: work },
-            Column { name: "balance", unit: eu, values: error },
+            Column::numbers("t", tu, t),
+            Column::numbers("energy", eu, energy),
+            Column::numbers("work", eu, work),
+            Column::numbers("balance", eu, error),
         ],
     };
     Ok(Report {
@@ -205,7 +210,7 @@ mod tests {
         assert!((work - exact_change).abs() < 1e-6 * exact_change.abs(), "W {work} vs {exact_change}");
         assert!(report.number("max_balance").unwrap() < 1e-8, "{:?}", report.number("max_balance"));
         let table = report.table("energy-budget").unwrap();
-        assert_eq!(table.column("t").unwrap().values.last(), Some(&t_end));
+        assert_eq!(table.column("t").unwrap().as_numbers().last(), Some(&t_end));
         assert!(report.summary[1].starts_with("The balance"), "{:?}", report.summary);
     }
 

@@ -18,7 +18,10 @@
 
 pub mod defaults;
 pub mod energy_budget;
+pub mod period;
+pub mod regimes;
 pub mod round_trip;
+pub mod stability;
 
 use std::fmt;
 
@@ -62,7 +65,8 @@ pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error>
 }
 
 /// Every study, in the order front ends list them.
-pub const STUDIES: &[&Study] = &[&energy_budget::STUDY, &round_trip::STUDY];
+pub const STUDIES: &[&Study] =
+    &[&stability::STUDY, &period::STUDY, &regimes::STUDY, &energy_budget::STUDY, &round_trip::STUDY];
 
 /// The study named `name`.
 ///
@@ -115,12 +119,32 @@ pub struct Param {
 impl Param {
     /// The system run, `default` with the settings `preset` over its defaults.
     pub const fn system(default: &'static str, preset: &'static [(&'static str, f64)]) -> Param {
-        Param { name: "system", help: "The system to run", kind: Kind::System { default, preset } }
+        Param {
+            name: "system",
+            help: "The system to run",
+            kind: Kind::System { default, preset, fixed: false },
+        }
+    }
+
+    /// The one system a study runs (period: the simple pendulum); its parameters are still
+    /// the user's to set.
+    pub const fn fixed_system(default: &'static str) -> Param {
+        Param {
+            name: "system",
+            help: "The system it runs",
+            kind: Kind::System { default, preset: &[], fixed: true },
+        }
     }
 
     /// The integration method.
     pub const fn method(default: &'static str) -> Param {
         Param { name: "method", help: "The integration method", kind: Kind::Method { default } }
+    }
+
+    /// The methods compared, comma-separated; every method that applies to the system when
+    /// none is named.
+    pub const fn methods() -> Param {
+        Param { name: "methods", help: "The methods, comma-separated", kind: Kind::Methods }
     }
 
     /// A time `name` (s, or the system's time unit), > 0.
@@ -142,8 +166,8 @@ pub fn run_inputs(values: &Values, method: &Method, dt: f64, t_end: f64) -> Vec<
 /// What a study module needs of this one, in one import.
 pub mod prelude {
     pub use super::{
-        Args, Axis, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report, Study,
-        Style, Table, Unit, run_inputs, sig, unit_suffix,
+        Args, Axis, Bar, Budget, Column, Domain, Input, Inputs, Kind, Line, Number, Param, Plot, Report,
+        Study, Style, Table, Unit, run_inputs, sig, unit_suffix,
     };
 }
 
@@ -158,12 +182,17 @@ pub enum Kind {
         /// Settings applied before the user's own when the default system runs (a damping
         /// that makes a budget worth showing, say); shown in the help.
         preset: &'static [(&'static str, f64)],
+        /// Whether the study runs only its default system (front ends then offer no choice).
+        fixed: bool,
     },
     /// A method of [`integrator::METHODS`].
     Method {
         /// The method run when none is named.
         default: &'static str,
     },
+    /// Methods of [`integrator::METHODS`], comma-separated, each applying to the system and
+    /// named once; every method that applies ([`crate::model::applicable`]) when none is named.
+    Methods,
     /// A real number in a unit, within a domain.
     Real {
         /// The value when none is given.
@@ -233,12 +262,13 @@ impl Param {
     /// damping=0.05`); front ends append it as `[default: …]` so that it is written once.
     pub fn default_text(&self) -> String {
         match self.kind {
-            Kind::System { default, preset: [] } => default.to_owned(),
-            Kind::System { default, preset } => {
+            Kind::System { default, preset: [], .. } => default.to_owned(),
+            Kind::System { default, preset, .. } => {
                 let set: Vec<String> = preset.iter().map(|(n, v)| format!("{n}={}", Short(*v))).collect();
                 format!("{default} with {}", set.join(", "))
             }
             Kind::Method { default } => default.to_owned(),
+            Kind::Methods => "every method that applies".to_owned(),
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
         }
@@ -445,6 +475,34 @@ impl<'a> Args<'a> {
         integrator::find(self.text(name)?.unwrap_or(default))
     }
 
+    /// The methods parameter `name` for `model`: those named, or every one that applies.
+    ///
+    /// # Errors
+    /// Those of [`crate::model::named_methods`], with the value named `name`.
+    ///
+    /// # Panics
+    /// When `name` is not a methods parameter of the study.
+    pub fn methods(
+        &self,
+        name: &str,
+        model: &dyn crate::model::DynModel,
+    ) -> Result<Vec<&'static Method>, Error> {
+        let Kind::Methods = self.param(name).kind else {
+            panic!("{name} is not a methods parameter of {}", self.study.name)
+        };
+        match self.text(name)? {
+            Some(text) => crate::model::named_methods(model, text.split(',')).map_err(|e| match e {
+                Error::InvalidInput { allowed, .. } => Error::InvalidInput {
+                    name: name.to_owned(),
+                    value: crate::error::clip(text, 80),
+                    allowed,
+                },
+                e => e,
+            }),
+            None => Ok(crate::model::applicable(model, integrator::METHODS, None)),
+        }
+    }
+
     /// One run's inputs, as the parameters `system`, `method`, `dt` and `t_end` give them.
     ///
     /// # Errors
@@ -463,10 +521,17 @@ impl<'a> Args<'a> {
     /// # Panics
     /// When `name` is not a system parameter of the study.
     pub fn system(&self, name: &str) -> Result<Values, Error> {
-        let Kind::System { default, preset } = self.param(name).kind else {
+        let Kind::System { default, preset, fixed } = self.param(name).kind else {
             panic!("{name} is not a system parameter of {}", self.study.name)
         };
         let given = self.text(name)?;
+        if let Some(other) = given.filter(|g| fixed && g != &default) {
+            return Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: crate::error::clip(other, 40),
+                allowed: format!("{default} only: {} runs no other system", self.study.name),
+            });
+        }
         let info = crate::model::find(given.unwrap_or(default))?;
         let mut settings: Vec<(String, f64)> = Vec::new();
         if given.is_none_or(|g| g == default) {
@@ -529,6 +594,10 @@ pub struct Number {
 pub struct Table {
     /// Its name, a file stem (`energy-budget` → `energy-budget.csv`).
     pub name: &'static str,
+    /// Whether it is short enough to show whole: front ends that print (the CLI, Python's
+    /// `str`) print it under the summary, and the CLI's JSON summary carries its rows; a long
+    /// series (a time series) only goes to its file.
+    pub shown: bool,
     /// Its columns, in order.
     pub columns: Vec<Column>,
 }
@@ -536,7 +605,7 @@ pub struct Table {
 impl Table {
     /// The number of rows.
     pub fn rows(&self) -> usize {
-        self.columns.first().map_or(0, |c| c.values.len())
+        self.columns.first().map_or(0, Column::len)
     }
 
     /// The column named `name`.
@@ -550,10 +619,55 @@ impl Table {
 pub struct Column {
     /// Its name, a CSV header and a key (`balance`).
     pub name: &'static str,
-    /// Its unit (`J`, `s`; empty for a pure number).
+    /// Its unit (`J`, `s`; empty for a pure number or text).
     pub unit: &'static str,
     /// Its values.
-    pub values: Vec<f64>,
+    pub values: Cells,
+}
+
+impl Column {
+    /// A column of numbers (NaN for a missing value).
+    pub fn numbers(name: &'static str, unit: &'static str, values: Vec<f64>) -> Column {
+        Column { name, unit, values: Cells::Numbers(values) }
+    }
+
+    /// A column of text (names, notes).
+    pub fn text(name: &'static str, values: Vec<String>) -> Column {
+        Column { name, unit: "", values: Cells::Text(values) }
+    }
+
+    /// Its numbers.
+    ///
+    /// # Panics
+    /// For a text column: a programming error in a study or its test.
+    pub fn as_numbers(&self) -> &[f64] {
+        match &self.values {
+            Cells::Numbers(v) => v,
+            Cells::Text(_) => panic!("{} is a text column", self.name),
+        }
+    }
+
+    /// The number of values.
+    pub fn len(&self) -> usize {
+        match &self.values {
+            Cells::Numbers(v) => v.len(),
+            Cells::Text(v) => v.len(),
+        }
+    }
+
+    /// Whether it has no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The values of a [`Column`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cells {
+    /// Numbers (NaN for a missing value: an empty CSV cell, `null` in JSON, `None` in Python).
+    Numbers(Vec<f64>),
+    /// Text.
+    Text(Vec<String>),
 }
 
 /// A plot: lines or points over two axes, as plain data (pendula-viz draws it).
@@ -569,6 +683,32 @@ pub struct Plot {
     pub y: Axis,
     /// The lines and point sets, drawn in order.
     pub series: Vec<Line>,
+    /// Its bars, for a bar chart (then `series` is empty): one a category, from top to
+    /// bottom, their length on the axis [`Plot::x`].
+    pub bars: Vec<Bar>,
+    /// The range of the value axis shown (a search range, say); `None` fits the values.
+    pub limits: Option<(f64, f64)>,
+}
+
+impl Plot {
+    /// A plot of lines and point sets (no bars, the value range fitted).
+    pub fn lines(name: &'static str, title: impl Into<String>, x: Axis, y: Axis, series: Vec<Line>) -> Plot {
+        Plot { name, title: title.into(), x, y, series, bars: Vec::new(), limits: None }
+    }
+}
+
+/// One bar of a bar chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bar {
+    /// Its category (a method's name takes the method's colour).
+    pub label: String,
+    /// Its length; `None` draws none, only the note.
+    pub value: Option<f64>,
+    /// Text beside it (or in its place); `None` prints the value.
+    pub note: Option<String>,
+    /// The value is a limit of the method's definition, not a measurement: drawn empty and
+    /// hatched.
+    pub refused: bool,
 }
 
 /// An axis of a [`Plot`].
@@ -594,6 +734,13 @@ pub struct Line {
     pub points: Vec<[f64; 2]>,
 }
 
+impl Line {
+    /// A series `label` drawn as `style` through `points`.
+    pub fn new(label: impl Into<String>, style: Style, points: Vec<[f64; 2]>) -> Line {
+        Line { label: label.into(), style, points }
+    }
+}
+
 /// How a [`Line`] is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Style {
@@ -603,6 +750,8 @@ pub enum Style {
     Dashed,
     /// Markers only.
     Points,
+    /// A line with a marker at each point (few points, each a measurement).
+    LineMarkers,
 }
 
 #[cfg(test)]
@@ -664,7 +813,7 @@ mod tests {
             assert_eq!(report.study, study.name);
             assert_eq!(report.inputs.len(), study.params.len(), "{}", study.name);
             for t in &report.tables {
-                assert!(t.columns.iter().all(|c| c.values.len() == t.rows()), "{}", t.name);
+                assert!(t.columns.iter().all(|c| c.len() == t.rows()), "{}", t.name);
                 assert!(t.rows() > 0, "{}", t.name);
             }
             assert!(!report.summary.is_empty());

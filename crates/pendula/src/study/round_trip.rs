@@ -87,7 +87,9 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         ),
         x: Axis { label: "t".into(), unit: tu.into(), log: false },
         y: Axis { label: label.into(), unit: state_units(info), log: true },
-        series: vec![Line { label: "forward vs backward run".into(), style: Style::Solid, points: positive }],
+        bars: Vec::new(),
+        limits: None,
+        series: vec![Line::new("forward vs backward run", Style::Solid, positive)],
     };
     Ok(Report {
         study: STUDY.name,
@@ -109,10 +111,8 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         ],
         tables: vec![Table {
             name: "round-trip",
-            columns: vec![
-                Column { name: "t", unit: tu, values: t },
-                Column { name: "distance", unit: "", values: distance },
-            ],
+            shown: false,
+            columns: vec![Column::numbers("t", tu, t), Column::numbers("distance", "", distance)],
         }],
         plots: vec![plot],
     })
@@ -176,12 +176,12 @@ mod tests {
     fn the_table_pairs_the_two_runs_at_the_same_times() {
         let r = trip("verlet");
         let table = r.table("round-trip").unwrap();
-        let t = &table.column("t").unwrap().values;
+        let t = table.column("t").unwrap().as_numbers();
         assert!(t.len() >= 1000, "{} rows", t.len());
         assert_eq!(t[0], 0.0);
         assert!((t[t.len() - 1] - 20.0).abs() < 1e-9);
         // At t = t_end the two runs share the turning state.
-        assert_eq!(table.column("distance").unwrap().values.last(), Some(&0.0));
+        assert_eq!(table.column("distance").unwrap().as_numbers().last(), Some(&0.0));
         assert_eq!(r.plots[0].y.unit, "rad and rad/s combined");
     }
 }
