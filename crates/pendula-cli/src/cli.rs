@@ -69,7 +69,7 @@ macro_rules! commands {
     };
 }
 
-use crate::commands::{animate, compare, convergence, divergence, fractal, lyapunov, poincare};
+use crate::commands::{animate, compare, convergence, fractal, lyapunov, poincare};
 use crate::commands::{bifurcation, merge, plot, report, resume, serve, sweep, work_precision};
 
 commands! {
@@ -113,12 +113,6 @@ commands! {
     "" Study(crate::studies::StudyCommand) => crate::studies::StudyCommand::run,
     files: &[],
     examples: &[];
-    /// Distance between two trajectories started close together, and its growth rate.
-    #[command(mut_arg("set", |a| a.help(SET_DIVERGENCE)))]
-    #[command(mut_args(|a| divergence::DEFAULTS.document(a)))]
-    "divergence" Divergence(Box<divergence::DivergenceArgs>) => divergence::run,
-    files: divergence::FILES,
-    examples: &["divergence --t-end 0.1 --dt 0.01"];
     /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
     /// plot of the running estimate and an uncertainty.
     #[command(mut_arg("set", |a| a.help(SET_LYAPUNOV)))]
@@ -240,8 +234,6 @@ const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the 
 (the oscillator's damping, kg/s) or `--set x=0.2` (m).";
 const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
 `--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_DIVERGENCE: &str = "Set a parameter or initial-state variable of the system, e.g. `--set \
-theta1=120deg --set m2=2` for the double pendulum (bare angles are radians).";
 const SET_LYAPUNOV: &str = "Set a parameter or initial-state variable, over the preset if one is given: \
 e.g. `--set theta1=120deg` for the double pendulum, `--set q=4` for a driven-pendulum preset.";
 const SET_POINCARE: &str = "Set a parameter of the system, e.g. `--set m2=2` (kg) for the double \

@@ -46,6 +46,7 @@ pub fn command(study: &'static Study) -> clap::Command {
             Kind::System { .. } => Arg::new(p.name).value_name("SYSTEM"),
             Kind::Method { .. } => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Methods => Arg::new(p.name).long(p.name).value_name("LIST"),
+            Kind::Variable => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Real { .. } | Kind::Count { .. } => Arg::new(p.name)
                 .long(p.name.replace('_', "-"))
                 .value_name(p.name.to_uppercase())
@@ -165,7 +166,9 @@ impl StudyCommand {
         for p in self.study.params {
             let Ok(Some(text)) = self.matches.try_get_one::<String>(p.name) else { continue };
             let value = match p.kind {
-                Kind::System { .. } | Kind::Method { .. } | Kind::Methods => Input::Name(text.clone()),
+                Kind::System { .. } | Kind::Method { .. } | Kind::Methods | Kind::Variable => {
+                    Input::Name(text.clone())
+                }
                 Kind::Real { .. } | Kind::Count { .. } => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }

@@ -674,7 +674,7 @@ fn set_help_examples_belong_to_the_command() {
         ("energy-budget", &[("--set m1=2", "double")]),
         ("round-trip", &[("--set m=2", "pendulum")]),
         ("oscillator-regimes", &[("--set m=2", "oscillator")]),
-        ("divergence", &[("--set theta1=120deg --set m2=2", "double")]),
+        ("divergence", &[("--set m1=2", "double")]),
         ("lyapunov", &[("--set theta1=120deg", "double"), ("--set q=4", "driven-pendulum")]),
         ("poincare", &[("--set m2=2", "double")]),
         (

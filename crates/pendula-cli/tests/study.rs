@@ -470,8 +470,7 @@ fn report_is_one_self_contained_page() {
         format!("{:.3} ± {:.3}", s["lambda_max"].as_f64().unwrap(), s["uncertainty"].as_f64().unwrap())
     };
     let rate = |s: &serde_json::Value| format!("{:.3}", s["growth_rate"].as_f64().unwrap());
-    let window =
-        divergence["fit_window"][1].as_f64().unwrap() - divergence["fit_window"][0].as_f64().unwrap();
+    let window = divergence["fit_end"].as_f64().unwrap() - divergence["fit_start"].as_f64().unwrap();
     // Finite-time rates over consecutive windows of that length, from the running average.
     let csv =
         std::fs::read_to_string(runs.join(slug("lyapunov --spectrum --t-end 500")).join("lyapunov.csv"))

@@ -16,7 +16,8 @@
 //! every state and the method's own dense coefficients where it has them) and `ensemble` (the
 //! library's `ensemble_path`, lanes on all cores); `crates/pendula-py/src/study.rs` wraps the
 //! library's analyses (`pendula::analysis`: Lyapunov exponents, Poincaré sections, the flip
-//! fractal, bifurcation and convergence studies, work–precision, divergence) and
+//! fractal, bifurcation and convergence studies, work–precision; the registry's studies, the
+//! divergence among them, through `crates/pendula-py/src/studies.rs`) and
 //! `crates/pendula-py/src/animate.rs` pendula-viz's GIF animation. Each long computation runs on a
 //! worker thread with the GIL released while the calling thread checks Python's signals (and
 //! updates a progress bar) every 20 ms (by default the bar shows itself only where a terminal or a

@@ -1,6 +1,6 @@
-//! The studies (`pendula.lyapunov`, `poincare`, `fractal`, `bifurcation`, `convergence`,
-//! `work_precision`, `divergence`): the library's analyses with the library's defaults, their
-//! results as plain dicts of numbers and arrays for `pendula.study` to wrap.
+//! The studies not yet on the registry (`pendula.lyapunov`, `poincare`, `fractal`,
+//! `bifurcation`, `convergence`, `work_precision`): the library's analyses with the library's
+//! defaults, their results as plain dicts of numbers and arrays for `pendula.study` to wrap.
 //!
 //! The arguments arrive with the defaults filled in by Python (from the library's
 //! `study::defaults`); what the library does not yet check itself is checked here, naming
@@ -13,6 +13,7 @@ use std::sync::atomic::Ordering;
 
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
+use pendula::Error;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
 use pendula::analysis::lyapunov::Mismatch;
 use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
@@ -24,7 +25,6 @@ use pendula::error::Short;
 use pendula::integrator::{self, METHODS, Method, Scheme};
 use pendula::model::DynModel;
 use pendula::system::{AsSystem, Model, double::DoublePendulum};
-use pendula::{End, Error, RunSpec};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -761,82 +761,6 @@ pub(crate) fn work_precision<'py>(
     accuracy_result(py, t_end, &reference, list)
 }
 
-/// The divergence of two runs `delta` apart in state variable `variable`, as `pendula
-/// divergence`: distances at about 2000 samples, and the exponential rate fitted before
-/// they exceed `saturation`. Returns `t`, `distance`, `growth_rate` (1/s or None),
-/// `fit_window` ((t₀, t₁) or None), `variable`.
-#[pyfunction]
-#[pyo3(signature = (system, method, dt, t_end, delta, variable, saturation, progress=None))]
-#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
-pub(crate) fn divergence<'py>(
-    py: Python<'py>,
-    system: &CoreSystem,
-    method: &str,
-    dt: f64,
-    t_end: f64,
-    delta: f64,
-    variable: Option<&str>,
-    saturation: f64,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let info = system.values.info();
-    if !delta.is_finite() || delta == 0.0 {
-        return Err(invalid(
-            py,
-            "delta",
-            Short(delta),
-            "a finite separation, not 0 (the two runs must start apart)",
-        ));
-    }
-    if !(saturation.is_finite() && saturation > delta.abs()) {
-        return Err(invalid(
-            py,
-            "saturation",
-            Short(saturation),
-            &format!("finite and larger than |delta| = {}", Short(delta.abs())),
-        ));
-    }
-    let index = match variable {
-        None => 0,
-        Some(name) => info.state.iter().position(|q| q.name == name).ok_or_else(|| {
-            to_py(py, &Error::unknown_name(info.name, name, info.state.iter().map(|q| q.name)))
-        })?,
-    };
-    let start = system.values.initial_state()[index];
-    if !analysis::divergence::survives_rounding(start, delta) {
-        return Err(invalid(
-            py,
-            "delta",
-            Short(delta),
-            &format!(
-                "added to {} = {} it is lost in rounding; use a larger delta or a smaller start",
-                info.state[index].name,
-                Short(start)
-            ),
-        ));
-    }
-    let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
-    let spec = RunSpec { t0: 0.0, h: dt, end: End::Time(t_end) };
-    let names = [("h", "dt")];
-    let schedule = spec.schedule().map_err(|e| renamed(py, e, &names))?;
-    let every = analysis::divergence::sample_every(schedule.steps);
-    let model = &*system.model;
-    let y0 = system.values.initial_state();
-    let d = interruptible(py, false, progress.as_ref(), |_| {
-        analysis::divergence(model, method, y0, index, delta, &spec, every)
-    })?
-    .map_err(|e| renamed(py, e, &names))?;
-    let fit = analysis::growth_rate(&d, saturation);
-    let out = PyDict::new(py);
-    out.set_item("method", method.name)?;
-    out.set_item("variable", info.state[index].name)?;
-    out.set_item("t", d.t.into_pyarray(py))?;
-    out.set_item("distance", d.distance.into_pyarray(py))?;
-    out.set_item("growth_rate", fit.map(|f| f.rate))?;
-    out.set_item("fit_window", fit.map(|f| (f.t_start, f.t_end)))?;
-    Ok(out)
-}
-
 /// The tolerances of a work-precision study: `levels` from `loosest` to `tightest`,
 /// geometric, the ends exact.
 #[pyfunction]
@@ -852,7 +776,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(convergence, m)?)?;
     m.add_function(wrap_pyfunction!(work_precision, m)?)?;
-    m.add_function(wrap_pyfunction!(divergence, m)?)?;
     m.add_function(wrap_pyfunction!(tolerance_ladder, m)?)?;
     Ok(())
 }

@@ -16,7 +16,10 @@ from pendula import InvalidValueError, UnknownNameError
 
 def test_every_registered_study_is_a_function_with_the_library_defaults_in_its_doc():
     for entry in pendula._core.studies():
-        f = getattr(pendula, entry["name"].replace("-", "_"))
+        # The generated function (a hand-written one, such as divergence's, keeps the
+        # package's name; its keyword defaults are checked against the registry below).
+        assert hasattr(pendula, entry["name"].replace("-", "_"))
+        f = pendula.studies.FUNCTIONS[entry["name"].replace("-", "_")]
         for p in entry["params"]:
             assert f"{p['name']}:" in f.__doc__ and f"[default: {p['default_text']}]" in f.__doc__
         assert entry["name"].replace("-", "_") in pendula.__all__
@@ -80,6 +83,14 @@ def test_a_report_plots_with_matplotlib():
     assert ax.get_xlabel() == "t (s)"
     with pytest.raises(UnknownNameError):
         r.plot("nope")
+    # A bar chart: one bar a method, the refused one hollow and hatched, its note beside it.
+    s = pendula.stability("pendulum", methods=["rk4", "tao-2"], t_end=2.0)
+    ax = s.plot()
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["tao-2", "rk4"]
+    hatched = [p for p in ax.patches if p.get_hatch()]
+    assert len(hatched) == 1 and not hatched[0].get_fill()
+    assert any("refused above" in t.get_text() for t in ax.texts)
+    assert ax.get_xscale() == "log" and ax.get_xlim() == (1e-5, 2.0)
 
 
 def test_every_study_signature_takes_its_defaults_from_the_library():
@@ -96,7 +107,6 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
         ("poincare", "poincare"),
         ("fractal", "fractal"),
         ("bifurcation", "bifurcation"),
-        ("divergence", "divergence"),
         ("convergence", "convergence"),
         ("work_precision", "work-precision"),
         ("sweep", "sweep"),
@@ -105,6 +115,12 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
             if p.name in library[study] and library[study][p.name] is not None and p.name not in ("section", "param") and p.default is not p.empty and p.default is not None:
                 assert p.default == library[study][p.name], (name, p.name)
                 checked += 1
+    # divergence is a registry study: its hand-written function takes the registry's defaults.
+    registry = {p["name"]: p["default"] for e in _core.studies() if e["name"] == "divergence" for p in e["params"]}
+    for p in inspect.signature(pendula.divergence).parameters.values():
+        if p.default is not p.empty and p.default is not None and p.name != "progress":
+            assert p.default == registry[p.name], p.name
+            checked += 1
     assert checked >= 25, checked
     assert pendula.poincare.__kwdefaults__["section"] + "=0" == library["poincare"]["section"]
     # The fractal's grid and the bifurcation's axis on defaults are the library's texts.

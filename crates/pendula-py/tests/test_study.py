@@ -176,7 +176,7 @@ def test_divergence_equals_the_cli_and_a_linear_separation_decays_at_the_damping
     s = summary(tmp_path / "s.json")
     r = pendula.divergence()
     assert r.growth_rate == s["growth_rate"]
-    assert list(r.fit_window) == s["fit_window"]
+    assert list(r.fit_window) == [s["fit_start"], s["fit_end"]]
     assert (r.variable, r.delta, r.saturation, r.t_end) == (s["variable"], s["delta"], s["saturation"], s["t_end"])
     _, rows = read_csv(tmp_path / "o" / "divergence.csv")
     np.testing.assert_array_equal(floats(rows), np.column_stack([r.t, r.distance]))

@@ -41,6 +41,7 @@ pub fn list() -> Value {
                         Kind::System { .. } => ("system", ""),
                         Kind::Method { .. } => ("method", ""),
                         Kind::Methods => ("methods", ""),
+                        Kind::Variable => ("variable", ""),
                         Kind::Real { unit: Unit::Time, .. } => ("real", "time"),
                         Kind::Real { unit: Unit::Fixed(u), .. } => ("real", u),
                         Kind::Real { unit: Unit::None, .. } => ("real", ""),

@@ -18,7 +18,6 @@ pub mod animate;
 pub mod bifurcation;
 pub mod compare;
 pub mod convergence;
-pub mod divergence;
 pub mod fractal;
 pub mod lyapunov;
 pub mod merge;

@@ -689,7 +689,8 @@ fn build(page: &mut Page) -> Result<()> {
             short(f(&d["growth_rate"]))
         ),
     );
-    let window = d["fit_window"].as_array().map(|w| w.iter().map(cell).collect::<Vec<_>>().join(" … "));
+    let window =
+        d["fit_start"].is_number().then(|| format!("{} … {}", cell(&d["fit_start"]), cell(&d["fit_end"])));
     page.figure(
         &Shown { command: "divergence", file: "divergence.png" },
         "Distance between two nearby double pendulums, log scale, with the fitted exponential.",
@@ -991,7 +992,7 @@ fn growth_rates(page: &mut Page, divergence_figure: usize) -> Result<()> {
     let s = page.run(short_run)?.context("summary")?;
     let d = page.run(diverge)?.context("summary")?;
     let b = page.run(lab)?.context("summary")?;
-    let window = |v: &Value| (f(&v["fit_window"][0]), f(&v["fit_window"][1]));
+    let window = |v: &Value| (f(&v["fit_start"]), f(&v["fit_end"]));
     let (d0, d1) = window(&d);
     let (b0, b1) = window(&b);
     // The long run's own finite-time rates over windows as long as the divergence fit's.

@@ -119,16 +119,6 @@ def work_precision(
     t_end: Optional[float] = None,
     progress: Optional[Callable[[int], None]] = None,
 ) -> dict[str, Any]: ...
-def divergence(
-    system: CoreSystem,
-    method: str,
-    dt: float,
-    t_end: float,
-    delta: float,
-    variable: Optional[str],
-    saturation: float,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
 def tolerance_ladder(loosest: float, tightest: float, levels: int) -> list[float]: ...
 
 # `Solution.animate()` (`crates/pendula-py/src/animate.rs`).

@@ -23,6 +23,7 @@ Units are SI: times in s, rates in 1/s, energies in J, angles in rad.
 
 from __future__ import annotations
 
+import math
 import operator
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Optional, Sequence, Tuple
@@ -36,6 +37,9 @@ from .errors import InvalidValueError, PendulaError, UnknownNameError
 #: Every study's defaults, declared once in the library (``pendula::study::defaults``): the
 #: signatures below take theirs from here, so that each equals its CLI flag's.
 _DEFAULTS = _core.defaults()
+#: The defaults of the studies on the library's registry (pendula::study::STUDIES), by study
+#: and parameter; a hand-written function over one of them takes its defaults from here.
+_REGISTRY = {e["name"]: {p["name"]: p["default"] for p in e["params"]} for e in _core.studies()}
 #: The flip fractal's default grid, the library's text ("theta1=-pi:pi:512 and …") read by
 #: the one value parser: {axis name: (lo, hi, n)}.
 _FRACTAL_GRID = {
@@ -933,49 +937,58 @@ class DivergenceResult(_Pickled):
 
 
 def divergence(
-    system: "System | str" = _DEFAULTS["divergence"]["system"],
+    system: "System | str" = _REGISTRY["divergence"]["system"],
     *,
-    method: str = _DEFAULTS["divergence"]["method"],
-    dt: float = _DEFAULTS["divergence"]["dt"],
-    t_end: float = _DEFAULTS["divergence"]["t_end"],
-    delta: float = _DEFAULTS["divergence"]["delta"],
+    method: str = _REGISTRY["divergence"]["method"],
+    dt: float = _REGISTRY["divergence"]["dt"],
+    t_end: float = _REGISTRY["divergence"]["t_end"],
+    delta: float = _REGISTRY["divergence"]["delta"],
     variable: Optional[str] = None,
-    saturation: float = _DEFAULTS["divergence"]["saturation"],
+    saturation: float = _REGISTRY["divergence"]["saturation"],
+    fit_from: float = _REGISTRY["divergence"]["fit_from"],
     progress: Any = None,
 ) -> DivergenceResult:
-    """The divergence of nearby trajectories, as ``pendula divergence``: ``system`` from its
-    initial state and from the same with ``delta`` added to ``variable`` (default: the first
-    state variable), both by ``method`` at steps ``dt`` (s) to ``t_end`` (s); the distance
-    at about 2000 samples and the exponential growth rate (1/s) fitted to ln(distance)
-    before it first exceeds ``saturation`` — a finite-time estimate of the largest Lyapunov
-    exponent.
+    """The divergence of nearby trajectories, the library's ``divergence`` study (as
+    ``pendula divergence``): ``system`` from its initial state and from the same with
+    ``delta`` added to ``variable`` (default: the first state variable), both by ``method``
+    at steps ``dt`` (s) to ``t_end`` (s); the distance at about 2000 samples and the
+    exponential growth rate (1/s) fitted to ln(distance) above ``fit_from`` and before it
+    first exceeds ``saturation`` — a finite-time estimate of the largest Lyapunov exponent.
+    :func:`pendula.study` ``("divergence", ...)`` returns the same as a :class:`StudyReport`.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    args = (
-        system._core,
-        str(method),
-        _float("dt", dt),
-        _float("t_end", t_end),
-        _float("delta", delta),
-        None if variable is None else str(variable),
-        _float("saturation", saturation),
-    )
-    raw = timed(progress, f"divergence {system.name}", lambda tick: _core.divergence(*args, tick))
-    window = raw["fit_window"]
+    values = [
+        ("system", system.name),
+        ("method", str(method)),
+        ("dt", _float("dt", dt)),
+        ("t_end", _float("t_end", t_end)),
+        ("delta", _float("delta", delta)),
+        ("saturation", _float("saturation", saturation)),
+        ("fit_from", _float("fit_from", fit_from)),
+    ]
+    if variable is not None:
+        values.append(("variable", str(variable)))
+    from . import _defaults
+
+    defaults = _defaults(system.name)
+    settings = [(k, float(v)) for k, v in system.params.items() if v != defaults.get(k)]
+    raw = timed(progress, f"divergence {system.name}", lambda tick: _core.run_study("divergence", values, settings, tick))
+    n, table = raw["numbers"], raw["tables"]["divergence"]
+    fitted = not math.isnan(n["growth_rate"])
     return DivergenceResult(
         system=system,
-        method=raw["method"],
+        method=raw["inputs"]["method"],
         dt=float(dt),
         t_end=float(t_end),
         delta=float(delta),
-        variable=raw["variable"],
+        variable=raw["inputs"]["variable"],
         saturation=float(saturation),
-        t=raw["t"],
-        distance=raw["distance"],
-        growth_rate=raw["growth_rate"],
-        fit_window=None if window is None else tuple(window),
+        t=table["t"],
+        distance=table["distance"],
+        growth_rate=n["growth_rate"] if fitted else None,
+        fit_window=(n["fit_start"], n["fit_end"]) if fitted else None,
     )

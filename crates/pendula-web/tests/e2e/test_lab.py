@@ -117,7 +117,7 @@ def test_butterfly_mode_measures_the_growth_of_the_separation(lab, shots, tmp_pa
                           "--out-dir", str(tmp_path), "--summary", "-"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     summary = json.loads(run.stdout)
-    assert summary["fit_window"] == [g["t_start"], g["t_end"]], (summary, g)
+    assert [summary["fit_start"], summary["fit_end"]] == [g["t_start"], g["t_end"]], (summary, g)
     # The CLI runs the reference integrator, the lab its fast path: their rounding differs by
     # about 1e-16, which the chaos amplifies as it amplifies δ = 1e-9.
     assert abs(summary["growth_rate"] - rate) <= 1e-6 * abs(rate), (summary["growth_rate"], rate)

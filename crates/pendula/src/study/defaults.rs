@@ -215,20 +215,6 @@ pub const WORK_PRECISION: Defaults = Defaults {
     ],
 };
 
-/// The separation of two nearby runs ([`mod@crate::analysis::divergence`]).
-pub const DIVERGENCE: Defaults = Defaults {
-    study: "divergence",
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: Some(30.0),
-    values: &[
-        num("delta", 1e-9),
-        num("saturation", 1e-2),
-        Default { name: "fit_from", value: Value::Number(0.0), why: "the whole run before saturation" },
-    ],
-};
-
 /// The largest Lyapunov exponent or the spectrum ([`mod@crate::analysis::lyapunov`]).
 pub const LYAPUNOV: Defaults = Defaults {
     study: "lyapunov",
@@ -308,7 +294,6 @@ pub static ALL: &[&Defaults] = &[
     &CONVERGENCE,
     &WORK_PRECISION,
     &ANIMATE,
-    &DIVERGENCE,
     &LYAPUNOV,
     &POINCARE,
     &BIFURCATION,

@@ -17,6 +17,7 @@
 //! arrive here as numbers and names.
 
 pub mod defaults;
+pub mod divergence;
 pub mod energy_budget;
 pub mod period;
 pub mod regimes;
@@ -65,8 +66,14 @@ pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error>
 }
 
 /// Every study, in the order front ends list them.
-pub const STUDIES: &[&Study] =
-    &[&stability::STUDY, &period::STUDY, &regimes::STUDY, &energy_budget::STUDY, &round_trip::STUDY];
+pub const STUDIES: &[&Study] = &[
+    &stability::STUDY,
+    &period::STUDY,
+    &regimes::STUDY,
+    &divergence::STUDY,
+    &energy_budget::STUDY,
+    &round_trip::STUDY,
+];
 
 /// The study named `name`.
 ///
@@ -193,6 +200,8 @@ pub enum Kind {
     /// Methods of [`integrator::METHODS`], comma-separated, each applying to the system and
     /// named once; every method that applies ([`crate::model::applicable`]) when none is named.
     Methods,
+    /// A state variable of the system (`theta1`), by name; the first when none is named.
+    Variable,
     /// A real number in a unit, within a domain.
     Real {
         /// The value when none is given.
@@ -269,6 +278,7 @@ impl Param {
             }
             Kind::Method { default } => default.to_owned(),
             Kind::Methods => "every method that applies".to_owned(),
+            Kind::Variable => "the first state variable".to_owned(),
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
         }
@@ -500,6 +510,28 @@ impl<'a> Args<'a> {
                 e => e,
             }),
             None => Ok(crate::model::applicable(model, integrator::METHODS, None)),
+        }
+    }
+
+    /// The variable parameter `name`: the index of the state variable of `info` it names, or
+    /// 0.
+    ///
+    /// # Errors
+    /// [`Error::UnknownName`] naming the valid variables.
+    ///
+    /// # Panics
+    /// When `name` is not a variable parameter of the study.
+    pub fn variable(&self, name: &str, info: &crate::system::SystemInfo) -> Result<usize, Error> {
+        let Kind::Variable = self.param(name).kind else {
+            panic!("{name} is not a variable parameter of {}", self.study.name)
+        };
+        match self.text(name)? {
+            None => Ok(0),
+            Some(v) => info
+                .state
+                .iter()
+                .position(|q| q.name == v)
+                .ok_or_else(|| Error::unknown_name(info.name, v, info.state.iter().map(|q| q.name))),
         }
     }
 
