@@ -255,8 +255,8 @@ pub struct OutDir {
 
 impl OutDir {
     /// `--out-dir`, or `pendula-out/<command>`: created, checked writable, and claimed with
-    /// `files`, the names the command writes there (its entry in `cli::COMMANDS`).
-    pub fn new(dir: Option<&Path>, command: &str, files: &[&str]) -> Result<Self> {
+    /// `names`, the files the command writes there (its entry in `cli::COMMANDS`).
+    pub fn new(dir: Option<&Path>, command: &str, names: &[&str]) -> Result<Self> {
         let path = dir.map_or_else(|| Path::new("pendula-out").join(command), Path::to_path_buf);
         if path == Path::new("-") {
             bail!("invalid --out-dir -: a directory of files cannot go to stdout; give a directory");
@@ -268,7 +268,6 @@ impl OutDir {
         // Fail now, not after the work, if the directory cannot be written.
         crate::output::probe(&path, "--out-dir")?;
         // A registry study's files: its tables' CSV and its plots' PNG and SVG, by stem.
-        let names = files;
         // A directory in the place of one of the command's files is refused now too.
         if let Ok(entries) = std::fs::read_dir(&path) {
             for entry in entries.flatten() {

@@ -34,8 +34,12 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                     d.set_item("kind", "method")?;
                     d.set_item("default", default)?;
                 }
-                Kind::Methods | Kind::Variable => {
-                    d.set_item("kind", if matches!(p.kind, Kind::Methods) { "methods" } else { "variable" })?;
+                Kind::Methods => {
+                    d.set_item("kind", "methods")?;
+                    d.set_item("default", py.None())?;
+                }
+                Kind::Variable => {
+                    d.set_item("kind", "variable")?;
                     d.set_item("default", py.None())?;
                 }
                 Kind::Real { default, unit, .. } => {

@@ -296,9 +296,13 @@ class System:
     def __hash__(self) -> int:
         return hash((self.name, tuple(self.params.items())))
 
+    def _changed(self) -> dict[str, float]:
+        """The values that differ from the catalogue's defaults: what was set."""
+        defaults = _defaults(self.name)
+        return {k: v for k, v in self.params.items() if v != defaults.get(k)}
+
     def __repr__(self) -> str:
-        changed = {k: v for k, v in self.params.items() if v != _defaults(self.name).get(k)}
-        args = "".join(f", {k}={v!r}" for k, v in changed.items())
+        args = "".join(f", {k}={v!r}" for k, v in self._changed().items())
         return f"System({self.name!r}{args})"
 
 

@@ -116,13 +116,12 @@ def study(name: str, system: Any = None, *, progress: Any = None, **params: Any)
     values = [(k, ",".join(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()]
     settings: list = []
     if system is not None:
-        from . import System, _defaults
+        from . import System
 
         if isinstance(system, System):
             # What the System changed from the catalogue's defaults: a study that sets part of
             # the state itself (period's amplitudes) refuses only what the user set.
-            defaults = _defaults(system.name)
-            settings = [(k, float(v)) for k, v in system.params.items() if v != defaults.get(k)]
+            settings = [(k, float(v)) for k, v in system._changed().items()]
             system = system.name
         values.insert(0, ("system", system))
     raw = _core.run_study(name, values, settings, progress)

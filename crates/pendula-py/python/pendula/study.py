@@ -972,10 +972,7 @@ def divergence(
     ]
     if variable is not None:
         values.append(("variable", str(variable)))
-    from . import _defaults
-
-    defaults = _defaults(system.name)
-    settings = [(k, float(v)) for k, v in system.params.items() if v != defaults.get(k)]
+    settings = [(k, float(v)) for k, v in system._changed().items()]
     raw = timed(progress, f"divergence {system.name}", lambda tick: _core.run_study("divergence", values, settings, tick))
     n, table = raw["numbers"], raw["tables"]["divergence"]
     fitted = not math.isnan(n["growth_rate"])

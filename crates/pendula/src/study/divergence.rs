@@ -147,7 +147,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             method.name
         ),
         Axis { label: "t".into(), unit: tu.into(), log: false },
-        Axis { label: "distance |Δy| in state space".into(), unit: state_units(info), log: true },
+        Axis { label: "distance |Δy| in state space".into(), unit: super::state_units(info), log: true },
         series,
     );
     let nan = f64::NAN;
@@ -193,22 +193,6 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         tables: vec![table],
         plots: vec![plot],
     })
-}
-
-/// The unit of a distance in state space: the state's units combined as plain numbers (the
-/// Euclidean norm mixes angles and angular velocities for the double pendulum).
-fn state_units(info: &crate::system::SystemInfo) -> String {
-    let mut units: Vec<&str> = Vec::new();
-    for q in info.state {
-        if !q.unit.is_empty() && !units.contains(&q.unit) {
-            units.push(q.unit);
-        }
-    }
-    match units.as_slice() {
-        [] => String::new(),
-        [one] => (*one).to_owned(),
-        many => format!("{} combined", many.join(" and ")),
-    }
 }
 
 #[cfg(test)]

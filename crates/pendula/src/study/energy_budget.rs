@@ -96,32 +96,28 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let points = |ys: &[f64]| -> Vec<[f64; 2]> { t.iter().zip(ys).map(|(t, y)| [*t, *y]).collect() };
     let time = Axis { label: "t".into(), unit: tu.into(), log: false };
     let plots = vec![
-        Plot {
-            name: "energy-budget",
-            title: format!("{system}: energy change and work ({})", method.name),
-            x: time.clone(),
-            y: Axis { label: "energy".into(), unit: eu.into(), log: false },
-            bars: Vec::new(),
-            limits: None,
-            series: vec![
+        Plot::lines(
+            "energy-budget",
+            format!("{system}: energy change and work ({})", method.name),
+            time.clone(),
+            Axis { label: "energy".into(), unit: eu.into(), log: false },
+            vec![
                 Line::new("E(t) - E(0)", Style::Solid, points(&change)),
                 Line::new("W(t)", Style::Dashed, points(&work)),
             ],
-        },
-        Plot {
-            name: "energy-balance",
-            title: format!(
+        ),
+        Plot::lines(
+            "energy-balance",
+            format!(
                 "{system}: balance E(t) - E(0) - W(t) ({}, dt = {}{})",
                 method.name,
                 Short(dt),
                 unit_suffix(tu)
             ),
-            x: time,
-            y: Axis { label: "E - E(0) - W".into(), unit: eu.into(), log: false },
-            bars: Vec::new(),
-            limits: None,
-            series: vec![Line::new("balance", Style::Solid, points(&error))],
-        },
+            time,
+            Axis { label: "E - E(0) - W".into(), unit: eu.into(), log: false },
+            vec![Line::new("balance", Style::Solid, points(&error))],
+        ),
     ];
     let table = Table {
         name: "energy-budget",

@@ -50,6 +50,22 @@ pub fn unit_suffix(unit: &str) -> String {
     if unit.is_empty() { String::new() } else { format!(" {unit}") }
 }
 
+/// The unit of a distance in `info`'s state space: the state's units, combined as plain
+/// numbers when they differ (rad and rad/s for the pendulums).
+pub fn state_units(info: &crate::system::SystemInfo) -> String {
+    let mut units: Vec<&str> = Vec::new();
+    for q in info.state {
+        if !q.unit.is_empty() && q.unit != "1" && !units.contains(&q.unit) {
+            units.push(q.unit);
+        }
+    }
+    match units.as_slice() {
+        [] => String::new(),
+        [one] => (*one).to_owned(),
+        many => format!("{} combined", many.join(" and ")),
+    }
+}
+
 /// The steps of a run from 0 to `t_end` at step `dt`, with the run loop's checks; an error
 /// about its step names the parameter `dt` (the run loop calls it `h`).
 ///

@@ -138,31 +138,27 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let degrees = Axis { label: "amplitude θ₀".into(), unit: "degrees".into(), log: false };
     let points = |ys: &[f64]| -> Vec<[f64; 2]> { amplitudes.iter().zip(ys).map(|(a, y)| [*a, *y]).collect() };
     let plots = vec![
-        Plot {
-            name: "period",
-            title: "Simple pendulum: period against amplitude".into(),
-            x: degrees.clone(),
-            y: Axis { label: "period T".into(), unit: "s".into(), log: false },
-            bars: Vec::new(),
-            limits: None,
-            series: vec![
+        Plot::lines(
+            "period",
+            "Simple pendulum: period against amplitude",
+            degrees.clone(),
+            Axis { label: "period T".into(), unit: "s".into(), log: false },
+            vec![
                 Line::new("exact 4√(l/g) K(sin(θ₀/2))", Style::Solid, points(&exact)),
                 Line::new(format!("simulated ({})", method.name), Style::Points, points(&simulated)),
                 Line::new("small-angle 2π√(l/g)", Style::Dashed, points(&small_angle)),
             ],
-        },
-        Plot {
-            name: "period_error",
-            title: "Simple pendulum: deviation from the exact period".into(),
-            x: degrees,
-            y: Axis { label: "|T / T(exact) − 1|".into(), unit: String::new(), log: true },
-            bars: Vec::new(),
-            limits: None,
-            series: vec![
+        ),
+        Plot::lines(
+            "period_error",
+            "Simple pendulum: deviation from the exact period",
+            degrees,
+            Axis { label: "|T / T(exact) − 1|".into(), unit: String::new(), log: true },
+            vec![
                 Line::new(format!("simulated ({})", method.name), Style::LineMarkers, points(&sim_error)),
                 Line::new("small-angle approximation", Style::LineMarkers, points(&small_error)),
             ],
-        },
+        ),
     ];
     let table = Table {
         name: "period",
@@ -174,9 +170,12 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             Column::numbers("small_angle", "s", small_angle),
         ],
     };
-    let mut inputs = run_inputs(&base, method, dt, 0.0);
-    inputs.pop();
-    inputs.push(("max_amplitude", Input::Number(max)));
+    let inputs = vec![
+        ("system", Input::Name(base.info().name.into())),
+        ("method", Input::Name(method.name.into())),
+        ("dt", Input::Number(dt)),
+        ("max_amplitude", Input::Number(max)),
+    ];
     Ok(Report { study: STUDY.name, inputs, summary, numbers, tables: vec![table], plots })
 }
 

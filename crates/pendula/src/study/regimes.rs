@@ -104,15 +104,13 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let damping = |zeta: f64| 2.0 * zeta * (o.k * o.m).sqrt();
 
     // Free decay from x = 1 m at rest in each regime.
-    let mut decay = Plot {
-        name: "regimes",
-        title: "Damped oscillator: the three regimes (paper Figure 1)".into(),
-        x: Axis { label: "time t".into(), unit: "s".into(), log: false },
-        y: Axis { label: "displacement x".into(), unit: "m".into(), log: false },
-        bars: Vec::new(),
-        limits: None,
-        series: Vec::new(),
-    };
+    let mut decay = Plot::lines(
+        "regimes",
+        "Damped oscillator: the three regimes (paper Figure 1)",
+        Axis { label: "time t".into(), unit: "s".into(), log: false },
+        Axis { label: "displacement x".into(), unit: "m".into(), log: false },
+        Vec::new(),
+    );
     let mut columns: [Vec<f64>; 4] = Default::default();
     let mut max_decay_error: f64 = 0.0;
     for (label, zeta) in REGIMES {
@@ -181,24 +179,20 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let worst_phase = points.iter().map(|p| (p.phase_simulated - p.phase_exact).abs()).fold(0.0, f64::max);
 
     let frequency = Axis { label: "drive frequency Ω / ω₀".into(), unit: String::new(), log: false };
-    let mut amplitude = Plot {
-        name: "resonance_amplitude",
-        title: "Forced damped oscillator: resonance".into(),
-        x: frequency.clone(),
-        y: Axis { label: "amplitude X k / F".into(), unit: String::new(), log: false },
-        bars: Vec::new(),
-        limits: None,
-        series: Vec::new(),
-    };
-    let mut phase = Plot {
-        name: "resonance_phase",
-        title: "Forced damped oscillator: phase lag (π/2 at resonance)".into(),
-        x: frequency,
-        y: Axis { label: "phase lag φ".into(), unit: "rad".into(), log: false },
-        bars: Vec::new(),
-        limits: None,
-        series: Vec::new(),
-    };
+    let mut amplitude = Plot::lines(
+        "resonance_amplitude",
+        "Forced damped oscillator: resonance",
+        frequency.clone(),
+        Axis { label: "amplitude X k / F".into(), unit: String::new(), log: false },
+        Vec::new(),
+    );
+    let mut phase = Plot::lines(
+        "resonance_phase",
+        "Forced damped oscillator: phase lag (π/2 at resonance)",
+        frequency,
+        Axis { label: "phase lag φ".into(), unit: "rad".into(), log: false },
+        Vec::new(),
+    );
     for zeta in RESONANCE {
         let curve = |f: &dyn Fn(f64) -> f64| -> Vec<[f64; 2]> {
             (0..=280).map(|k| 0.2 + f64::from(k) * 0.01).map(|r| [r, f(r)]).collect()

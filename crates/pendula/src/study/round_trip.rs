@@ -76,21 +76,19 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     let label = "distance |Δy| in state space";
     let positive: Vec<[f64; 2]> =
         t.iter().zip(&distance).filter(|(_, d)| **d > 0.0).map(|(t, d)| [*t, *d]).collect();
-    let plot = Plot {
-        name: "round-trip",
-        title: format!(
+    let plot = Plot::lines(
+        "round-trip",
+        format!(
             "{}: there and back again ({}, dt = {}{})",
             info.name,
             method.name,
             Short(dt),
             unit_suffix(tu)
         ),
-        x: Axis { label: "t".into(), unit: tu.into(), log: false },
-        y: Axis { label: label.into(), unit: state_units(info), log: true },
-        bars: Vec::new(),
-        limits: None,
-        series: vec![Line::new("forward vs backward run", Style::Solid, positive)],
-    };
+        Axis { label: "t".into(), unit: tu.into(), log: false },
+        Axis { label: label.into(), unit: super::state_units(info), log: true },
+        vec![Line::new("forward vs backward run", Style::Solid, positive)],
+    );
     Ok(Report {
         study: STUDY.name,
         inputs: run_inputs(&values, method, dt, t_end),
@@ -116,22 +114,6 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         }],
         plots: vec![plot],
     })
-}
-
-/// The unit of a distance in `info`'s state space: the state's units, combined as plain
-/// numbers when they differ (rad and rad/s for the pendulums).
-fn state_units(info: &crate::system::SystemInfo) -> String {
-    let mut units: Vec<&str> = Vec::new();
-    for q in info.state {
-        if !q.unit.is_empty() && q.unit != "1" && !units.contains(&q.unit) {
-            units.push(q.unit);
-        }
-    }
-    match units.as_slice() {
-        [] => String::new(),
-        [one] => (*one).to_owned(),
-        many => format!("{} combined", many.join(" and ")),
-    }
 }
 
 /// What the method's symmetry means for the round trip, as a fact of the method.
