@@ -151,14 +151,17 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         })
         .collect();
     let cmp = |a: &&(&Method, f64), b: &&(&Method, f64)| a.1.total_cmp(&b.1);
+    // A method stable at the top of the search range has a limit at least that large.
+    let step = |h: f64| {
+        let at_least = if h >= H_RANGE.1 { "at least " } else { "" };
+        format!("{at_least}{}{}", sig(h), unit_suffix(tu))
+    };
     if let (Some(lo), Some(hi)) = (measured.iter().min_by(cmp), measured.iter().max_by(cmp)) {
         summary.push(format!(
-            "The stable steps run from {}{} ({}) to {}{} ({})",
-            sig(lo.1),
-            unit_suffix(tu),
+            "The stable steps run from {} ({}) to {} ({})",
+            step(lo.1),
             lo.0.name,
-            sig(hi.1),
-            unit_suffix(tu),
+            step(hi.1),
             hi.0.name
         ));
     }
@@ -279,6 +282,8 @@ mod tests {
         assert!(steps[0] <= lo * 1.0001 && steps[0] > lo / 1.02, "euler {} vs {lo}", steps[0]);
         assert!(steps[1] > 1.0, "verlet {}", steps[1]);
         assert!(report.summary[1].contains("(euler)"), "{:?}", report.summary);
+        // Verlet is stable at the top of the search range: its limit is only bounded below.
+        assert!(report.summary[1].ends_with("to at least 2.000 s (verlet)"), "{:?}", report.summary);
     }
 
     #[test]
