@@ -69,7 +69,7 @@ macro_rules! commands {
     };
 }
 
-use crate::commands::{animate, compare, convergence, fractal, lyapunov, poincare};
+use crate::commands::{animate, compare, convergence, fractal, poincare};
 use crate::commands::{bifurcation, merge, plot, report, resume, serve, sweep, work_precision};
 
 commands! {
@@ -113,13 +113,6 @@ commands! {
     "" Study(crate::studies::StudyCommand) => crate::studies::StudyCommand::run,
     files: &[],
     examples: &[];
-    /// Lyapunov exponents from the variational equations (Benettin, QR), with a convergence
-    /// plot of the running estimate and an uncertainty.
-    #[command(mut_arg("set", |a| a.help(SET_LYAPUNOV)))]
-    #[command(mut_args(|a| lyapunov::DEFAULTS.document(a)))]
-    "lyapunov" Lyapunov(Box<lyapunov::LyapunovArgs>) => lyapunov::run,
-    files: lyapunov::FILES,
-    examples: &["lyapunov --t-end 1 --transient 0 --renormalise 0.05 --dt 0.01"];
     /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
     /// surface and their crossings of a section, located by events.
     #[command(mut_arg("set", |a| a.help(SET_POINCARE)))]
@@ -234,8 +227,6 @@ const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the 
 (the oscillator's damping, kg/s) or `--set x=0.2` (m).";
 const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
 `--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_LYAPUNOV: &str = "Set a parameter or initial-state variable, over the preset if one is given: \
-e.g. `--set theta1=120deg` for the double pendulum, `--set q=4` for a driven-pendulum preset.";
 const SET_POINCARE: &str = "Set a parameter of the system, e.g. `--set m2=2` (kg) for the double \
 pendulum; every orbit starts on the energy surface (--energy).";
 const SET_BIFURCATION: &str = "Set a parameter over the preset or the defaults, e.g. `--set q=4` \

@@ -178,10 +178,7 @@ pub fn threads(text: Option<&str>, allow_large: bool) -> Result<usize> {
     Ok(n as usize)
 }
 
-/// A count for people: whole numbers up to 10⁶ in full, larger ones as `1.2e14`.
-pub fn round(x: f64) -> String {
-    if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
-}
+pub use pendula::error::approx as round;
 
 pub use pendula_io::value::bytes;
 

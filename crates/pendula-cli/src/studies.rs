@@ -27,13 +27,20 @@ pub fn flag(param: &Param) -> String {
 
 /// The help of a parameter: its phrase, its unit, and its default (from the study, so that
 /// it is written once).
-pub fn help(param: &Param) -> String {
+pub fn help(study: &Study, param: &Param) -> String {
     let unit = match param.kind {
         Kind::Real { unit: Unit::Time, .. } => ", s (none for a dimensionless system)".to_owned(),
         Kind::Real { unit: Unit::Fixed(u), .. } => format!(", {u}"),
         _ => String::new(),
     };
-    format!("{}{unit} [default: {}]", param.help, param.default_text())
+    format!("{}{unit} [default: {}]", respell(study, param.help), param.default_text())
+}
+
+/// `text` with each parameter it names in backticks (`` `renormalise` ``) spelled as its
+/// flag (`--renormalise`).
+fn respell(study: &Study, text: &str) -> String {
+    let names = study.params.iter().map(|p| (p.name, flag(p))).chain([("set", "--set".to_owned())]);
+    names.fold(text.to_owned(), |t, (n, f)| t.replace(&format!("`{n}`"), &f))
 }
 
 /// The subcommand of `study`.
@@ -46,13 +53,14 @@ pub fn command(study: &'static Study) -> clap::Command {
             Kind::System { .. } => Arg::new(p.name).value_name("SYSTEM"),
             Kind::Method { .. } => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Methods => Arg::new(p.name).long(p.name).value_name("LIST"),
-            Kind::Variable => Arg::new(p.name).long(p.name).value_name("NAME"),
+            Kind::Variable | Kind::Preset => Arg::new(p.name).long(p.name).value_name("NAME"),
+            Kind::Flag => Arg::new(p.name).long(p.name).action(clap::ArgAction::SetTrue),
             Kind::Real { .. } | Kind::Count { .. } => Arg::new(p.name)
                 .long(p.name.replace('_', "-"))
                 .value_name(p.name.to_uppercase())
                 .allow_hyphen_values(true),
         };
-        cmd = cmd.arg(arg.help(help(p)));
+        cmd = cmd.arg(arg.help(help(study, p)));
     }
     // After the shared arguments, whose own doc would otherwise be the command's about.
     let cmd = Common::augment_args(cmd).about(study.about);
@@ -72,11 +80,25 @@ fn set_help(study: &Study) -> Option<String> {
     let info = pendula::model::find(default).ok()?;
     let q = info.parameters.iter().find(|q| q.default > 0.0)?;
     let what = if fixed { "a parameter" } else { "a parameter or initial-state variable" };
+    let example = |q: &pendula::system::Quantity| {
+        format!(
+            "`--set {}={}`{}",
+            q.name,
+            pendula::error::Short(2.0 * q.default),
+            if matches!(q.unit, "" | "1") { String::new() } else { format!(" ({})", q.unit) }
+        )
+    };
+    // A study that takes a preset: its settings come first, and `--set` applies over them.
+    let over_preset = study.params.iter().any(|p| matches!(p.kind, Kind::Preset)).then(|| {
+        let preset = pendula::system::driven::PRESETS.first()?;
+        let info = pendula::model::find(preset.system).ok()?;
+        let q = info.parameters.iter().find(|q| q.default > 0.0)?;
+        Some(format!(", or over a --preset's settings ({} with a {} preset)", example(q), preset.system))
+    });
     Some(format!(
-        "Set {what} of the {default} system, e.g. `--set {}={}`{}; `pendula list systems` names them{}",
-        q.name,
-        pendula::error::Short(2.0 * q.default),
-        pendula::study::unit_suffix(q.unit).replacen(' ', " (", 1) + if q.unit.is_empty() { "" } else { ")" },
+        "Set {what} of the {default} system, e.g. {}{}; `pendula list systems` names them{}",
+        example(q),
+        over_preset.flatten().unwrap_or_default(),
         if fixed { "" } else { "; angles take a `deg` or `pi` suffix (bare numbers are radians)" }
     ))
 }
@@ -124,8 +146,13 @@ impl StudyCommand {
     pub fn run(&self) -> Result<()> {
         let common = Common::from_arg_matches(&self.matches)?;
         let inputs = self.inputs(&common)?;
-        let budget =
-            Budget { max_steps: (!common.large.allow_large).then_some(crate::limits::MAX_SCALAR_STEPS) };
+        let limited = !common.large.allow_large;
+        let budget = Budget {
+            max_steps: limited.then_some(crate::limits::MAX_SCALAR_STEPS),
+            // The tables are written as CSV: each value a cell.
+            max_values: limited
+                .then_some(crate::limits::MAX_OUTPUT_BYTES / crate::limits::CSV_BYTES_PER_VALUE),
+        };
         // Checked before the output directory is touched: bad input leaves no trace.
         let files: Vec<String> =
             self.study.files.iter().flat_map(|f| ["csv", "png", "svg"].map(|e| format!("{f}.{e}"))).collect();
@@ -162,22 +189,35 @@ impl StudyCommand {
     /// `--set` items against the system's quantities.
     fn inputs(&self, common: &Common) -> Result<Inputs> {
         let mut inputs = Inputs::default();
-        let mut system = None;
+        let (mut system, mut preset) = (None, None);
         for p in self.study.params {
+            if let Kind::Flag = p.kind {
+                if self.matches.get_flag(p.name) {
+                    inputs.values.push((p.name.to_owned(), Input::Flag(true)));
+                }
+                continue;
+            }
             let Ok(Some(text)) = self.matches.try_get_one::<String>(p.name) else { continue };
             let value = match p.kind {
-                Kind::System { .. } | Kind::Method { .. } | Kind::Methods | Kind::Variable => {
+                Kind::System { .. } | Kind::Method { .. } | Kind::Methods | Kind::Variable | Kind::Preset => {
                     Input::Name(text.clone())
                 }
-                Kind::Real { .. } | Kind::Count { .. } => {
+                Kind::Real { .. } | Kind::Count { .. } | Kind::Flag => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }
             };
-            if let Kind::System { .. } = p.kind {
-                system = Some(text.as_str());
+            match p.kind {
+                Kind::System { .. } => system = Some(text.as_str()),
+                // A preset picks the system when none is named (the study checks that
+                // they agree).
+                Kind::Preset => {
+                    preset = Some(pendula::system::driven::find_preset(text)?.system);
+                }
+                _ => {}
             }
             inputs.values.push((p.name.to_owned(), value));
         }
+        let system = system.or(preset);
         if !common.set.items.is_empty() {
             let default = self.study.params.iter().find_map(|p| match p.kind {
                 Kind::System { default, .. } => Some(default),
@@ -199,15 +239,30 @@ impl StudyCommand {
         let names: Vec<(&str, &str)> = names.iter().map(|(n, f)| (*n, f.as_str())).collect();
         match e {
             // Worded as every command's refusal over the limits (the budget's limit is the same).
-            pendula::Error::TooLarge { what, steps, .. } => {
-                let estimate = crate::limits::Estimate::new(crate::limits::Cost::Steps, steps, what);
+            pendula::Error::TooLarge { what, cost, amount, .. } => {
+                let estimate = match cost {
+                    pendula::study::Cost::Steps => {
+                        crate::limits::Estimate::new(crate::limits::Cost::Steps, amount, what)
+                    }
+                    // Each value a CSV cell.
+                    pendula::study::Cost::Values => crate::limits::Estimate::new(
+                        crate::limits::Cost::Output,
+                        amount * crate::limits::CSV_BYTES_PER_VALUE,
+                        what,
+                    ),
+                };
                 crate::limits::check(self.study.name, false, &[estimate]).err().unwrap_or_else(|| {
                     anyhow::anyhow!("{}: refusing a request over the limits", self.study.name)
                 })
             }
             pendula::Error::InvalidInput { name, value, allowed } => {
                 let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
-                anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
+                let allowed = respell(self.study, &allowed);
+                if value.parse::<f64>().is_ok() {
+                    anyhow::anyhow!("invalid {shown} {value}: {allowed}")
+                } else {
+                    anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
+                }
             }
             e => crate::parse::flag_error(e, &names),
         }
@@ -232,6 +287,7 @@ fn document(report: &Report) -> Value {
         let v = match input {
             Input::Number(x) => json!(x),
             Input::Name(s) => json!(s),
+            Input::Flag(b) => json!(b),
         };
         doc.insert((*name).into(), v);
     }

@@ -198,23 +198,8 @@ pub fn values(system: &str, set: &[String]) -> Result<Values> {
     Ok(values)
 }
 
-/// Validated values from an optional system name, an optional `--preset` (which picks the
-/// system when none is named) and `--set` items over it; `default` names the system when
-/// neither does.
-pub fn preset_values(
-    system: Option<&str>,
-    preset: Option<&str>,
-    set: &[String],
-    default: &str,
-) -> Result<Values> {
-    let (info, settings) = preset_settings(system, preset, set, default)?;
-    let values = info.values(&settings)?;
-    values.check_energy()?;
-    Ok(values)
-}
-
-/// The system and the (name, value) settings of [`preset_values`], not yet validated as a
-/// whole (for commands that add their own settings per run).
+/// The system and the (name, value) settings of a command that takes `--preset`, not yet
+/// validated as a whole (for commands that add their own settings per run).
 pub fn preset_settings(
     system: Option<&str>,
     preset: Option<&str>,

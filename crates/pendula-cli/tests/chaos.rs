@@ -105,7 +105,8 @@ fn lyapunov_summary_and_spectrum() {
     .success();
     let s = json(&dir.path().join("s.json"));
     assert_eq!(s["system"], "driven-pendulum");
-    let spectrum: Vec<f64> = serde_json::from_value(s["spectrum"].clone()).unwrap();
+    let spectrum: Vec<f64> =
+        s["tables"]["exponents"].as_array().unwrap().iter().map(|e| e["value"].as_f64().unwrap()).collect();
     assert_eq!(spectrum.len(), 2);
     assert!((spectrum[0] + spectrum[1] + 0.5).abs() < 1e-6, "sum {spectrum:?} must be -1/q");
     assert!(s["lambda_max"].as_f64().unwrap() > 0.0 && s["uncertainty"].as_f64().unwrap() > 0.0);

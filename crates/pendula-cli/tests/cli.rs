@@ -675,7 +675,7 @@ fn set_help_examples_belong_to_the_command() {
         ("round-trip", &[("--set m=2", "pendulum")]),
         ("oscillator-regimes", &[("--set m=2", "oscillator")]),
         ("divergence", &[("--set m1=2", "double")]),
-        ("lyapunov", &[("--set theta1=120deg", "double"), ("--set q=4", "driven-pendulum")]),
+        ("lyapunov", &[("--set m1=2", "double"), ("--set q=4", "driven-pendulum")]),
         ("poincare", &[("--set m2=2", "double")]),
         (
             "bifurcation",

@@ -233,17 +233,7 @@ pub fn count(n: u64) -> String {
     }
 }
 
-/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
-pub fn sci(x: f64) -> String {
-    if !x.is_finite() {
-        return "unboundedly many".to_owned();
-    }
-    let text = format!("{x:.3e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
-    let mantissa =
-        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
-    format!("{mantissa}e{exponent}")
-}
+pub use pendula::error::sci;
 
 /// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
 pub fn bytes(x: f64) -> String {

@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyList};
 use crate::{interruptible, to_py};
 
 /// Every study: `name`, `about`, and `params`, each a dict with `name`, `help`, `kind`
-/// (`system`, `method`, `real`, `count`), `default` (the value, or the default system's
+/// ([`pendula::study::Param::kind_name`]), `default` (the value, or the default system's
 /// name), `default_text` (as documentation shows it) and `unit` (`time` for the system's
 /// time unit).
 #[pyfunction]
@@ -24,26 +24,12 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             d.set_item("name", p.name)?;
             d.set_item("help", p.help)?;
             d.set_item("default_text", p.default_text())?;
+            d.set_item("kind", p.kind_name())?;
             match p.kind {
-                Kind::System { default, fixed, .. } => {
-                    // The one system it runs: no argument for it.
-                    d.set_item("kind", if fixed { "fixed-system" } else { "system" })?;
-                    d.set_item("default", default)?;
-                }
-                Kind::Method { default } => {
-                    d.set_item("kind", "method")?;
-                    d.set_item("default", default)?;
-                }
-                Kind::Methods => {
-                    d.set_item("kind", "methods")?;
-                    d.set_item("default", py.None())?;
-                }
-                Kind::Variable => {
-                    d.set_item("kind", "variable")?;
-                    d.set_item("default", py.None())?;
-                }
+                Kind::System { default, .. } | Kind::Method { default } => d.set_item("default", default)?,
+                Kind::Methods | Kind::Variable | Kind::Preset => d.set_item("default", py.None())?,
+                Kind::Flag => d.set_item("default", false)?,
                 Kind::Real { default, unit, .. } => {
-                    d.set_item("kind", "real")?;
                     d.set_item("default", default)?;
                     d.set_item(
                         "unit",
@@ -54,10 +40,7 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                         },
                     )?;
                 }
-                Kind::Count { default, .. } => {
-                    d.set_item("kind", "count")?;
-                    d.set_item("default", default)?;
-                }
+                Kind::Count { default, .. } => d.set_item("default", default)?,
             }
             params.append(d)?;
         }
@@ -91,12 +74,9 @@ fn run_study<'py>(
         let input = if let Ok(text) = v.extract::<String>() {
             Input::Name(text)
         } else if v.is_instance_of::<pyo3::types::PyBool>() {
-            // True is 1 to Python's float(), never a value anyone meant here.
-            return Err(crate::raise(
-                py,
-                "InvalidValueError",
-                format!("invalid value {v} for `{key}`: a number or a name, not a bool"),
-            ));
+            // A switch's state (True is 1 to Python's float(): the study refuses a bool
+            // where a number belongs).
+            Input::Flag(v.is_truthy()?)
         } else if let Ok(x) = v.extract::<f64>() {
             Input::Number(x)
         } else {
@@ -117,6 +97,7 @@ fn run_study<'py>(
         match v {
             Input::Number(x) => given.set_item(k, x)?,
             Input::Name(s) => given.set_item(k, s)?,
+            Input::Flag(b) => given.set_item(k, b)?,
         }
     }
     out.set_item("inputs", given)?;

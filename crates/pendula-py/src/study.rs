@@ -1,4 +1,4 @@
-//! The studies not yet on the registry (`pendula.lyapunov`, `poincare`, `fractal`,
+//! The studies not yet on the registry (`pendula.poincare`, `fractal`,
 //! `bifurcation`, `convergence`, `work_precision`): the library's analyses with the library's
 //! defaults, their results as plain dicts of numbers and arrays for `pendula.study` to wrap.
 //!
@@ -15,16 +15,15 @@ use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pendula::Error;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
-use pendula::analysis::lyapunov::Mismatch;
 use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
 use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
-use pendula::analysis::{self, LyapunovSpec, OrderEstimate};
+use pendula::analysis::{self, OrderEstimate};
 use pendula::control::Tolerances;
 use pendula::ensemble::BatchMethod;
 use pendula::error::Short;
 use pendula::integrator::{self, METHODS, Method, Scheme};
 use pendula::model::DynModel;
-use pendula::system::{AsSystem, Model, double::DoublePendulum};
+use pendula::system::{Model, double::DoublePendulum};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -70,69 +69,6 @@ fn pool(py: Python<'_>, threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
 fn rows<'py>(py: Python<'py>, data: Vec<f64>, cols: usize) -> Bound<'py, numpy::PyArray2<f64>> {
     let n = data.len() / cols.max(1);
     Array2::from_shape_vec((n, cols), data).expect("whole rows").into_pyarray(py)
-}
-
-/// The largest Lyapunov exponent (or all, `spectrum`) of `system` from its initial state,
-/// as `pendula lyapunov`. Returns `exponents`, `uncertainty` (1/s), `running` (rows of t
-/// since the transient, λ₁ … λ_k).
-#[pyfunction]
-#[pyo3(signature = (system, method, dt, t_end, transient, renormalise, spectrum, progress=None))]
-#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
-pub(crate) fn lyapunov<'py>(
-    py: Python<'py>,
-    system: &CoreSystem,
-    method: &str,
-    dt: f64,
-    t_end: f64,
-    transient: f64,
-    renormalise: f64,
-    spectrum: bool,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let method = integrator::find(method).map_err(|e| to_py(py, &e))?;
-    let dt = positive(py, "dt", dt)?;
-    let t_end = positive(py, "t_end", t_end)?;
-    if !(transient.is_finite() && transient >= 0.0) {
-        return Err(invalid(py, "transient", Short(transient), "a finite time >= 0 (s)"));
-    }
-    let renormalise = positive(py, "renormalise", renormalise)?;
-    let count = if spectrum { system.values.info().state.len() } else { 1 };
-    let spec = LyapunovSpec { h: dt, transient, t_end, renormalise, count, blocks: 10 };
-    if let Some(Mismatch::StepOverInterval) = spec.mismatch() {
-        return Err(invalid(
-            py,
-            "dt",
-            Short(dt),
-            &format!(
-                "at most renormalise = {} s (the tangent vectors are re-orthonormalised that often, at whole steps)",
-                Short(renormalise)
-            ),
-        ));
-    }
-    if let Some(Mismatch::TooFewIntervals) = spec.mismatch() {
-        return Err(invalid(
-            py,
-            "t_end",
-            Short(t_end),
-            &format!(
-                "at least {} re-orthonormalisations (every renormalise = {} s) are needed for the uncertainty",
-                analysis::lyapunov::MIN_INTERVALS,
-                Short(renormalise)
-            ),
-        ));
-    }
-    let model = &*system.model;
-    let y0 = system.values.initial_state();
-    let result = interruptible(py, false, progress.as_ref(), |_| {
-        analysis::lyapunov(&AsSystem(model), method, y0, &spec)
-    })?
-    .map_err(|e| renamed(py, e, &[("h", "dt")]))?;
-    let out = PyDict::new(py);
-    out.set_item("method", method.name)?;
-    out.set_item("exponents", result.exponents.into_pyarray(py))?;
-    out.set_item("uncertainty", result.uncertainty.into_pyarray(py))?;
-    out.set_item("running", rows(py, result.running, count + 1))?;
-    Ok(out)
 }
 
 /// A Poincaré section as `pendula poincare`: `count` orbits at `energy` (J) crossing
@@ -770,7 +706,6 @@ pub(crate) fn tolerance_ladder(loosest: f64, tightest: f64, levels: usize) -> Ve
 
 /// Adds the studies to the module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(lyapunov, m)?)?;
     m.add_function(wrap_pyfunction!(poincare, m)?)?;
     m.add_function(wrap_pyfunction!(fractal, m)?)?;
     m.add_function(wrap_pyfunction!(bifurcation, m)?)?;

@@ -103,7 +103,6 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
     library = _core.defaults()
     checked = 0
     for name, study in [
-        ("lyapunov", "lyapunov"),
         ("poincare", "poincare"),
         ("fractal", "fractal"),
         ("bifurcation", "bifurcation"),
@@ -115,12 +114,13 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
             if p.name in library[study] and library[study][p.name] is not None and p.name not in ("section", "param") and p.default is not p.empty and p.default is not None:
                 assert p.default == library[study][p.name], (name, p.name)
                 checked += 1
-    # divergence is a registry study: its hand-written function takes the registry's defaults.
-    registry = {p["name"]: p["default"] for e in _core.studies() if e["name"] == "divergence" for p in e["params"]}
-    for p in inspect.signature(pendula.divergence).parameters.values():
-        if p.default is not p.empty and p.default is not None and p.name != "progress":
-            assert p.default == registry[p.name], p.name
-            checked += 1
+    # Registry studies with hand-written functions take the registry's defaults.
+    for name in ("divergence", "lyapunov"):
+        registry = {p["name"]: p["default"] for e in _core.studies() if e["name"] == name for p in e["params"]}
+        for p in inspect.signature(getattr(pendula, name)).parameters.values():
+            if p.default is not p.empty and p.default is not None and p.name != "progress":
+                assert p.default == registry[p.name], (name, p.name)
+                checked += 1
     assert checked >= 25, checked
     assert pendula.poincare.__kwdefaults__["section"] + "=0" == library["poincare"]["section"]
     # The fractal's grid and the bifurcation's axis on defaults are the library's texts.

@@ -91,6 +91,9 @@ pub struct Limits {
     /// Integration steps of one `study` request (the study's own estimate, checked before
     /// it runs): about a second of work.
     pub max_study_steps: u64,
+    /// Table values of one `study` answer (a running estimate's rows, say), checked before
+    /// it runs: the answer stays a few megabytes.
+    pub max_study_values: u64,
 }
 
 impl Default for Limits {
@@ -106,6 +109,7 @@ impl Default for Limits {
             max_t_max: 1000.0,
             max_message_bytes: 64 * 1024,
             max_study_steps: 2_000_000,
+            max_study_values: 200_000,
         }
     }
 }

@@ -519,8 +519,9 @@ pub fn run(inbox: Receiver<Inbound>, shared: Arc<Shared>, limits: Limits) {
                     Err(r) => Err(r),
                 },
                 // Bounded by the limit on its steps, so it holds the live run back briefly.
-                Command::Study(request) => crate::study::run(request, limits.max_study_steps as f64)
-                    .map(|message| shared.text(&message)),
+                Command::Study(request) => {
+                    crate::study::run(request, &limits).map(|message| shared.text(&message))
+                }
                 Command::FractalCancel => {
                     if let Some(flag) = fractal_cancel.take() {
                         flag.store(true, Ordering::Relaxed);

@@ -1,6 +1,6 @@
 //! The library's studies ([`pendula::study::STUDIES`]) in the lab: `hello` lists them with
 //! their parameters (the page builds a form from the list), and the `study` command runs
-//! one within [`crate::Limits::max_study_steps`] and answers with its report — summary,
+//! one within [`crate::Limits::max_study_steps`] (and `max_study_values`) and answers with its report — summary,
 //! numbers, tables and its plots drawn by pendula-viz as PNG, the same figures the CLI
 //! writes. A study added to the library appears in the lab with no code here.
 
@@ -26,7 +26,7 @@ pub struct StudyRequest {
 }
 
 /// The studies for `hello`: name, about, and each parameter's name, help, kind, default
-/// (as documentation shows it) and unit.
+/// (as documentation shows it), unit and the names it may take (a preset's).
 pub fn list() -> Value {
     let studies: Vec<Value> = study::STUDIES
         .iter()
@@ -35,19 +35,19 @@ pub fn list() -> Value {
                 .params
                 .iter()
                 .map(|p| {
-                    let (kind, unit) = match p.kind {
-                        // The one system it runs: no field in the form.
-                        Kind::System { fixed: true, .. } => ("fixed-system", ""),
-                        Kind::System { .. } => ("system", ""),
-                        Kind::Method { .. } => ("method", ""),
-                        Kind::Methods => ("methods", ""),
-                        Kind::Variable => ("variable", ""),
-                        Kind::Real { unit: Unit::Time, .. } => ("real", "time"),
-                        Kind::Real { unit: Unit::Fixed(u), .. } => ("real", u),
-                        Kind::Real { unit: Unit::None, .. } => ("real", ""),
-                        Kind::Count { .. } => ("count", ""),
+                    let unit = match p.kind {
+                        Kind::Real { unit: Unit::Time, .. } => "time",
+                        Kind::Real { unit: Unit::Fixed(u), .. } => u,
+                        _ => "",
                     };
-                    json!({"name": p.name, "help": p.help, "kind": kind, "default": p.default_text(), "unit": unit})
+                    // `fixed-system` (the one system it runs) gets no field in the form.
+                    let kind = p.kind_name();
+                    // A preset is chosen from the catalogue's list.
+                    let choices: Vec<&str> = match p.kind {
+                        Kind::Preset => pendula::system::driven::PRESETS.iter().map(|p| p.name).collect(),
+                        _ => Vec::new(),
+                    };
+                    json!({"name": p.name, "help": p.help, "kind": kind, "default": p.default_text(), "unit": unit, "choices": choices})
                 })
                 .collect();
             json!({"name": s.name, "about": s.about, "params": params})
@@ -56,23 +56,31 @@ pub fn list() -> Value {
     Value::Array(studies)
 }
 
-/// Runs `request` within `max_steps` and returns the `study` message.
+/// Runs `request` within the study limits of `limits` and returns the `study` message.
 ///
 /// # Errors
 /// A [`Refusal`] with the library's message (bad input, a run over the limit, a failed run).
-pub fn run(request: StudyRequest, max_steps: f64) -> Result<Value, Refusal> {
+pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refusal> {
     let spec = study::find(&request.name).map_err(|e| Refusal(e.to_string()))?;
     let mut inputs = Inputs { values: Vec::new(), set: request.set.into_iter().collect() };
     for (name, value) in request.inputs {
         let input = match value {
             Value::String(s) => Input::Name(s),
             Value::Number(n) => Input::Number(n.as_f64().unwrap_or(f64::NAN)),
-            other => return Err(Refusal(format!("invalid value {other} for `{name}`: a number or a name"))),
+            Value::Bool(b) => Input::Flag(b),
+            other => {
+                return Err(Refusal(format!(
+                    "invalid value {other} for `{name}`: a number, a name or a switch"
+                )));
+            }
         };
         inputs.values.push((name, input));
     }
-    let report =
-        (spec.run)(&inputs, &Budget { max_steps: Some(max_steps) }).map_err(|e| Refusal(e.to_string()))?;
+    let budget = Budget {
+        max_steps: Some(limits.max_study_steps as f64),
+        max_values: Some(limits.max_study_values as f64),
+    };
+    let report = (spec.run)(&inputs, &budget).map_err(|e| Refusal(e.to_string()))?;
     let tables: Vec<Value> = report
         .tables
         .iter()
@@ -111,6 +119,7 @@ pub fn run(request: StudyRequest, max_steps: f64) -> Result<Value, Refusal> {
             let v = match v {
                 Input::Number(x) => json!(x),
                 Input::Name(s) => json!(s),
+                Input::Flag(b) => json!(b),
             };
             ((*k).to_owned(), v)
         })

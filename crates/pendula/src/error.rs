@@ -169,13 +169,15 @@ pub enum Error {
         /// What is allowed, in words.
         allowed: String,
     },
-    /// A run would take more steps than its budget ([`crate::study::Budget`]) allows.
-    #[error("{what} would take {} steps, over the limit of {}", Short(*.steps), Short(*.limit))]
+    /// A run would cost more than its budget ([`crate::study::Budget`]) allows.
+    #[error("{what} would {} {} {}, over the limit of {}", cost.verb(), Short(*.amount), cost.unit(), Short(*.limit))]
     TooLarge {
         /// What would run, in words.
         what: String,
-        /// Its cost in integration steps.
-        steps: f64,
+        /// What is counted.
+        cost: crate::study::Cost,
+        /// How much of it.
+        amount: f64,
         /// The limit.
         limit: f64,
     },
@@ -310,6 +312,23 @@ pub fn clip(text: &str, max: usize) -> String {
         Some((end, _)) if text.chars().count() > max => format!("{}…", &text[..end]),
         _ => text.to_owned(),
     }
+}
+
+/// A large or small number to 4 significant digits with an exponent: `1e13`, `7.864e19`.
+pub fn sci(x: f64) -> String {
+    if !x.is_finite() {
+        return "unboundedly many".to_owned();
+    }
+    let text = format!("{x:.3e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let mantissa =
+        if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
+    format!("{mantissa}e{exponent}")
+}
+
+/// A count for people: whole numbers up to 10⁶ in full, larger ones as `1.2e14`.
+pub fn approx(x: f64) -> String {
+    if x.is_finite() && x.abs() < 1e6 { format!("{}", x.round()) } else { sci(x) }
 }
 
 /// A float for a message: at most 10 significant digits, in the shortest form that reads back

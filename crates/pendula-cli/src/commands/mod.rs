@@ -19,7 +19,6 @@ pub mod bifurcation;
 pub mod compare;
 pub mod convergence;
 pub mod fractal;
-pub mod lyapunov;
 pub mod merge;
 pub mod plot;
 pub mod poincare;

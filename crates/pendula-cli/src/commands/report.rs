@@ -712,7 +712,9 @@ fn build(page: &mut Page) -> Result<()> {
     )?;
 
     let l = page.run("lyapunov --spectrum --t-end 500")?.context("summary")?;
-    let spectrum: Vec<String> = l["spectrum"].as_array().into_iter().flatten().map(|v| short(f(v))).collect();
+    // The exponents' table: one row each, with its value and uncertainty.
+    let exponents: Vec<&Value> = l["tables"]["exponents"].as_array().into_iter().flatten().collect();
+    let spectrum: Vec<String> = exponents.iter().map(|e| short(f(&e["value"]))).collect();
     page.section(
         "Lyapunov exponents",
         &format!(
@@ -722,16 +724,12 @@ fn build(page: &mut Page) -> Result<()> {
             spectrum.join(", ")
         ),
     );
-    let uncertainty: Vec<f64> = l["spectrum_uncertainty"].as_array().into_iter().flatten().map(f).collect();
-    let mut rows: Vec<Vec<String>> = l["spectrum"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .enumerate()
-        .map(|(k, v)| {
+    let mut rows: Vec<Vec<String>> = exponents
+        .iter()
+        .map(|e| {
             vec![
-                format!("{} (1/s)", pendula_viz::pretty(&format!("lambda{}", k + 1))),
-                format!("{} ± {}", short(f(v)), uncertainty.get(k).map_or("-".into(), |u| short(*u))),
+                format!("{} (1/s)", pendula_viz::pretty(e["exponent"].as_str().unwrap_or("?"))),
+                format!("{} ± {}", short(f(&e["value"])), short(f(&e["uncertainty"]))),
             ]
         })
         .collect();

@@ -214,52 +214,54 @@ class LyapunovResult(_Pickled):
 
 
 def lyapunov(
-    system: "System | str" = _DEFAULTS["lyapunov"]["system"],
+    system: "System | str" = _REGISTRY["lyapunov"]["system"],
     *,
-    method: str = _DEFAULTS["lyapunov"]["method"],
-    dt: float = _DEFAULTS["lyapunov"]["dt"],
-    t_end: float = _DEFAULTS["lyapunov"]["t_end"],
-    transient: float = _DEFAULTS["lyapunov"]["transient"],
-    renormalise: float = _DEFAULTS["lyapunov"]["renormalise"],
+    method: str = _REGISTRY["lyapunov"]["method"],
+    dt: float = _REGISTRY["lyapunov"]["dt"],
+    t_end: float = _REGISTRY["lyapunov"]["t_end"],
+    transient: float = _REGISTRY["lyapunov"]["transient"],
+    renormalise: float = _REGISTRY["lyapunov"]["renormalise"],
     spectrum: bool = False,
     progress: Any = None,
 ) -> LyapunovResult:
     """The largest Lyapunov exponent of ``system`` (a System or a catalogue name) from its
-    initial state, or the whole ``spectrum``, as ``pendula lyapunov``: the state and its
-    tangent vectors by ``method`` (an explicit Runge–Kutta method, an embedded pair at fixed
-    steps, or Gauss–Legendre) at steps ``dt`` (s), a ``transient`` (s) discarded, then
-    averaged over ``t_end`` (s) with re-orthonormalisation every ``renormalise`` (s; at least
-    20 of them).
+    initial state, or the whole ``spectrum``, the library's ``lyapunov`` study (as ``pendula
+    lyapunov``): the state and its tangent vectors by ``method`` (an explicit Runge–Kutta
+    method, an embedded pair at fixed steps, or Gauss–Legendre) at steps ``dt`` (s), a
+    ``transient`` (s) discarded, then averaged over ``t_end`` (s) with re-orthonormalisation
+    every ``renormalise`` (s; at least 20 of them). :func:`pendula.study` ``("lyapunov",
+    ...)`` returns the same as a :class:`StudyReport`.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    args = (
-        system._core,
-        str(method),
-        _float("dt", dt),
-        _float("t_end", t_end),
-        _float("transient", transient),
-        _float("renormalise", renormalise),
-        bool(spectrum),
-    )
-    raw = timed(progress, f"lyapunov {system.name}", lambda tick: _core.lyapunov(*args, tick))
-    running = raw["running"]
+    values = [
+        ("system", system.name),
+        ("method", str(method)),
+        ("dt", _float("dt", dt)),
+        ("t_end", _float("t_end", t_end)),
+        ("transient", _float("transient", transient)),
+        ("renormalise", _float("renormalise", renormalise)),
+        ("spectrum", bool(spectrum)),
+    ]
+    settings = [(k, float(v)) for k, v in system._changed().items()]
+    raw = timed(progress, f"lyapunov {system.name}", lambda tick: _core.run_study("lyapunov", values, settings, tick))
+    running, exponents = raw["tables"]["lyapunov"], raw["tables"]["exponents"]
     return LyapunovResult(
         system=system,
-        method=raw["method"],
+        method=raw["inputs"]["method"],
         dt=float(dt),
         t_end=float(t_end),
         transient=float(transient),
         renormalise=float(renormalise),
-        lambda_max=float(raw["exponents"][0]),
-        uncertainty=float(raw["uncertainty"][0]),
-        spectrum=raw["exponents"] if spectrum else None,
-        spectrum_uncertainty=raw["uncertainty"] if spectrum else None,
-        t=np.ascontiguousarray(running[:, 0]),
-        running=np.ascontiguousarray(running[:, 1:]),
+        lambda_max=float(raw["numbers"]["lambda_max"]),
+        uncertainty=float(raw["numbers"]["uncertainty"]),
+        spectrum=exponents["value"] if spectrum else None,
+        spectrum_uncertainty=exponents["uncertainty"] if spectrum else None,
+        t=running["t"],
+        running=np.column_stack([v for k, v in running.items() if k != "t"]),
     )
 
 

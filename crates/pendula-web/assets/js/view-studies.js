@@ -28,6 +28,12 @@ function buildForm() {
       input = el('select');
       const list = p.kind === 'system' ? lab.hello.systems : lab.hello.methods;
       fillOptions(input, [['', `default: ${p.default}`, p.help], ...list.map((x) => [x.name, x.name, x.description || x.title || x.name])]);
+    } else if (p.kind === 'preset') {
+      input = el('select');
+      fillOptions(input, [['', p.default, p.help], ...p.choices.map((x) => [x, x, x])]);
+    } else if (p.kind === 'flag') {
+      input = el('input');
+      input.type = 'checkbox';
     } else {
       input = el('input');
       input.type = 'text';
@@ -56,6 +62,10 @@ function buildForm() {
 function request() {
   const inputs = {};
   for (const input of $('study-form').querySelectorAll('[data-param]')) {
+    if (input.dataset.kind === 'flag') {
+      if (input.checked) inputs[input.dataset.param] = true;
+      continue;
+    }
     const text = input.value.trim();
     if (!text) continue;
     const kind = input.dataset.kind;

@@ -55,3 +55,30 @@ def test_a_short_table_is_shown_and_a_fixed_system_has_no_field(browser, server,
     page.screenshot(path=str(shots / "studies-period.png"), full_page=True)
     assert not page.js_errors, page.js_errors
     page.close()
+
+
+def test_a_switch_is_a_checkbox_and_a_preset_a_list(browser, server, shots):
+    page = open_lab(browser, server)
+    page.click("#tab-studies")
+    page.select_option("#study-name", "lyapunov")
+    assert page.get_attribute("[data-param=spectrum]", "type") == "checkbox"
+    presets = page.eval_on_selector_all("[data-param=preset] option", "os => os.map(o => o.value)")
+    assert "baker-gollub-chaotic-1.5" in presets and presets[0] == ""
+    page.select_option("[data-param=preset]", "baker-gollub-chaotic-1.5")
+    page.check("[data-param=spectrum]")
+    for name, value in (("dt", "0.01"), ("t_end", "100"), ("transient", "0")):
+        page.fill(f"[data-param={name}]", value)
+    page.click("#study-run")
+    page.wait_for_function("lab.study && lab.study.study === 'lyapunov'", timeout=15000)
+    # The preset picked the system; the spectrum of the damped driven pendulum (q = 2) has
+    # two exponents summing to -1/q, as the library's study finds them from Python.
+    report = pendula.study("lyapunov", preset="baker-gollub-chaotic-1.5", spectrum=True, dt=0.01, t_end=100, transient=0)
+    assert page.evaluate("lab.study.inputs") == dict(report.inputs)
+    rows = page.eval_on_selector_all(
+        "table.study-table tr", "rs => rs.map(r => [...r.children].map(c => c.textContent))"
+    )
+    assert [r[0] for r in rows[1:]] == ["lambda1", "lambda2"]
+    assert abs(sum(float(r[1]) for r in rows[1:]) + 0.5) < 1e-6
+    page.screenshot(path=str(shots / "studies-lyapunov.png"), full_page=True)
+    assert not page.js_errors, page.js_errors
+    page.close()

@@ -215,16 +215,6 @@ pub const WORK_PRECISION: Defaults = Defaults {
     ],
 };
 
-/// The largest Lyapunov exponent or the spectrum ([`mod@crate::analysis::lyapunov`]).
-pub const LYAPUNOV: Defaults = Defaults {
-    study: "lyapunov",
-    system: "double",
-    method: Some("rk4"),
-    dt: Some(1e-3),
-    t_end: Some(200.0),
-    values: &[num("transient", 10.0), num("renormalise", 0.5)],
-};
-
 /// A Poincaré section at one energy ([`crate::analysis::poincare`]).
 pub const POINCARE: Defaults = Defaults {
     study: "poincare",
@@ -294,7 +284,6 @@ pub static ALL: &[&Defaults] = &[
     &CONVERGENCE,
     &WORK_PRECISION,
     &ANIMATE,
-    &LYAPUNOV,
     &POINCARE,
     &BIFURCATION,
     &FRACTAL,
@@ -316,7 +305,6 @@ mod tests {
                 assert!(!d.values[..i].iter().any(|w| w.name == v.name), "{}: {} twice", d.study, v.name);
             }
         }
-        assert_eq!(LYAPUNOV.number("transient"), 10.0);
         assert_eq!(POINCARE.count("count"), 30);
         assert_eq!(Value::Number(1e-9).to_string(), "1e-9");
     }

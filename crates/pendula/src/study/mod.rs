@@ -19,6 +19,7 @@
 pub mod defaults;
 pub mod divergence;
 pub mod energy_budget;
+pub mod lyapunov;
 pub mod period;
 pub mod regimes;
 pub mod round_trip;
@@ -74,6 +75,14 @@ pub fn state_units(info: &crate::system::SystemInfo) -> String {
 pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error> {
     let spec = crate::RunSpec { t0: 0.0, h: dt, end: crate::End::Time(t_end) };
     spec.schedule().map_err(|e| match e {
+        // Too many steps is the step and the end together: both are named.
+        Error::InvalidValue { name, value, allowed } if name == "h" && allowed.contains("10^13") => {
+            Error::InvalidInput {
+                name: "dt".into(),
+                value: Short(value).to_string(),
+                allowed: format!("{allowed} to `t_end` {}", Short(t_end)),
+            }
+        }
         Error::InvalidValue { name, value, allowed } if name == "h" => {
             Error::InvalidValue { name: "dt".into(), value, allowed }
         }
@@ -87,6 +96,7 @@ pub const STUDIES: &[&Study] = &[
     &period::STUDY,
     &regimes::STUDY,
     &divergence::STUDY,
+    &lyapunov::STUDY,
     &energy_budget::STUDY,
     &round_trip::STUDY,
 ];
@@ -159,6 +169,16 @@ impl Param {
         }
     }
 
+    /// A preset of the driven systems' settings (`--preset baker-gollub-chaotic`), which
+    /// also picks the system.
+    pub const fn preset() -> Param {
+        Param {
+            name: "preset",
+            help: "A named set of settings (`pendula list presets`); it also picks the system, and `set` applies over it",
+            kind: Kind::Preset,
+        }
+    }
+
     /// The integration method.
     pub const fn method(default: &'static str) -> Param {
         Param { name: "method", help: "The integration method", kind: Kind::Method { default } }
@@ -228,6 +248,11 @@ pub enum Kind {
         /// The values allowed.
         domain: Domain,
     },
+    /// A switch, off unless given (`--spectrum`; `spectrum=True`).
+    Flag,
+    /// A named set of a system's settings ([`crate::system::driven::PRESETS`]): it picks the
+    /// system when none is named, and its settings come before the user's.
+    Preset,
     /// A whole number within bounds.
     Count {
         /// The value when none is given.
@@ -297,6 +322,25 @@ impl Param {
             Kind::Variable => "the first state variable".to_owned(),
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
+            Kind::Flag => "off".to_owned(),
+            Kind::Preset => "none".to_owned(),
+        }
+    }
+
+    /// What kind of value it takes, in one word, as front ends describe it to their users
+    /// (Python's `studies()`, the lab's form): `system` (`fixed-system` for the one a study
+    /// runs), `method`, `methods`, `variable`, `real`, `count`, `flag`, `preset`.
+    pub fn kind_name(&self) -> &'static str {
+        match self.kind {
+            Kind::System { fixed: true, .. } => "fixed-system",
+            Kind::System { .. } => "system",
+            Kind::Method { .. } => "method",
+            Kind::Methods => "methods",
+            Kind::Variable => "variable",
+            Kind::Real { .. } => "real",
+            Kind::Count { .. } => "count",
+            Kind::Flag => "flag",
+            Kind::Preset => "preset",
         }
     }
 
@@ -317,6 +361,8 @@ pub enum Input {
     Number(f64),
     /// A name (a system, a method).
     Name(String),
+    /// A switch's state.
+    Flag(bool),
 }
 
 impl fmt::Display for Input {
@@ -324,6 +370,7 @@ impl fmt::Display for Input {
         match self {
             Input::Number(v) => write!(f, "{}", Short(*v)),
             Input::Name(s) => f.write_str(s),
+            Input::Flag(b) => write!(f, "{b}"),
         }
     }
 }
@@ -342,6 +389,12 @@ impl Inputs {
     /// `self` with `name` set to the number `v`.
     pub fn number(mut self, name: &str, v: f64) -> Self {
         self.values.push((name.to_owned(), Input::Number(v)));
+        self
+    }
+
+    /// `self` with the switch `name` set to `on`.
+    pub fn flag(mut self, name: &str, on: bool) -> Self {
+        self.values.push((name.to_owned(), Input::Flag(on)));
         self
     }
 
@@ -364,21 +417,63 @@ impl Inputs {
 pub struct Budget {
     /// The most integration steps (of one system) a run may take; `None` for no limit.
     pub max_steps: Option<f64>,
+    /// The most values a report's tables may hold (a long running estimate, say); `None`
+    /// for no limit.
+    pub max_values: Option<f64>,
+}
+
+/// What a [`Budget`] counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// Integration steps of one system.
+    Steps,
+    /// Values in a report's tables.
+    Values,
+}
+
+impl Cost {
+    /// The verb of a refusal: "would take 2e12 steps", "would hold 4e9 values".
+    pub fn verb(self) -> &'static str {
+        match self {
+            Cost::Steps => "take",
+            Cost::Values => "hold",
+        }
+    }
+
+    /// What is counted, plural.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Cost::Steps => "steps",
+            Cost::Values => "table values",
+        }
+    }
 }
 
 impl Budget {
     /// No limit.
-    pub const UNLIMITED: Budget = Budget { max_steps: None };
+    pub const UNLIMITED: Budget = Budget { max_steps: None, max_values: None };
 
     /// Refuses a run of `steps` steps (`what` says what they are) over the limit.
     ///
     /// # Errors
     /// [`Error::TooLarge`] naming the cost and the limit.
     pub fn afford(&self, steps: f64, what: impl Into<String>) -> Result<(), Error> {
-        match self.max_steps {
+        Self::refuse(self.max_steps, Cost::Steps, steps, what)
+    }
+
+    /// Refuses a report whose tables would hold `values` values over the limit.
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] naming the cost and the limit.
+    pub fn afford_values(&self, values: f64, what: impl Into<String>) -> Result<(), Error> {
+        Self::refuse(self.max_values, Cost::Values, values, what)
+    }
+
+    fn refuse(limit: Option<f64>, cost: Cost, amount: f64, what: impl Into<String>) -> Result<(), Error> {
+        match limit {
             // A NaN cost (from a NaN input that slipped through) is refused too.
-            Some(limit) if steps.is_nan() || steps > limit => {
-                Err(Error::TooLarge { what: what.into(), steps, limit })
+            Some(limit) if amount.is_nan() || amount > limit => {
+                Err(Error::TooLarge { what: what.into(), cost, amount, limit })
             }
             _ => Ok(()),
         }
@@ -472,6 +567,11 @@ impl<'a> Args<'a> {
                 value: crate::error::clip(text, 40),
                 allowed: "a number".to_owned(),
             }),
+            Some(Input::Flag(b)) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: b.to_string(),
+                allowed: "a number, not a bool".to_owned(),
+            }),
         }
     }
 
@@ -479,10 +579,32 @@ impl<'a> Args<'a> {
         match self.given(name) {
             None => Ok(None),
             Some(Input::Name(s)) => Ok(Some(s)),
-            Some(Input::Number(v)) => Err(Error::InvalidInput {
+            Some(other) => Err(Error::InvalidInput {
                 name: name.to_owned(),
-                value: Short(*v).to_string(),
+                value: other.to_string(),
                 allowed: "a name".to_owned(),
+            }),
+        }
+    }
+
+    /// The switch `name`: on when given on.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a value that is not a switch's.
+    ///
+    /// # Panics
+    /// When `name` is not a flag parameter of the study.
+    pub fn flag(&self, name: &str) -> Result<bool, Error> {
+        let Kind::Flag = self.param(name).kind else {
+            panic!("{name} is not a flag parameter of {}", self.study.name)
+        };
+        match self.given(name) {
+            None => Ok(false),
+            Some(Input::Flag(on)) => Ok(*on),
+            Some(other) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: other.to_string(),
+                allowed: "on or off (a switch)".to_owned(),
             }),
         }
     }
@@ -572,7 +694,25 @@ impl<'a> Args<'a> {
         let Kind::System { default, preset, fixed } = self.param(name).kind else {
             panic!("{name} is not a system parameter of {}", self.study.name)
         };
-        let given = self.text(name)?;
+        let mut given = self.text(name)?;
+        // A named preset (of a study that takes one) picks the system, and its settings
+        // come first.
+        let mut settings: Vec<(String, f64)> = Vec::new();
+        let named = self.study.params.iter().find(|p| matches!(p.kind, Kind::Preset));
+        if let Some(p) = named
+            && let Some(preset_name) = self.text(p.name)?
+        {
+            let chosen = crate::system::driven::find_preset(preset_name)?;
+            if let Some(system) = given.filter(|g| *g != chosen.system) {
+                return Err(Error::InvalidInput {
+                    name: p.name.to_owned(),
+                    value: preset_name.to_owned(),
+                    allowed: format!("it is for the system {}, not {system}", chosen.system),
+                });
+            }
+            given = Some(chosen.system);
+            settings.extend(chosen.settings.iter().map(|(n, v)| ((*n).to_owned(), *v)));
+        }
         if let Some(other) = given.filter(|g| fixed && g != &default) {
             return Err(Error::InvalidInput {
                 name: name.to_owned(),
@@ -581,8 +721,7 @@ impl<'a> Args<'a> {
             });
         }
         let info = crate::model::find(given.unwrap_or(default))?;
-        let mut settings: Vec<(String, f64)> = Vec::new();
-        if given.is_none_or(|g| g == default) {
+        if given.is_none_or(|g| g == default) && settings.is_empty() {
             settings.extend(preset.iter().map(|(n, v)| ((*n).to_owned(), *v)));
         }
         settings.extend(self.inputs.set.iter().cloned());
@@ -846,11 +985,13 @@ mod tests {
 
     #[test]
     fn budgets_refuse_runs_over_their_limit() {
-        let b = Budget { max_steps: Some(1e6) };
+        let b = Budget { max_steps: Some(1e6), max_values: Some(10.0) };
         assert!(b.afford(1e6, "a run").is_ok());
         let e = b.afford(2e6, "a sweep").unwrap_err().to_string();
         assert_eq!(e, format!("a sweep would take {} steps, over the limit of {}", Short(2e6), Short(1e6)));
         assert!(b.afford(f64::NAN, "x").is_err());
+        let e = b.afford_values(11.0, "a table").unwrap_err().to_string();
+        assert_eq!(e, "a table would hold 11 table values, over the limit of 10");
         assert!(Budget::UNLIMITED.afford(1e30, "x").is_ok());
     }
 

@@ -214,9 +214,12 @@ mod tests {
         assert!(e.contains("`theta`") && e.contains("from rest"), "{e}");
         let e = run(Inputs::default().name("system", "double"));
         assert!(e.contains("`double`") && e.contains("pendulum only"), "{e}");
-        let e = (STUDY.run)(&Inputs::default().number("dt", 1e-9), &Budget { max_steps: Some(1e9) })
-            .unwrap_err()
-            .to_string();
+        let e = (STUDY.run)(
+            &Inputs::default().number("dt", 1e-9),
+            &Budget { max_steps: Some(1e9), max_values: None },
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("35 amplitudes"), "{e}");
     }
 }
