@@ -69,7 +69,7 @@ macro_rules! commands {
     };
 }
 
-use crate::commands::{animate, compare, convergence, fractal, poincare};
+use crate::commands::{animate, compare, convergence, fractal};
 use crate::commands::{bifurcation, merge, plot, report, resume, serve, sweep, work_precision};
 
 commands! {
@@ -113,13 +113,6 @@ commands! {
     "" Study(crate::studies::StudyCommand) => crate::studies::StudyCommand::run,
     files: &[],
     examples: &[];
-    /// Poincare section of a conservative two-degree-of-freedom system: orbits on a fixed-energy
-    /// surface and their crossings of a section, located by events.
-    #[command(mut_arg("set", |a| a.help(SET_POINCARE)))]
-    #[command(mut_args(|a| poincare::DEFAULTS.document(a)))]
-    "poincare" Poincare(Box<poincare::PoincareArgs>) => poincare::run,
-    files: poincare::FILES,
-    examples: &["poincare --count 1 --t-end 10"];
     /// Stroboscopic orbit diagram of a driven system against a swept parameter (SIMD lanes for
     /// the driven pendulum).
     #[command(mut_arg("set", |a| a.help(SET_BIFURCATION)))]
@@ -227,8 +220,6 @@ const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the 
 (the oscillator's damping, kg/s) or `--set x=0.2` (m).";
 const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
 `--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_POINCARE: &str = "Set a parameter of the system, e.g. `--set m2=2` (kg) for the double \
-pendulum; every orbit starts on the energy surface (--energy).";
 const SET_BIFURCATION: &str = "Set a parameter over the preset or the defaults, e.g. `--set q=4` \
 (the driven pendulum's quality factor) or `--set drive_frequency=0.5`.";
 

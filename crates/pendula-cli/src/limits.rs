@@ -40,11 +40,7 @@ pub const MAX_STEPS_PER_PERIOD: u64 = 1_000_000;
 pub const MAX_THREADS: usize = 1024;
 /// Steps of a fixed-step run (the library's own bound: 10¹³ steps take days).
 pub const MAX_STEPS: u64 = 10_000_000_000_000;
-/// A lower estimate of an adaptive run's steps per small-oscillation period
-/// (`Model::time_scale`): DOP853 takes about 40 at tolerance 1e-6 on the chaotic double
-/// pendulum and 100 at 1e-10, DOPRI5 300 at 1e-10. A lower estimate refuses only runs
-/// that are surely too large.
-pub const ADAPTIVE_STEPS_PER_PERIOD: f64 = 20.0;
+pub use pendula::study::{ADAPTIVE_STEPS_PER_PERIOD, adaptive_steps};
 /// Bytes of a CSV value (at most 24 characters and a separator).
 pub const CSV_BYTES_PER_VALUE: f64 = 25.0;
 
@@ -186,14 +182,6 @@ pub use pendula_io::value::bytes;
 /// counts them, without its checks: for estimates of validated values).
 pub fn steps(span: f64, h: f64) -> f64 {
     (span / h).ceil().max(1.0)
-}
-
-/// A lower estimate of an adaptive run's steps over `span` on a model of small-oscillation
-/// period `period`, no fewer than `span / h_max`.
-pub fn adaptive_steps(span: f64, period: f64, h_max: f64) -> f64 {
-    // A period of 0 (a start whose energy overflows) is unboundedly many steps.
-    let by_period = if period > 0.0 { span / period * ADAPTIVE_STEPS_PER_PERIOD } else { f64::INFINITY };
-    by_period.max(span / h_max).max(1.0)
 }
 
 /// The period of the motion from `y0`, s, for estimates of adaptive steps: the model's

@@ -28,12 +28,12 @@ pub fn flag(param: &Param) -> String {
 /// The help of a parameter: its phrase, its unit, and its default (from the study, so that
 /// it is written once).
 pub fn help(study: &Study, param: &Param) -> String {
-    let unit = match param.kind {
-        Kind::Real { unit: Unit::Time, .. } => ", s (none for a dimensionless system)".to_owned(),
-        Kind::Real { unit: Unit::Fixed(u), .. } => format!(", {u}"),
+    let unit = match param.real_unit() {
+        Some(Unit::Time) => ", s (none for a dimensionless system)".to_owned(),
+        Some(Unit::Fixed(u)) => format!(", {u}"),
         _ => String::new(),
     };
-    format!("{}{unit} [default: {}]", respell(study, param.help), param.default_text())
+    respell(study, &format!("{}{unit} [default: {}]", param.help, param.default_text()))
 }
 
 /// `text` with each parameter it names in backticks (`` `renormalise` ``) spelled as its
@@ -55,7 +55,8 @@ pub fn command(study: &'static Study) -> clap::Command {
             Kind::Methods => Arg::new(p.name).long(p.name).value_name("LIST"),
             Kind::Variable | Kind::Preset => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Flag => Arg::new(p.name).long(p.name).action(clap::ArgAction::SetTrue),
-            Kind::Real { .. } | Kind::Count { .. } => Arg::new(p.name)
+            Kind::Section { .. } => Arg::new(p.name).long(p.name).value_name("NAME=VALUE"),
+            Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } => Arg::new(p.name)
                 .long(p.name.replace('_', "-"))
                 .value_name(p.name.to_uppercase())
                 .allow_hyphen_values(true),
@@ -73,8 +74,11 @@ pub fn command(study: &'static Study) -> clap::Command {
 /// `--set` help with an example on the study's default system: its first parameter at twice
 /// its default (`--set l=2` for the pendulum), which is always in its domain.
 fn set_help(study: &Study) -> Option<String> {
-    let (default, fixed) = study.params.iter().find_map(|p| match p.kind {
-        Kind::System { default, fixed, .. } => Some((default, fixed)),
+    // `fixed`: only the system's parameters may be set (its start is the study's).
+    let (default, fixed, own_start) = study.params.iter().find_map(|p| match p.kind {
+        Kind::System { default, fixed, own_start, .. } => {
+            Some((default, fixed || own_start.is_some(), own_start))
+        }
         _ => None,
     })?;
     let info = pendula::model::find(default).ok()?;
@@ -96,10 +100,11 @@ fn set_help(study: &Study) -> Option<String> {
         Some(format!(", or over a --preset's settings ({} with a {} preset)", example(q), preset.system))
     });
     Some(format!(
-        "Set {what} of the {default} system, e.g. {}{}; `pendula list systems` names them{}",
+        "Set {what} of the {default} system, e.g. {}{}; `pendula list systems` names them{}{}",
         example(q),
         over_preset.flatten().unwrap_or_default(),
-        if fixed { "" } else { "; angles take a `deg` or `pi` suffix (bare numbers are radians)" }
+        if fixed { "" } else { "; angles take a `deg` or `pi` suffix (bare numbers are radians)" },
+        own_start.map(|why| format!(" ({})", respell(study, why))).unwrap_or_default()
     ))
 }
 
@@ -189,7 +194,7 @@ impl StudyCommand {
     /// `--set` items against the system's quantities.
     fn inputs(&self, common: &Common) -> Result<Inputs> {
         let mut inputs = Inputs::default();
-        let (mut system, mut preset) = (None, None);
+        let (mut system, mut preset, mut section) = (None, None, None);
         for p in self.study.params {
             if let Kind::Flag = p.kind {
                 if self.matches.get_flag(p.name) {
@@ -202,7 +207,11 @@ impl StudyCommand {
                 Kind::System { .. } | Kind::Method { .. } | Kind::Methods | Kind::Variable | Kind::Preset => {
                     Input::Name(text.clone())
                 }
-                Kind::Real { .. } | Kind::Count { .. } | Kind::Flag => {
+                Kind::Section { .. } => {
+                    section = Some((p, text.as_str()));
+                    continue;
+                }
+                Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } | Kind::Flag => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }
             };
@@ -218,11 +227,28 @@ impl StudyCommand {
             inputs.values.push((p.name.to_owned(), value));
         }
         let system = system.or(preset);
+        let default = self.study.params.iter().find_map(|p| match p.kind {
+            Kind::System { default, .. } => Some(default),
+            _ => None,
+        });
+        // A section's value in the value syntax of its angle (`90deg`), as a number.
+        if let Some((p, text)) = section {
+            let value = match text.split_once('=') {
+                Some((angle, value)) => {
+                    let info = pendula::model::find(system.or(default).unwrap_or_default())?;
+                    let quantity = info.state.iter().find(|q| q.name == angle.trim() && q.is_angle());
+                    match quantity {
+                        Some(q) => {
+                            format!("{}={:?}", q.name, crate::parse::parse_value(&flag(p), value, Some(q))?)
+                        }
+                        None => text.to_owned(),
+                    }
+                }
+                None => text.to_owned(),
+            };
+            inputs.values.push((p.name.to_owned(), Input::Name(value)));
+        }
         if !common.set.items.is_empty() {
-            let default = self.study.params.iter().find_map(|p| match p.kind {
-                Kind::System { default, .. } => Some(default),
-                _ => None,
-            });
             let name = system.or(default).ok_or_else(|| {
                 anyhow::anyhow!("invalid --set: {} runs no system whose values it could set", self.study.name)
             })?;
@@ -264,6 +290,16 @@ impl StudyCommand {
                     anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
                 }
             }
+            pendula::Error::InvalidValue { name, value, allowed }
+                if names.iter().any(|(n, _)| *n == name) =>
+            {
+                let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
+                anyhow::anyhow!(
+                    "invalid {shown} {}: {}",
+                    pendula::error::Short(value),
+                    respell(self.study, allowed)
+                )
+            }
             e => crate::parse::flag_error(e, &names),
         }
     }
@@ -278,6 +314,12 @@ fn rows(table: &pendula::study::Table) -> Vec<Vec<String>> {
     (0..table.rows()).map(|i| table.columns.iter().map(|c| cell(c, i)).collect()).collect()
 }
 
+/// A number in JSON: a whole one (a count, a round end time) as an integer, so that readers
+/// take `30` orbits as the count it is; others with every digit.
+fn number(x: f64) -> Value {
+    if x.fract() == 0.0 && x.abs() < 9e15 { json!(x as i64) } else { json!(x) }
+}
+
 /// The JSON summary: every input as the run used it, every number, and the rows of the
 /// tables short enough to show (`tables.NAME`, a list of {column: value}).
 fn document(report: &Report) -> Value {
@@ -285,21 +327,21 @@ fn document(report: &Report) -> Value {
     doc.insert("study".into(), json!(report.study));
     for (name, input) in &report.inputs {
         let v = match input {
-            Input::Number(x) => json!(x),
+            Input::Number(x) => number(*x),
             Input::Name(s) => json!(s),
             Input::Flag(b) => json!(b),
         };
         doc.insert((*name).into(), v);
     }
     for n in &report.numbers {
-        doc.insert(n.key.into(), json!(n.value));
+        doc.insert(n.key.into(), number(n.value));
     }
     let mut tables = Map::new();
     for t in report.tables.iter().filter(|t| t.shown) {
         let rows: Vec<Value> = (0..t.rows())
             .map(|i| {
                 let cell = |c: &pendula::study::Column| match &c.values {
-                    Cells::Numbers(v) => json!(v[i]),
+                    Cells::Numbers(v) => number(v[i]),
                     Cells::Text(t) => json!(t[i]),
                 };
                 Value::Object(t.columns.iter().map(|c| (c.name.to_owned(), cell(c))).collect())
@@ -325,7 +367,9 @@ mod tests {
                 let arg =
                     cmd.get_arguments().find(|a| a.get_id() == p.name).expect("an argument per parameter");
                 let shown = arg.get_help().expect("help").to_string();
-                assert!(shown.ends_with(&format!("[default: {}]", p.default_text())), "{}: {shown}", p.name);
+                // The default as declared, its parameter names spelled as flags.
+                let default = respell(study, &p.default_text());
+                assert!(shown.ends_with(&format!("[default: {default}]")), "{}: {shown}", p.name);
             }
         }
     }

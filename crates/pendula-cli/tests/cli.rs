@@ -676,7 +676,7 @@ fn set_help_examples_belong_to_the_command() {
         ("oscillator-regimes", &[("--set m=2", "oscillator")]),
         ("divergence", &[("--set m1=2", "double")]),
         ("lyapunov", &[("--set m1=2", "double"), ("--set q=4", "driven-pendulum")]),
-        ("poincare", &[("--set m2=2", "double")]),
+        ("poincare", &[("--set m1=2", "double")]),
         (
             "bifurcation",
             &[("--set q=4", "driven-pendulum"), ("--set drive_frequency=0.5", "driven-pendulum")],

@@ -28,9 +28,14 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             match p.kind {
                 Kind::System { default, .. } | Kind::Method { default } => d.set_item("default", default)?,
                 Kind::Methods | Kind::Variable | Kind::Preset => d.set_item("default", py.None())?,
+                Kind::Section { default } => d.set_item("default", default)?,
                 Kind::Flag => d.set_item("default", false)?,
-                Kind::Real { default, unit, .. } => {
-                    d.set_item("default", default)?;
+                Kind::Real { .. } | Kind::Optional { .. } => {
+                    match p.kind {
+                        Kind::Real { default, .. } => d.set_item("default", default)?,
+                        _ => d.set_item("default", py.None())?,
+                    }
+                    let unit = p.real_unit().unwrap_or(Unit::None);
                     d.set_item(
                         "unit",
                         match unit {
@@ -149,6 +154,7 @@ fn run_study<'py>(
                     Style::Dashed => "dashed",
                     Style::Points => "points",
                     Style::LineMarkers => "line-markers",
+                    Style::Dots => "dots",
                 },
             )?;
             let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().map(|[x, y]| (*x, *y)).unzip();
@@ -168,6 +174,7 @@ fn run_study<'py>(
         }
         d.set_item("bars", bars)?;
         d.set_item("limits", p.limits)?;
+        d.set_item("legend", p.legend)?;
         plots.append(d)?;
     }
     out.set_item("plots", plots)?;

@@ -1,4 +1,4 @@
-//! The studies not yet on the registry (`pendula.poincare`, `fractal`,
+//! The studies not yet on the registry (`pendula.fractal`,
 //! `bifurcation`, `convergence`, `work_precision`): the library's analyses with the library's
 //! defaults, their results as plain dicts of numbers and arrays for `pendula.study` to wrap.
 //!
@@ -15,10 +15,8 @@ use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pendula::Error;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
-use pendula::analysis::poincare::{self as section_of, PoincareSpec, Stepping};
 use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
 use pendula::analysis::{self, OrderEstimate};
-use pendula::control::Tolerances;
 use pendula::ensemble::BatchMethod;
 use pendula::error::Short;
 use pendula::integrator::{self, METHODS, Method, Scheme};
@@ -43,17 +41,6 @@ fn positive(py: Python<'_>, name: &str, value: f64) -> PyResult<f64> {
     }
 }
 
-/// The library's error, its quantities named as the Python arguments (`h` → `dt`).
-fn renamed(py: Python<'_>, e: Error, names: &[(&str, &str)]) -> PyErr {
-    match e {
-        Error::InvalidValue { name, value, allowed } => {
-            let name = names.iter().find(|(from, _)| *from == name).map_or(name, |(_, to)| (*to).to_owned());
-            to_py(py, &Error::InvalidValue { name, value, allowed })
-        }
-        other => to_py(py, &other),
-    }
-}
-
 /// A worker pool of `threads` (default: every core).
 fn pool(py: Python<'_>, threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -64,114 +51,6 @@ fn pool(py: Python<'_>, threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
         .num_threads(threads)
         .build()
         .map_err(|e| raise(py, "PendulaError", format!("cannot start {threads} threads: {e}")))
-}
-
-fn rows<'py>(py: Python<'py>, data: Vec<f64>, cols: usize) -> Bound<'py, numpy::PyArray2<f64>> {
-    let n = data.len() / cols.max(1);
-    Array2::from_shape_vec((n, cols), data).expect("whole rows").into_pyarray(py)
-}
-
-/// A Poincaré section as `pendula poincare`: `count` orbits at `energy` (J) crossing
-/// `section` = `value` (rad) rising. Adaptive (`dt` None, an embedded pair, rtol = atol =
-/// `tol`) or fixed steps `dt`. Returns per crossing `orbit`, `t`, `states` (canonical
-/// q₁, q₂, p₁, p₂), `q`, `p` (the other angle, wrapped, and its momentum); `initial`
-/// (count, 4); `max_energy_error` (J); `section_index`.
-#[pyfunction]
-#[pyo3(signature = (system, energy, count, section, value, t_end, method, dt, tol, progress=None))]
-#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
-pub(crate) fn poincare<'py>(
-    py: Python<'py>,
-    system: &CoreSystem,
-    energy: f64,
-    count: usize,
-    section: &str,
-    value: f64,
-    t_end: f64,
-    method: &str,
-    dt: Option<f64>,
-    tol: f64,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let model = &*system.model;
-    let info = system.values.info();
-    // The system first: a system without an energy surface has no section, whatever the
-    // other arguments say.
-    section_of::check_system(model).map_err(|e| to_py(py, &e))?;
-    if !energy.is_finite() {
-        return Err(invalid(py, "energy", Short(energy), "a finite energy (J)"));
-    }
-    if !(1..=10_000).contains(&count) {
-        return Err(invalid(py, "count", count, "1 to 10000 orbits"));
-    }
-    let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
-    let Some(index) = info.state.iter().position(|q| q.name == section && q.is_angle()) else {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid section `{section}`: not an angle of {}; valid: {}",
-                info.name,
-                angles.join(", ")
-            ),
-        ));
-    };
-    if !value.is_finite() {
-        return Err(invalid(py, "value", Short(value), "a finite angle (rad)"));
-    }
-    let t_end = positive(py, "t_end", t_end)?;
-    let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
-    let stepping = match (dt, method.scheme) {
-        (Some(h), _) => {
-            if !(h.is_finite() && h > 0.0 && h <= t_end) {
-                return Err(invalid(py, "dt", Short(h), "finite, > 0 and at most t_end"));
-            }
-            Stepping::Fixed(h)
-        }
-        (None, Scheme::Embedded(_)) => {
-            let tol = Tolerances { rtol: tol, atol: tol, h_min: 0.0, h_max: f64::INFINITY };
-            tol.validate().map_err(|e| renamed(py, e, &[("rtol", "tol"), ("atol", "tol")]))?;
-            Stepping::Adaptive(tol)
-        }
-        (None, _) => {
-            return Err(raise(
-                py,
-                "InvalidValueError",
-                format!("method `{}` takes fixed steps: give dt", method.name),
-            ));
-        }
-    };
-    let spec = PoincareSpec { energy, count, section: index, value, t_end };
-    let orbits = interruptible(py, false, progress.as_ref(), |_| {
-        section_of::poincare(model, method, stepping, &spec)
-    })?
-    .map_err(|e| to_py(py, &e))?;
-    let worst = section_of::max_energy_error(model, &orbits, energy);
-    let other = 1 - index;
-    let (mut orbit, mut t, mut states, mut q, mut p, mut initial) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (k, o) in orbits.iter().enumerate() {
-        initial.extend_from_slice(&o.initial);
-        for (tc, z) in o.t.iter().zip(&o.crossings) {
-            orbit.push(k as i64);
-            t.push(*tc);
-            states.extend_from_slice(z);
-            q.push(pendula::system::wrap_angle(z[other]));
-            p.push(z[2 + other]);
-        }
-    }
-    let out = PyDict::new(py);
-    out.set_item("method", method.name)?;
-    out.set_item("section_index", index)?;
-    out.set_item("other", info.state[other].name)?;
-    out.set_item("orbit", orbit.into_pyarray(py))?;
-    out.set_item("t", t.into_pyarray(py))?;
-    out.set_item("states", rows(py, states, 4))?;
-    out.set_item("q", q.into_pyarray(py))?;
-    out.set_item("p", p.into_pyarray(py))?;
-    out.set_item("initial", rows(py, initial, 4))?;
-    out.set_item("crossings_per_orbit", orbits.iter().map(|o| o.t.len()).collect::<Vec<_>>())?;
-    out.set_item("max_energy_error", worst)?;
-    Ok(out)
 }
 
 /// The flip fractal as `pendula fractal`: the double pendulum `system` (its parameters; it
@@ -706,7 +585,6 @@ pub(crate) fn tolerance_ladder(loosest: f64, tightest: f64, levels: usize) -> Ve
 
 /// Adds the studies to the module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(poincare, m)?)?;
     m.add_function(wrap_pyfunction!(fractal, m)?)?;
     m.add_function(wrap_pyfunction!(bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(convergence, m)?)?;

@@ -103,7 +103,6 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
     library = _core.defaults()
     checked = 0
     for name, study in [
-        ("poincare", "poincare"),
         ("fractal", "fractal"),
         ("bifurcation", "bifurcation"),
         ("convergence", "convergence"),
@@ -115,14 +114,17 @@ def test_every_study_signature_takes_its_defaults_from_the_library():
                 assert p.default == library[study][p.name], (name, p.name)
                 checked += 1
     # Registry studies with hand-written functions take the registry's defaults.
-    for name in ("divergence", "lyapunov"):
+    for name in ("divergence", "lyapunov", "poincare"):
         registry = {p["name"]: p["default"] for e in _core.studies() if e["name"] == name for p in e["params"]}
         for p in inspect.signature(getattr(pendula, name)).parameters.values():
-            if p.default is not p.empty and p.default is not None and p.name != "progress":
+            # Poincaré's section is one parameter NAME=VALUE in the registry, two here.
+            if p.default is not p.empty and p.default is not None and p.name not in ("progress", "section", "value"):
                 assert p.default == registry[p.name], (name, p.name)
                 checked += 1
     assert checked >= 25, checked
-    assert pendula.poincare.__kwdefaults__["section"] + "=0" == library["poincare"]["section"]
+    poincare = pendula.poincare.__kwdefaults__
+    registry = {p["name"]: p["default"] for e in _core.studies() if e["name"] == "poincare" for p in e["params"]}
+    assert f"{poincare['section']}={poincare['value']:g}" == registry["section"]
     # The fractal's grid and the bifurcation's axis on defaults are the library's texts.
     for text in library["fractal"]["grid"].split(" and "):
         name, *axis = _core.parse_axis("double", [], text)

@@ -49,6 +49,17 @@ pub fn pretty(name: &str) -> String {
     format!("{stem}{}", subscript(digits))
 }
 
+/// `text` with each word that is a Greek-letter catalogue name as its symbol (`section
+/// theta1 = 0` → `section θ₁ = 0`); other words, method names with digits among them
+/// (`dopri5`), as they are.
+pub fn greek_words(text: &str) -> String {
+    let greek = |word: &str| {
+        let stem = word.trim_end_matches(|c: char| c.is_ascii_digit());
+        GREEK.iter().any(|(n, _)| *n == stem)
+    };
+    text.split(' ').map(|w| if greek(w) { pretty(w) } else { w.to_owned() }).collect::<Vec<_>>().join(" ")
+}
+
 /// A unit as printed: `^2` and `^3` become superscripts, `*` a space; the catalogue's `1`
 /// (a dimensionless quantity) becomes the empty string.
 pub fn unit(unit: &str) -> String {
@@ -101,6 +112,14 @@ pub fn with_unit(value: impl std::fmt::Display, unit_text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn greek_words_in_a_title_become_symbols_and_nothing_else_changes() {
+        assert_eq!(
+            greek_words("double: section theta1 = 0 (dopri5), p1 beta"),
+            "double: section θ₁ = 0 (dopri5), p1 β"
+        );
+    }
 
     #[test]
     fn names_become_symbols() {

@@ -28,13 +28,14 @@ impl From<&Plot> for Figure {
             return Figure::from(bars);
         }
         let mut figure = Figure::new(
-            plot.title.clone(),
+            crate::labels::greek_words(&plot.title),
             axis_label(&plot.x.label, &plot.x.unit),
             axis_label(&plot.y.label, &plot.y.unit),
         )
         .scales(scale(plot.x.log), scale(plot.y.log));
         // An unlabelled series continues the labelled one before it (its simulated markers
-        // beside its exact line), in its colour.
+        // beside its exact line), in its colour; without a legend the labels only tell
+        // series apart by colour.
         let mut color = 0;
         for (i, line) in plot.series.iter().enumerate() {
             if i > 0 && !line.label.is_empty() {
@@ -45,9 +46,10 @@ impl From<&Plot> for Figure {
                 Style::Dashed => Kind::Dashed,
                 Style::Points => Kind::Markers,
                 Style::LineMarkers => Kind::LineMarkers,
+                Style::Dots => Kind::Dots,
             };
             figure = figure.with(
-                line.label.clone(),
+                if plot.legend { line.label.clone() } else { String::new() },
                 palette(color),
                 kind,
                 line.points.iter().map(|[x, y]| (*x, *y)).collect(),
@@ -72,6 +74,7 @@ mod tests {
             y: Axis { label: "theta1".into(), unit: "rad".into(), log: true },
             bars: Vec::new(),
             limits: None,
+            legend: true,
             series: vec![
                 Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },
                 Line { label: "fit".into(), style: Style::Dashed, points: vec![[0.0, 1.0]] },

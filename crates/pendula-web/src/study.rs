@@ -35,9 +35,9 @@ pub fn list() -> Value {
                 .params
                 .iter()
                 .map(|p| {
-                    let unit = match p.kind {
-                        Kind::Real { unit: Unit::Time, .. } => "time",
-                        Kind::Real { unit: Unit::Fixed(u), .. } => u,
+                    let unit = match p.real_unit() {
+                        Some(Unit::Time) => "time",
+                        Some(Unit::Fixed(u)) => u,
                         _ => "",
                     };
                     // `fixed-system` (the one system it runs) gets no field in the form.

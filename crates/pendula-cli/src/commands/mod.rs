@@ -21,7 +21,6 @@ pub mod convergence;
 pub mod fractal;
 pub mod merge;
 pub mod plot;
-pub mod poincare;
 pub mod report;
 pub mod resume;
 pub mod serve;

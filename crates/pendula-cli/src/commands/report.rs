@@ -752,9 +752,9 @@ fn build(page: &mut Page) -> Result<()> {
         &format!(
             "{} orbits on the energy surface E = {} J, their {} upward crossings of θ₁ = 0 located by events on dop853's \
              dense output (largest energy error {}): invariant curves of regular orbits beside a chaotic sea.",
-            q["count"],
+            cell(&q["count"]),
             cell(&q["energy"]),
-            q["crossings"],
+            cell(&q["crossings"]),
             short(f(&q["max_energy_error"]))
         ),
     );

@@ -88,7 +88,7 @@ class StudyReport:
                 ax.set_xlim(*p["limits"])
             ax.set_title(p["title"])
             return ax
-        styles = {"solid": "-", "dashed": "--", "points": "o", "line-markers": "o-"}
+        styles = {"solid": "-", "dashed": "--", "points": "o", "line-markers": "o-", "dots": "."}
         for s in p["series"]:
             ax.plot(s["x"], s["y"], styles[s["style"]], label=s["label"])
         for axis, set_label, set_scale in (("x", ax.set_xlabel, ax.set_xscale), ("y", ax.set_ylabel, ax.set_yscale)):
@@ -96,7 +96,8 @@ class StudyReport:
             set_label(a["label"] + (f" ({a['unit']})" if a["unit"] else ""))
             set_scale("log" if a["log"] else "linear")
         ax.set_title(p["title"])
-        ax.legend()
+        if p["legend"]:
+            ax.legend()
         return ax
 
     def _repr_html_(self) -> str:

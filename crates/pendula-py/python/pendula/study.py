@@ -45,9 +45,9 @@ _REGISTRY = {e["name"]: {p["name"]: p["default"] for p in e["params"]} for e in 
 _FRACTAL_GRID = {
     a[0]: tuple(a[1:]) for a in (_core.parse_axis("double", [], t) for t in _DEFAULTS["fractal"]["grid"].split(" and "))
 }
-#: The Poincaré section on defaults, the library's `NAME=VALUE` text read by the one value
+#: The Poincaré section on defaults, the registry's `NAME=VALUE` text read by the one value
 #: parser (`deg` and `pi` accepted): (angle, value in rad).
-_SECTION_NAME, _SECTION_VALUE = _DEFAULTS["poincare"]["section"].split("=", 1)
+_SECTION_NAME, _SECTION_VALUE = _REGISTRY["poincare"]["section"].split("=", 1)
 _POINCARE_SECTION = (_SECTION_NAME, _core.parse_value("double", _SECTION_NAME, _SECTION_VALUE))
 
 if TYPE_CHECKING:
@@ -274,7 +274,7 @@ class PoincareResult(_Pickled):
     ``count`` orbits of energy ``energy`` (J), in orbit order.
 
     Per crossing: ``orbit`` (its orbit's index), ``t`` (s), ``states`` (canonical
-    (q₁, q₂, p₁, p₂): rad and kg m²/s), ``q`` and ``p`` (the other angle, wrapped into
+    (q₁, q₂, p₁, p₂): rad and kg m²/s; the other angle wrapped as ``q``), ``q`` and ``p`` (the other angle, wrapped into
     [−π, π), and its momentum: the section's picture). ``initial`` (count, 4): each orbit's
     start (positions, velocities). ``crossings``, ``crossings_per_orbit`` and
     ``max_energy_error`` (J, the largest |H − E| at a crossing).
@@ -332,60 +332,73 @@ class PoincareResult(_Pickled):
 
 
 def poincare(
-    system: "System | str" = _DEFAULTS["poincare"]["system"],
+    system: "System | str" = _REGISTRY["poincare"]["system"],
     *,
-    energy: float = _DEFAULTS["poincare"]["energy"],
-    count: int = _DEFAULTS["poincare"]["count"],
+    energy: float = _REGISTRY["poincare"]["energy"],
+    count: int = _REGISTRY["poincare"]["count"],
     section: str = _POINCARE_SECTION[0],
     value: float = _POINCARE_SECTION[1],
-    t_end: float = _DEFAULTS["poincare"]["t_end"],
-    method: str = _DEFAULTS["poincare"]["method"],
+    t_end: float = _REGISTRY["poincare"]["t_end"],
+    method: str = _REGISTRY["poincare"]["method"],
     dt: Optional[float] = None,
-    tol: float = _DEFAULTS["poincare"]["tol"],
+    tol: float = _REGISTRY["poincare"]["tol"],
     progress: Any = None,
 ) -> PoincareResult:
     """A Poincaré section of a conservative two-degree-of-freedom ``system`` (the double
-    pendulum, or the chain with links=2), as ``pendula poincare``: ``count`` orbits
-    (1 to 10000) started on the surface H = ``energy`` (J) on the section (R2 sequence),
-    each followed for ``t_end`` (s), their crossings of ``section`` = ``value`` (an angle,
-    rad, mod 2π) with that angle increasing located on the dense output. ``method`` adaptive
-    (dop853, dopri5) at rtol = atol = ``tol``, or fixed steps ``dt`` (s) for any method.
-    The system's initial-state values are not used.
+    pendulum, or the chain with links=2), the library's ``poincare`` study (as ``pendula
+    poincare``): ``count`` orbits (1 to 10000) started on the surface H = ``energy`` (J) on
+    the section (R2 sequence), each followed for ``t_end`` (s), their crossings of
+    ``section`` = ``value`` (an angle, rad, mod 2π) with that angle increasing located on
+    the dense output. ``method`` adaptive (dop853, dopri5) at rtol = atol = ``tol``, or
+    fixed steps ``dt`` (s) for any method. The system's initial-state values are not used.
+    :func:`pendula.study` ``("poincare", section="theta1=0", ...)`` returns the same as a
+    :class:`StudyReport`.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    args = (
-        system._core,
-        _float("energy", energy),
-        _int("count", count, 1, 10_000, "orbits"),
-        str(section),
-        _float("value", value),
-        _float("t_end", t_end),
-        str(method),
-        None if dt is None else _float("dt", dt),
-        _float("tol", tol),
-    )
-    raw = timed(progress, f"poincare {system.name}", lambda tick: _core.poincare(*args, tick))
+    values = [
+        ("system", system.name),
+        ("energy", _float("energy", energy)),
+        ("count", _int("count", count, 1, 10_000, "orbits")),
+        # The section as the library reads it: NAME=VALUE, the value's shortest exact digits.
+        ("section", f"{section}={_float('value', value)!r}"),
+        ("t_end", _float("t_end", t_end)),
+        ("method", str(method)),
+        ("tol", _float("tol", tol)),
+    ]
+    if dt is not None:
+        values.append(("dt", _float("dt", dt)))
+    settings = [(k, float(v)) for k, v in system._changed().items()]
+    raw = timed(progress, f"poincare {system.name}", lambda tick: _core.run_study("poincare", values, settings, tick))
+    crossings, orbits = raw["tables"]["poincare"], raw["tables"]["orbits"]
+    names = list(crossings)
+    other, section_name = names[2], names[4]
+    # Canonical (q₁, q₂, p₁, p₂) at each crossing: the section's angle as integrated, the
+    # other one wrapped into [−π, π) as the section's picture shows it.
+    angle = {section_name: crossings[section_name], other: crossings[other]}
+    momentum = {"p" + section_name[5:]: crossings[names[5]], "p" + other[5:]: crossings[names[3]]}
+    states = np.column_stack([angle["theta1"], angle["theta2"], momentum["p1"], momentum["p2"]])
+    state_names = [n for n in orbits if n not in ("orbit", "crossings")]
     return PoincareResult(
         system=system,
-        method=raw["method"],
+        method=raw["inputs"]["method"],
         energy=float(energy),
         count=int(count),
         section=str(section),
         value=float(value),
         t_end=float(t_end),
-        other=raw["other"],
-        orbit=raw["orbit"],
-        t=raw["t"],
-        states=raw["states"],
-        q=raw["q"],
-        p=raw["p"],
-        initial=raw["initial"],
-        crossings_per_orbit=tuple(raw["crossings_per_orbit"]),
-        max_energy_error=float(raw["max_energy_error"]),
+        other=other,
+        orbit=crossings["orbit"].astype(np.int64),
+        t=crossings["t"],
+        states=states,
+        q=crossings[other],
+        p=crossings[names[3]],
+        initial=np.column_stack([orbits[n] for n in state_names]),
+        crossings_per_orbit=tuple(int(c) for c in orbits["crossings"]),
+        max_energy_error=float(raw["numbers"]["max_energy_error"]),
     )
 
 

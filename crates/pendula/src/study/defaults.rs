@@ -215,25 +215,6 @@ pub const WORK_PRECISION: Defaults = Defaults {
     ],
 };
 
-/// A Poincaré section at one energy ([`crate::analysis::poincare`]).
-pub const POINCARE: Defaults = Defaults {
-    study: "poincare",
-    system: "double",
-    method: Some("dop853"),
-    dt: None,
-    t_end: Some(300.0),
-    values: &[
-        Default {
-            name: "energy",
-            value: Value::Number(-15.0),
-            why: "regular and chaotic orbits side by side",
-        },
-        count("count", 30),
-        Default { name: "section", value: Value::Text("theta1=0"), why: "" },
-        num("tol", 1e-10),
-    ],
-};
-
 /// A stroboscopic orbit diagram of a driven system ([`crate::analysis::strobe`]).
 pub const BIFURCATION: Defaults = Defaults {
     study: "bifurcation",
@@ -278,17 +259,8 @@ pub const ANIMATE: Defaults = Defaults {
 };
 
 /// Every study's defaults, in the CLI's order.
-pub static ALL: &[&Defaults] = &[
-    &SIMULATE,
-    &COMPARE,
-    &CONVERGENCE,
-    &WORK_PRECISION,
-    &ANIMATE,
-    &POINCARE,
-    &BIFURCATION,
-    &FRACTAL,
-    &SWEEP,
-];
+pub static ALL: &[&Defaults] =
+    &[&SIMULATE, &COMPARE, &CONVERGENCE, &WORK_PRECISION, &ANIMATE, &BIFURCATION, &FRACTAL, &SWEEP];
 
 #[cfg(test)]
 mod tests {
@@ -305,7 +277,6 @@ mod tests {
                 assert!(!d.values[..i].iter().any(|w| w.name == v.name), "{}: {} twice", d.study, v.name);
             }
         }
-        assert_eq!(POINCARE.count("count"), 30);
         assert_eq!(Value::Number(1e-9).to_string(), "1e-9");
     }
 }

@@ -21,6 +21,7 @@ pub mod divergence;
 pub mod energy_budget;
 pub mod lyapunov;
 pub mod period;
+pub mod poincare;
 pub mod regimes;
 pub mod round_trip;
 pub mod stability;
@@ -90,6 +91,20 @@ pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error>
     })
 }
 
+/// A lower estimate of an adaptive run's steps per small-oscillation period
+/// (`Model::time_scale`): DOP853 takes about 40 at tolerance 1e-6 on the chaotic double
+/// pendulum and 100 at 1e-10, DOPRI5 300 at 1e-10. A lower estimate refuses only runs
+/// that are surely too large.
+pub const ADAPTIVE_STEPS_PER_PERIOD: f64 = 20.0;
+
+/// A lower estimate of an adaptive run's steps over `span` on a model of small-oscillation
+/// period `period`, no fewer than `span / h_max`.
+pub fn adaptive_steps(span: f64, period: f64, h_max: f64) -> f64 {
+    // A period of 0 (a start whose energy overflows) is unboundedly many steps.
+    let by_period = if period > 0.0 { span / period * ADAPTIVE_STEPS_PER_PERIOD } else { f64::INFINITY };
+    by_period.max(span / h_max).max(1.0)
+}
+
 /// Every study, in the order front ends list them.
 pub const STUDIES: &[&Study] = &[
     &stability::STUDY,
@@ -97,6 +112,7 @@ pub const STUDIES: &[&Study] = &[
     &regimes::STUDY,
     &divergence::STUDY,
     &lyapunov::STUDY,
+    &poincare::STUDY,
     &energy_budget::STUDY,
     &round_trip::STUDY,
 ];
@@ -155,7 +171,17 @@ impl Param {
         Param {
             name: "system",
             help: "The system to run",
-            kind: Kind::System { default, preset, fixed: false },
+            kind: Kind::System { default, preset, fixed: false, own_start: None },
+        }
+    }
+
+    /// The system run, `default` unless named, whose parameters the user may set but not its
+    /// start, which the study chooses (`why` says how).
+    pub const fn system_parameters(default: &'static str, why: &'static str) -> Param {
+        Param {
+            name: "system",
+            help: "The system to run",
+            kind: Kind::System { default, preset: &[], fixed: false, own_start: Some(why) },
         }
     }
 
@@ -165,7 +191,7 @@ impl Param {
         Param {
             name: "system",
             help: "The system it runs",
-            kind: Kind::System { default, preset: &[], fixed: true },
+            kind: Kind::System { default, preset: &[], fixed: true, own_start: None },
         }
     }
 
@@ -227,6 +253,9 @@ pub enum Kind {
         preset: &'static [(&'static str, f64)],
         /// Whether the study runs only its default system (front ends then offer no choice).
         fixed: bool,
+        /// Why the user may not set the initial state, when the study starts its runs itself
+        /// (`None`: the user may).
+        own_start: Option<&'static str>,
     },
     /// A method of [`integrator::METHODS`].
     Method {
@@ -253,6 +282,21 @@ pub enum Kind {
     /// A named set of a system's settings ([`crate::system::driven::PRESETS`]): it picks the
     /// system when none is named, and its settings come before the user's.
     Preset,
+    /// A real number that may be left out (then the study does something else, which
+    /// `none` says: `adaptive steps at tol`).
+    Optional {
+        /// Its unit, as [`Kind::Real`]'s.
+        unit: Unit,
+        /// The values allowed when given.
+        domain: Domain,
+        /// What the study does without it, in a phrase (shown as its default).
+        none: &'static str,
+    },
+    /// An angle of the system and a value of it, `NAME=VALUE` (rad): a Poincaré section.
+    Section {
+        /// The section when none is given.
+        default: &'static str,
+    },
     /// A whole number within bounds.
     Count {
         /// The value when none is given.
@@ -261,6 +305,8 @@ pub enum Kind {
         min: u64,
         /// Largest allowed.
         max: u64,
+        /// What it counts, plural (`orbits`), for messages.
+        of: &'static str,
     },
 }
 
@@ -323,6 +369,8 @@ impl Param {
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
             Kind::Flag => "off".to_owned(),
+            Kind::Optional { none, .. } => format!("none: {none}"),
+            Kind::Section { default } => default.to_owned(),
             Kind::Preset => "none".to_owned(),
         }
     }
@@ -337,7 +385,8 @@ impl Param {
             Kind::Method { .. } => "method",
             Kind::Methods => "methods",
             Kind::Variable => "variable",
-            Kind::Real { .. } => "real",
+            Kind::Real { .. } | Kind::Optional { .. } => "real",
+            Kind::Section { .. } => "section",
             Kind::Count { .. } => "count",
             Kind::Flag => "flag",
             Kind::Preset => "preset",
@@ -346,10 +395,18 @@ impl Param {
 
     /// The unit of a real parameter for `system`'s time unit (`""` for none).
     pub fn unit(&self, time_unit: &'static str) -> &'static str {
-        match self.kind {
-            Kind::Real { unit: Unit::Time, .. } => time_unit,
-            Kind::Real { unit: Unit::Fixed(u), .. } => u,
+        match self.real_unit() {
+            Some(Unit::Time) => time_unit,
+            Some(Unit::Fixed(u)) => u,
             _ => "",
+        }
+    }
+
+    /// The unit of a real parameter (given or optional); `None` for other kinds.
+    pub fn real_unit(&self) -> Option<Unit> {
+        match self.kind {
+            Kind::Real { unit, .. } | Kind::Optional { unit, .. } => Some(unit),
+            _ => None,
         }
     }
 }
@@ -544,7 +601,7 @@ impl<'a> Args<'a> {
     /// # Panics
     /// When `name` is not a count parameter of the study.
     pub fn count(&self, name: &str) -> Result<u64, Error> {
-        let Kind::Count { default, min, max } = self.param(name).kind else {
+        let Kind::Count { default, min, max, of } = self.param(name).kind else {
             panic!("{name} is not a count parameter of {}", self.study.name)
         };
         let Some(v) = self.number(name)? else { return Ok(default) };
@@ -552,10 +609,73 @@ impl<'a> Args<'a> {
             return Err(Error::InvalidInput {
                 name: name.to_owned(),
                 value: Short(v).to_string(),
-                allowed: format!("a whole number from {min} to {max}"),
+                allowed: format!("expected a whole number of {of}, >= {min} and <= {max}"),
             });
         }
         Ok(v as u64)
+    }
+
+    /// The optional real parameter `name`: `None` when not given, else checked against its
+    /// domain.
+    ///
+    /// # Errors
+    /// As [`Args::real`].
+    ///
+    /// # Panics
+    /// When `name` is not an optional real parameter of the study.
+    pub fn optional(&self, name: &str) -> Result<Option<f64>, Error> {
+        let Kind::Optional { domain, .. } = self.param(name).kind else {
+            panic!("{name} is not an optional parameter of {}", self.study.name)
+        };
+        match self.number(name)? {
+            Some(v) if !domain.contains(v) => {
+                Err(Error::InvalidValue { name: name.to_owned(), value: v, allowed: domain.describe() })
+            }
+            v => Ok(v),
+        }
+    }
+
+    /// The section parameter `name` on `info`: the index of the angle it names and its
+    /// value (rad).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for text that is not `NAME=VALUE`, a name that is not an
+    /// angle of the system (with the valid ones and the closest), a value that is not a
+    /// finite number.
+    ///
+    /// # Panics
+    /// When `name` is not a section parameter of the study.
+    pub fn section(&self, name: &str, info: &crate::system::SystemInfo) -> Result<(usize, f64), Error> {
+        let Kind::Section { default } = self.param(name).kind else {
+            panic!("{name} is not a section parameter of {}", self.study.name)
+        };
+        let text = self.text(name)?.unwrap_or(default);
+        let invalid = |allowed: String| Error::InvalidInput {
+            name: name.to_owned(),
+            value: crate::error::clip(text, 40),
+            allowed,
+        };
+        let Some((angle, value)) = text.split_once('=') else {
+            return Err(invalid("expected NAME=VALUE, e.g. theta1=0".to_owned()));
+        };
+        let angle = angle.trim();
+        let angles: Vec<&str> = info.state.iter().filter(|q| q.is_angle()).map(|q| q.name).collect();
+        let Some(index) = info.state.iter().position(|q| q.name == angle && q.is_angle()) else {
+            return Err(invalid(format!(
+                "`{}` is not an angle of {}{}; valid: {}",
+                crate::error::clip(angle, 40),
+                info.name,
+                crate::error::did_you_mean(&suggestions(angle, angles.iter().copied())),
+                angles.join(", ")
+            )));
+        };
+        match value.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok((index, v)),
+            _ => Err(invalid(format!(
+                "the value `{}` is not a finite number (rad)",
+                crate::error::clip(value, 40)
+            ))),
+        }
     }
 
     fn number(&self, name: &str) -> Result<Option<f64>, Error> {
@@ -691,7 +811,7 @@ impl<'a> Args<'a> {
     /// # Panics
     /// When `name` is not a system parameter of the study.
     pub fn system(&self, name: &str) -> Result<Values, Error> {
-        let Kind::System { default, preset, fixed } = self.param(name).kind else {
+        let Kind::System { default, preset, fixed, own_start } = self.param(name).kind else {
             panic!("{name} is not a system parameter of {}", self.study.name)
         };
         let mut given = self.text(name)?;
@@ -721,6 +841,16 @@ impl<'a> Args<'a> {
             });
         }
         let info = crate::model::find(given.unwrap_or(default))?;
+        if let Some(why) = own_start
+            && let Some((q, v)) =
+                self.inputs.set.iter().find(|(n, _)| info.state.iter().any(|q| q.name == *n))
+        {
+            return Err(Error::InvalidInput {
+                name: "set".into(),
+                value: format!("{q}={}", Short(*v)),
+                allowed: format!("{why}; set parameters only"),
+            });
+        }
         if given.is_none_or(|g| g == default) && settings.is_empty() {
             settings.extend(preset.iter().map(|(n, v)| ((*n).to_owned(), *v)));
         }
@@ -875,12 +1005,15 @@ pub struct Plot {
     pub bars: Vec<Bar>,
     /// The range of the value axis shown (a search range, say); `None` fits the values.
     pub limits: Option<(f64, f64)>,
+    /// Whether the series' labels form a legend; without one (tens of orbits told apart by
+    /// colour alone), each labelled series still takes the next colour.
+    pub legend: bool,
 }
 
 impl Plot {
     /// A plot of lines and point sets (no bars, the value range fitted).
     pub fn lines(name: &'static str, title: impl Into<String>, x: Axis, y: Axis, series: Vec<Line>) -> Plot {
-        Plot { name, title: title.into(), x, y, series, bars: Vec::new(), limits: None }
+        Plot { name, title: title.into(), x, y, series, bars: Vec::new(), limits: None, legend: true }
     }
 }
 
@@ -939,6 +1072,8 @@ pub enum Style {
     Points,
     /// A line with a marker at each point (few points, each a measurement).
     LineMarkers,
+    /// Small dots (thousands of points: a section's crossings).
+    Dots,
 }
 
 #[cfg(test)]
