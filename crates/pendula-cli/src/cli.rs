@@ -70,7 +70,7 @@ macro_rules! commands {
 }
 
 use crate::commands::{animate, compare, convergence, fractal};
-use crate::commands::{bifurcation, merge, plot, report, resume, serve, sweep, work_precision};
+use crate::commands::{merge, plot, report, resume, serve, sweep, work_precision};
 
 commands! {
     /// Integrate one system with one method and write its trajectory and a summary.
@@ -113,13 +113,6 @@ commands! {
     "" Study(crate::studies::StudyCommand) => crate::studies::StudyCommand::run,
     files: &[],
     examples: &[];
-    /// Stroboscopic orbit diagram of a driven system against a swept parameter (SIMD lanes for
-    /// the driven pendulum).
-    #[command(mut_arg("set", |a| a.help(SET_BIFURCATION)))]
-    #[command(mut_args(|a| bifurcation::DEFAULTS.document(a)))]
-    "bifurcation" Bifurcation(Box<bifurcation::BifurcationArgs>) => bifurcation::run,
-    files: bifurcation::FILES,
-    examples: &["bifurcation --param drive_amplitude=1:1.5:3 --transient 0 --samples 2 --steps-per-period 4"];
     /// Time to the first flip of the double pendulum released from rest over (theta1, theta2),
     /// on the ensemble engine, with a per-pixel convergence flag from a run at half the step.
     #[command(mut_args(|a| fractal::DEFAULTS.document(a)))]
@@ -220,9 +213,6 @@ const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the 
 (the oscillator's damping, kg/s) or `--set x=0.2` (m).";
 const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
 `--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_BIFURCATION: &str = "Set a parameter over the preset or the defaults, e.g. `--set q=4` \
-(the driven pendulum's quality factor) or `--set drive_frequency=0.5`.";
-
 #[cfg(test)]
 mod tests {
     use clap::{CommandFactory, Parser};

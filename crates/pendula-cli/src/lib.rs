@@ -157,11 +157,7 @@ fn exit_code(err: &anyhow::Error) -> u8 {
         return 1;
     }
     match err.downcast_ref::<pendula::Error>() {
-        Some(
-            pendula::Error::NonFinite { .. }
-            | pendula::Error::NewtonDidNotConverge { .. }
-            | pendula::Error::StepSizeTooSmall { .. },
-        ) => 1,
+        Some(e) if e.is_numerical() => 1,
         _ => 2,
     }
 }

@@ -22,7 +22,11 @@ pub struct StudyCommand {
 
 /// The flag of a parameter: `--t-end` for `t_end`.
 pub fn flag(param: &Param) -> String {
-    format!("--{}", param.name.replace('_', "-"))
+    match param.kind {
+        // The positional argument: named as a word.
+        Kind::System { .. } => param.name.to_owned(),
+        _ => format!("--{}", param.name.replace('_', "-")),
+    }
 }
 
 /// The help of a parameter: its phrase, its unit, and its default (from the study, so that
@@ -53,13 +57,16 @@ pub fn command(study: &'static Study) -> clap::Command {
             Kind::System { .. } => Arg::new(p.name).value_name("SYSTEM"),
             Kind::Method { .. } => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Methods => Arg::new(p.name).long(p.name).value_name("LIST"),
-            Kind::Variable | Kind::Preset => Arg::new(p.name).long(p.name).value_name("NAME"),
+            Kind::Variable { .. } | Kind::Preset => Arg::new(p.name).long(p.name).value_name("NAME"),
             Kind::Flag => Arg::new(p.name).long(p.name).action(clap::ArgAction::SetTrue),
             Kind::Section { .. } => Arg::new(p.name).long(p.name).value_name("NAME=VALUE"),
-            Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } => Arg::new(p.name)
-                .long(p.name.replace('_', "-"))
-                .value_name(p.name.to_uppercase())
-                .allow_hyphen_values(true),
+            Kind::Axis { .. } => Arg::new(p.name).long(p.name).value_name("NAME=LO:HI:N"),
+            Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } | Kind::Threads => {
+                Arg::new(p.name)
+                    .long(p.name.replace('_', "-"))
+                    .value_name(p.name.to_uppercase())
+                    .allow_hyphen_values(true)
+            }
         };
         cmd = cmd.arg(arg.help(help(study, p)));
     }
@@ -94,7 +101,8 @@ fn set_help(study: &Study) -> Option<String> {
     };
     // A study that takes a preset: its settings come first, and `--set` applies over them.
     let over_preset = study.params.iter().any(|p| matches!(p.kind, Kind::Preset)).then(|| {
-        let preset = pendula::system::driven::PRESETS.first()?;
+        // Only where the presets are another system's.
+        let preset = pendula::system::driven::PRESETS.first().filter(|p| p.system != default)?;
         let info = pendula::model::find(preset.system).ok()?;
         let q = info.parameters.iter().find(|q| q.default > 0.0)?;
         Some(format!(", or over a --preset's settings ({} with a {} preset)", example(q), preset.system))
@@ -157,6 +165,7 @@ impl StudyCommand {
             // The tables are written as CSV: each value a cell.
             max_values: limited
                 .then_some(crate::limits::MAX_OUTPUT_BYTES / crate::limits::CSV_BYTES_PER_VALUE),
+            max_lane_steps: limited.then_some(crate::limits::MAX_LANE_STEPS),
         };
         // Checked before the output directory is touched: bad input leaves no trace.
         let files: Vec<String> =
@@ -194,7 +203,9 @@ impl StudyCommand {
     /// `--set` items against the system's quantities.
     fn inputs(&self, common: &Common) -> Result<Inputs> {
         let mut inputs = Inputs::default();
-        let (mut system, mut preset, mut section) = (None, None, None);
+        // Values read in the units of the system's quantities they name (`90deg`), once the
+        // system is known.
+        let (mut system, mut preset, mut in_units) = (None, None, Vec::new());
         for p in self.study.params {
             if let Kind::Flag = p.kind {
                 if self.matches.get_flag(p.name) {
@@ -204,12 +215,18 @@ impl StudyCommand {
             }
             let Ok(Some(text)) = self.matches.try_get_one::<String>(p.name) else { continue };
             let value = match p.kind {
-                Kind::System { .. } | Kind::Method { .. } | Kind::Methods | Kind::Variable | Kind::Preset => {
-                    Input::Name(text.clone())
-                }
-                Kind::Section { .. } => {
-                    section = Some((p, text.as_str()));
+                Kind::System { .. }
+                | Kind::Method { .. }
+                | Kind::Methods
+                | Kind::Variable { .. }
+                | Kind::Preset => Input::Name(text.clone()),
+                Kind::Section { .. } | Kind::Axis { .. } => {
+                    in_units.push((p, text.as_str()));
                     continue;
+                }
+                // Within the CLI's thread limit (four a core without --allow-large).
+                Kind::Threads => {
+                    Input::Number(crate::limits::threads(Some(text), common.large.allow_large)? as f64)
                 }
                 Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } | Kind::Flag => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
@@ -231,20 +248,41 @@ impl StudyCommand {
             Kind::System { default, .. } => Some(default),
             _ => None,
         });
-        // A section's value in the value syntax of its angle (`90deg`), as a number.
-        if let Some((p, text)) = section {
-            let value = match text.split_once('=') {
-                Some((angle, value)) => {
-                    let info = pendula::model::find(system.or(default).unwrap_or_default())?;
-                    let quantity = info.state.iter().find(|q| q.name == angle.trim() && q.is_angle());
-                    match quantity {
-                        Some(q) => {
-                            format!("{}={:?}", q.name, crate::parse::parse_value(&flag(p), value, Some(q))?)
+        for (p, text) in in_units {
+            let info = pendula::model::find(system.or(default).unwrap_or_default())?;
+            let value = match p.kind {
+                // A section's value in the value syntax of its angle, as a number.
+                Kind::Section { .. } => match text.split_once('=') {
+                    Some((angle, value)) => {
+                        match info.state.iter().find(|q| q.name == angle.trim() && q.is_angle()) {
+                            Some(q) => {
+                                format!(
+                                    "{}={:?}",
+                                    q.name,
+                                    crate::parse::parse_value(&flag(p), value, Some(q))?
+                                )
+                            }
+                            None => text.to_owned(),
                         }
-                        None => text.to_owned(),
+                    }
+                    None => text.to_owned(),
+                },
+                // An axis's bounds in its quantity's value syntax; a name the system does not
+                // have, and the other checks, are the study's.
+                _ => {
+                    let example = "drive_amplitude=1.0:1.5:800";
+                    match pendula_io::value::parse_axis_text(info, &flag(p), example, text) {
+                        Ok(a) if info.parameters.iter().any(|q| q.name == a.name) => {
+                            format!("{}={:?}:{:?}:{}", a.name, a.lo, a.hi, a.n)
+                        }
+                        Err(e)
+                            if info.quantity(text.split('=').next().unwrap_or_default().trim()).is_ok() =>
+                        {
+                            return Err(e.into());
+                        }
+                        _ => text.to_owned(),
                     }
                 }
-                None => text.to_owned(),
             };
             inputs.values.push((p.name.to_owned(), Input::Name(value)));
         }
@@ -269,6 +307,9 @@ impl StudyCommand {
                 let estimate = match cost {
                     pendula::study::Cost::Steps => {
                         crate::limits::Estimate::new(crate::limits::Cost::Steps, amount, what)
+                    }
+                    pendula::study::Cost::LaneSteps => {
+                        crate::limits::Estimate::new(crate::limits::Cost::LaneSteps, amount, what)
                     }
                     // Each value a CSV cell.
                     pendula::study::Cost::Values => crate::limits::Estimate::new(
@@ -308,6 +349,7 @@ impl StudyCommand {
 /// A table's rows, each value as CSV and the printed tables write numbers.
 fn rows(table: &pendula::study::Table) -> Vec<Vec<String>> {
     let cell = |c: &pendula::study::Column, i: usize| match &c.values {
+        Cells::Numbers(v) if c.whole => format!("{}", v[i] as i64),
         Cells::Numbers(v) => num(v[i]),
         Cells::Text(t) => t[i].clone(),
     };

@@ -18,7 +18,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use pendula::analysis;
 use pendula::integrator::Method;
-use pendula::system::{self, Values};
+use pendula::system::Values;
 use pendula_viz::Figure;
 
 use pendula::error::Short;
@@ -196,25 +196,6 @@ pub fn values(system: &str, set: &[String]) -> Result<Values> {
     let values = info.values(&parse_settings(info, set)?)?;
     values.check_energy()?;
     Ok(values)
-}
-
-/// The system and the (name, value) settings of a command that takes `--preset`, not yet
-/// validated as a whole (for commands that add their own settings per run).
-pub fn preset_settings(
-    system: Option<&str>,
-    preset: Option<&str>,
-    set: &[String],
-    default: &str,
-) -> Result<(&'static system::SystemInfo, Vec<(String, f64)>)> {
-    let preset = preset.map(system::driven::find_preset).transpose()?;
-    let name = system.or(preset.map(|p| p.system)).unwrap_or(default);
-    let info = pendula::model::find(name)?;
-    let mut settings = match preset {
-        Some(p) => crate::parse::preset_settings(info, p)?,
-        None => Vec::new(),
-    };
-    settings.extend(parse_settings(info, set)?);
-    Ok((info, settings))
 }
 
 /// The output directory: created if needed (and removed again if the run fails or is refused

@@ -677,10 +677,7 @@ fn set_help_examples_belong_to_the_command() {
         ("divergence", &[("--set m1=2", "double")]),
         ("lyapunov", &[("--set m1=2", "double"), ("--set q=4", "driven-pendulum")]),
         ("poincare", &[("--set m1=2", "double")]),
-        (
-            "bifurcation",
-            &[("--set q=4", "driven-pendulum"), ("--set drive_frequency=0.5", "driven-pendulum")],
-        ),
+        ("bifurcation", &[("--set q=4", "driven-pendulum")]),
     ];
     let dir = TempDir::new().unwrap();
     for (command, examples) in commands {

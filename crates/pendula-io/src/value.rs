@@ -219,21 +219,7 @@ pub fn axis_example(info: &SystemInfo) -> String {
     }
 }
 
-/// A count for a message: in full up to a million, as a power of ten (`10^13`) or with an
-/// exponent beyond.
-pub fn count(n: u64) -> String {
-    if n < 1_000_000 {
-        return n.to_string();
-    }
-    let digits = n.to_string();
-    if digits.starts_with('1') && digits[1..].bytes().all(|b| b == b'0') {
-        format!("10^{}", digits.len() - 1)
-    } else {
-        sci(n as f64)
-    }
-}
-
-pub use pendula::error::sci;
+pub use pendula::error::{count, sci};
 
 /// Bytes for people: `512 B`, `1.5 MiB`, `3 GiB`, `2.3e6 TiB`.
 pub fn bytes(x: f64) -> String {

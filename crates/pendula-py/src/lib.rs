@@ -85,7 +85,9 @@ fn to_py(py: Python<'_>, e: &Error) -> PyErr {
         | Error::UnknownStudy { .. }
         | Error::UnknownInput { .. } => "UnknownNameError",
         Error::UnmetRequirement { .. } => "UnsuitableMethodError",
-        Error::NonFinite { .. } | Error::NonFiniteMember { .. } => "NonFiniteStateError",
+        Error::NonFinite { .. } | Error::NonFiniteMember { .. } | Error::NonFiniteIn { .. } => {
+            "NonFiniteStateError"
+        }
         Error::StepSizeTooSmall { .. } => "StepSizeTooSmallError",
         Error::NewtonDidNotConverge { .. } => "NewtonError",
         Error::InvalidValue { .. } | Error::InvalidInput { .. } | Error::TooLarge { .. } => {
@@ -147,6 +149,7 @@ fn failure_time(e: &Error) -> Option<f64> {
     match e {
         Error::NonFinite { t }
         | Error::NonFiniteMember { t, .. }
+        | Error::NonFiniteIn { t, .. }
         | Error::StepSizeTooSmall { t, .. }
         | Error::NewtonDidNotConverge { t, .. } => Some(*t),
         _ => None,

@@ -27,8 +27,12 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             d.set_item("kind", p.kind_name())?;
             match p.kind {
                 Kind::System { default, .. } | Kind::Method { default } => d.set_item("default", default)?,
-                Kind::Methods | Kind::Variable | Kind::Preset => d.set_item("default", py.None())?,
+                Kind::Methods | Kind::Variable { .. } | Kind::Preset | Kind::Threads => {
+                    d.set_item("default", py.None())?
+                }
                 Kind::Section { default } => d.set_item("default", default)?,
+                // The default axis is one system's: the study chooses it.
+                Kind::Axis { .. } => d.set_item("default", py.None())?,
                 Kind::Flag => d.set_item("default", false)?,
                 Kind::Real { .. } | Kind::Optional { .. } => {
                     match p.kind {
@@ -122,6 +126,11 @@ fn run_study<'py>(
         for c in t.columns {
             units.set_item(c.name, c.unit)?;
             match c.values {
+                // An index or a count as integers.
+                Cells::Numbers(v) if c.whole => {
+                    columns
+                        .set_item(c.name, v.iter().map(|x| *x as i64).collect::<Vec<_>>().into_pyarray(py))?;
+                }
                 Cells::Numbers(v) => columns.set_item(c.name, v.into_pyarray(py))?,
                 Cells::Text(t) => columns.set_item(c.name, t)?,
             }

@@ -1,5 +1,4 @@
-//! The studies not yet on the registry (`pendula.fractal`,
-//! `bifurcation`, `convergence`, `work_precision`): the library's analyses with the library's
+//! The studies not yet on the registry (`pendula.fractal`, `convergence`, `work_precision`): the library's analyses with the library's
 //! defaults, their results as plain dicts of numbers and arrays for `pendula.study` to wrap.
 //!
 //! The arguments arrive with the defaults filled in by Python (from the library's
@@ -15,7 +14,6 @@ use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pendula::Error;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
-use pendula::analysis::strobe::{OrbitDiagramSpec, orbit_diagram};
 use pendula::analysis::{self, OrderEstimate};
 use pendula::ensemble::BatchMethod;
 use pendula::error::Short;
@@ -228,104 +226,6 @@ fn assembled<'py>(
     let centres = |a: GridAxis| (0..a.n).map(|i| a.centre(i)).collect::<Vec<_>>().into_pyarray(py);
     out.set_item("theta1_centres", centres(theta1))?;
     out.set_item("theta2_centres", centres(theta2))?;
-    Ok(out)
-}
-
-/// A stroboscopic orbit diagram as `pendula bifurcation`: `system` (a driven one) with
-/// parameter `param` at the n cell centres of (lo, hi), the state once per drive period for
-/// `samples` periods after `transient` (s, whole periods), RK4 at `steps_per_period`.
-/// Returns `values` (n,), `samples` (n, samples, n_state), `kernel`.
-#[pyfunction]
-#[pyo3(signature = (system, param, transient, samples, steps_per_period, threads=None, progress=None))]
-#[allow(clippy::too_many_arguments)] // the study's description, as Python passes it
-pub(crate) fn bifurcation<'py>(
-    py: Python<'py>,
-    system: &CoreSystem,
-    param: (String, f64, f64, usize),
-    transient: f64,
-    samples: usize,
-    steps_per_period: u32,
-    threads: Option<usize>,
-    progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let info = system.values.info();
-    if info.quantity("drive_frequency").is_err() {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid system `{}`: bifurcation needs a driven system (a drive_frequency parameter)",
-                info.name
-            ),
-        ));
-    }
-    let (name, lo, hi, n) = param;
-    let q = info.quantity(&name).map_err(|e| to_py(py, &e))?;
-    if !info.parameters.iter().any(|p| p.name == q.name) {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid param `{name}`: not a parameter of {}; set the initial state on the System",
-                info.name
-            ),
-        ));
-    }
-    if !(lo.is_finite() && hi.is_finite() && lo < hi && n >= 1) {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!(
-                "invalid param ({name:?}, {lo}, {hi}, {n}): (name, lo, hi, n) with finite lo < hi and n >= 1"
-            ),
-        ));
-    }
-    if !(transient.is_finite() && transient >= 0.0) {
-        return Err(invalid(py, "transient", Short(transient), "a finite time >= 0 (s)"));
-    }
-    if !(1..=1_000_000).contains(&samples) {
-        return Err(invalid(py, "samples", samples, "1 to 10^6 samples"));
-    }
-    if !(4..=1_000_000).contains(&steps_per_period) {
-        return Err(invalid(py, "steps_per_period", steps_per_period, "4 to 10^6 steps"));
-    }
-    let axis = GridAxis { lo, hi, n };
-    let base: Vec<(String, f64)> =
-        info.quantities().map(|q| (q.name.to_owned(), system.values.get(q.name))).collect();
-    let mut all = Vec::with_capacity(n);
-    for i in 0..n {
-        let mut s = base.clone();
-        s.push((q.name.to_owned(), axis.centre(i)));
-        all.push(info.values(&s).map_err(|e| to_py(py, &e))?);
-    }
-    let pool = pool(py, threads)?;
-    let spec = OrbitDiagramSpec { transient, samples, steps_per_period };
-    let data = interruptible(py, false, progress.as_ref(), |_| pool.install(|| orbit_diagram(&all, &spec)))?
-        .map_err(|e| match e {
-            Error::NonFiniteMember { member, t } => raise(
-                py,
-                "NonFiniteStateError",
-                format!("{} ({} = {})", Error::NonFinite { t }, q.name, axis.centre(member)),
-            ),
-            other => to_py(py, &other),
-        })?;
-    let dim = info.state.len();
-    let out = PyDict::new(py);
-    out.set_item("values", (0..n).map(|i| axis.centre(i)).collect::<Vec<_>>().into_pyarray(py))?;
-    out.set_item(
-        "samples",
-        numpy::ndarray::Array3::from_shape_vec((n, samples, dim), data)
-            .expect("the samples")
-            .into_pyarray(py),
-    )?;
-    out.set_item(
-        "kernel",
-        if pendula::ensemble::driven::runs(info) {
-            "simd lanes (ensemble engine)"
-        } else {
-            "scalar, per value"
-        },
-    )?;
     Ok(out)
 }
 
@@ -586,7 +486,6 @@ pub(crate) fn tolerance_ladder(loosest: f64, tightest: f64, levels: usize) -> Ve
 /// Adds the studies to the module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fractal, m)?)?;
-    m.add_function(wrap_pyfunction!(bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(convergence, m)?)?;
     m.add_function(wrap_pyfunction!(work_precision, m)?)?;
     m.add_function(wrap_pyfunction!(tolerance_ladder, m)?)?;

@@ -108,7 +108,7 @@ def test_bifurcation_equals_the_cli_on_both_engines_and_settles_on_period_one(cl
          "--out-dir", "o", "--summary", "s.json"], tmp_path)
     s = summary(tmp_path / "s.json")
     r = pendula.bifurcation(param=("drive_amplitude", 1.0, 1.5, 16), transient=100, samples=10)
-    assert r.kernel == s["kernel"] == "simd lanes (ensemble engine)"
+    assert r.kernel == s["tables"]["run"][0]["kernel"] == "simd lanes (ensemble engine)"
     header, rows = read_csv(tmp_path / "o" / "bifurcation.csv")
     assert header == ["drive_amplitude", "sample", "theta", "omega"]
     ours = np.column_stack([np.repeat(r.values, 10), np.tile(np.arange(10), 16), r.samples.reshape(-1, 2)])
@@ -120,7 +120,7 @@ def test_bifurcation_equals_the_cli_on_both_engines_and_settles_on_period_one(cl
     p = summary(tmp_path / "p.json")
     scalar = pendula.bifurcation(pendula.System("pendulum", drive_frequency=2, damping=0.5),
                                  param=("drive_amplitude", 0.5, 2, 6), transient=30, samples=5)
-    assert scalar.kernel == p["kernel"] == "scalar, per value"
+    assert scalar.kernel == p["tables"]["run"][0]["kernel"] == "scalar, per value"
     _, rows = read_csv(tmp_path / "p" / "bifurcation.csv")
     np.testing.assert_array_equal(floats(rows, [2, 3]), scalar.samples.reshape(-1, 2))
     # Baker–Gollub (q = 2, ω_D = 2/3): at weak drive the motion settles, at the decay rate
@@ -211,7 +211,7 @@ def test_bad_input_names_the_value_and_what_is_allowed():
         pendula.fractal(theta1=(1, -1, 4))
     with pytest.raises(pendula.InvalidValueError, match="needs a driven system"):
         pendula.bifurcation("chain", param=("g", 1, 2, 3))
-    with pytest.raises(pendula.InvalidValueError, match="give param"):
+    with pytest.raises(pendula.InvalidValueError, match="give `param`"):
         pendula.bifurcation("pendulum")
     with pytest.raises(pendula.UnknownNameError, match="variable"):
         pendula.bifurcation(variable="phi", param=("drive_amplitude", 1, 2, 2))

@@ -29,8 +29,11 @@ impl From<&Plot> for Figure {
         }
         let mut figure = Figure::new(
             crate::labels::greek_words(&plot.title),
-            axis_label(&plot.x.label, &plot.x.unit),
-            axis_label(&plot.y.label, &plot.y.unit),
+            match plot.system {
+                Some(system) => crate::labels::system_axis_label(system, &plot.x.label, &plot.x.unit),
+                None => axis_label(&plot.x.label, &plot.x.unit),
+            },
+            axis_label(&crate::labels::greek_words(&plot.y.label), &plot.y.unit),
         )
         .scales(scale(plot.x.log), scale(plot.y.log));
         // An unlabelled series continues the labelled one before it (its simulated markers
@@ -74,6 +77,7 @@ mod tests {
             y: Axis { label: "theta1".into(), unit: "rad".into(), log: true },
             bars: Vec::new(),
             limits: None,
+            system: None,
             legend: true,
             series: vec![
                 Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },

@@ -70,7 +70,7 @@ pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refus
             Value::Bool(b) => Input::Flag(b),
             other => {
                 return Err(Refusal(format!(
-                    "invalid value {other} for `{name}`: a number, a name or a switch"
+                    "invalid value {other} for `{name}`: a number or a name, or true or false for a switch"
                 )));
             }
         };
@@ -79,6 +79,8 @@ pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refus
     let budget = Budget {
         max_steps: Some(limits.max_study_steps as f64),
         max_values: Some(limits.max_study_values as f64),
+        // The lanes run each system about ten times faster than the scalar integrators.
+        max_lane_steps: Some(10.0 * limits.max_study_steps as f64),
     };
     let report = (spec.run)(&inputs, &budget).map_err(|e| Refusal(e.to_string()))?;
     let tables: Vec<Value> = report

@@ -97,6 +97,15 @@ pub enum Error {
         /// Time of the first non-finite state, s.
         t: f64,
     },
+    /// One run of many, named by what sets it apart (`drive_amplitude = 1.2`), stopped being
+    /// finite.
+    #[error("{place}: the state became non-finite at t = {} s (try a smaller step)", Short(*.t))]
+    NonFiniteIn {
+        /// Which run, in words.
+        place: String,
+        /// Time of the first non-finite state, s.
+        t: f64,
+    },
     /// The step-size controller asked for a step below the minimum.
     #[error(
         "the step size fell to h = {} s at t = {} s, below the minimum (loosen the tolerances or lower the smallest step allowed)",
@@ -175,12 +184,42 @@ pub enum Error {
         /// What would run, in words.
         what: String,
         /// What is counted.
-        cost: crate::study::Cost,
+        cost: Cost,
         /// How much of it.
         amount: f64,
         /// The limit.
         limit: f64,
     },
+}
+
+/// What a [`crate::study::Budget`] counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// Integration steps of one system.
+    Steps,
+    /// Values in a report's tables.
+    Values,
+    /// Steps of one system on the ensemble engine's SIMD lanes.
+    LaneSteps,
+}
+
+impl Cost {
+    /// The verb of a refusal: "would take 2e12 steps", "would hold 4e9 values".
+    pub fn verb(self) -> &'static str {
+        match self {
+            Cost::Steps | Cost::LaneSteps => "take",
+            Cost::Values => "hold",
+        }
+    }
+
+    /// What is counted, plural.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Cost::Steps => "steps",
+            Cost::Values => "table values",
+            Cost::LaneSteps => "steps on SIMD lanes",
+        }
+    }
 }
 
 /// The error with which an observer ended a run ([`Error::Observer`]): shared, so that the
@@ -239,7 +278,10 @@ impl Error {
     pub fn is_numerical(&self) -> bool {
         matches!(
             self,
-            Error::NonFinite { .. } | Error::NewtonDidNotConverge { .. } | Error::StepSizeTooSmall { .. }
+            Error::NonFinite { .. }
+                | Error::NonFiniteIn { .. }
+                | Error::NewtonDidNotConverge { .. }
+                | Error::StepSizeTooSmall { .. }
         )
     }
 
@@ -324,6 +366,20 @@ pub fn sci(x: f64) -> String {
     let mantissa =
         if mantissa.contains('.') { mantissa.trim_end_matches('0').trim_end_matches('.') } else { mantissa };
     format!("{mantissa}e{exponent}")
+}
+
+/// A count for a message: in full up to a million, as a power of ten (`10^13`) or with an
+/// exponent beyond.
+pub fn count(n: u64) -> String {
+    if n < 1_000_000 {
+        return n.to_string();
+    }
+    let digits = n.to_string();
+    if digits.starts_with('1') && digits[1..].bytes().all(|b| b == b'0') {
+        format!("10^{}", digits.len() - 1)
+    } else {
+        sci(n as f64)
+    }
 }
 
 /// A count for people: whole numbers up to 10⁶ in full, larger ones as `1.2e14`.

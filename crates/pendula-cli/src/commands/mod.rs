@@ -15,7 +15,6 @@
 //! aborting.
 
 pub mod animate;
-pub mod bifurcation;
 pub mod compare;
 pub mod convergence;
 pub mod fractal;

@@ -817,9 +817,9 @@ fn build(page: &mut Page) -> Result<()> {
             "Baker and Gollub's damped, driven pendulum (q = 2, ω_D = 2/3): the angular velocity once per drive period \
              against the drive amplitude g, {} values from {} to {}, {} samples each after a transient of {} (time \
              in units of 1/ω₀) — period doubling, chaos, windows.",
-            cell(&b["param"]["n"]),
-            cell(&b["param"]["lo"]),
-            cell(&b["param"]["hi"]),
+            cell(&b["n"]),
+            cell(&b["lo"]),
+            cell(&b["hi"]),
             cell(&b["samples"]),
             cell(&b["transient"]),
         ),
@@ -828,15 +828,12 @@ fn build(page: &mut Page) -> Result<()> {
         &Shown { command: "bifurcation", file: "bifurcation.png" },
         "Stroboscopic orbit diagram of the driven pendulum.",
         Data::pairs(vec![
-            (
-                "drive amplitude g (dimensionless)",
-                format!("{} … {}", cell(&b["param"]["lo"]), cell(&b["param"]["hi"])),
-            ),
-            ("values of g", cell(&b["param"]["n"])),
+            ("drive amplitude g (dimensionless)", format!("{} … {}", cell(&b["lo"]), cell(&b["hi"]))),
+            ("values of g", cell(&b["n"])),
             ("samples per value", cell(&b["samples"])),
             ("transient (1/ω₀)", cell(&b["transient"])),
             ("RK4 steps per drive period", cell(&b["steps_per_period"])),
-            ("kernel", cell(&b["kernel"])),
+            ("kernel", cell(&b["tables"]["run"][0]["kernel"])),
             ("threads", cell(&b["threads"])),
         ]),
     )?;

@@ -47,8 +47,10 @@ class StudyReport:
             # Numbers as the CSV writes them (shortest round trip; a missing one empty),
             # right-aligned; text (a method, a note) left-aligned.
             numeric = [isinstance(c, np.ndarray) for c in columns.values()]
-            cell = lambda v, n: ("" if np.isnan(v) else repr(float(v))) if n else str(v)  # noqa: E731
-            rows = [[cell(v, n) for v, n in zip(values, numeric)] for values in zip(*columns.values())]
+            # A whole column (an index, a count) as integers, as the CSV writes it.
+            whole = [isinstance(c, np.ndarray) and c.dtype.kind == "i" for c in columns.values()]
+            cell = lambda v, n, w: str(int(v)) if w else ("" if np.isnan(v) else repr(float(v))) if n else str(v)  # noqa: E731
+            rows = [[cell(v, n, w) for v, n, w in zip(values, numeric, whole)] for values in zip(*columns.values())]
             widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(header)]
             align = lambda t, w, n: t.rjust(w) if n else t.ljust(w)  # noqa: E731
             lines = ["  ".join(align(h, w, n) for h, w, n in zip(header, widths, numeric)).rstrip()]

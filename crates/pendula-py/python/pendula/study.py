@@ -612,62 +612,64 @@ class BifurcationResult(_Pickled):
 
 
 def bifurcation(
-    system: "System | str" = _DEFAULTS["bifurcation"]["system"],
+    system: "System | str" = _REGISTRY["bifurcation"]["system"],
     *,
     param: Optional[Tuple[str, float, float, int]] = None,
-    transient: float = _DEFAULTS["bifurcation"]["transient"],
-    samples: int = _DEFAULTS["bifurcation"]["samples"],
-    steps_per_period: int = _DEFAULTS["bifurcation"]["steps_per_period"],
+    transient: float = _REGISTRY["bifurcation"]["transient"],
+    samples: int = _REGISTRY["bifurcation"]["samples"],
+    steps_per_period: int = _REGISTRY["bifurcation"]["steps_per_period"],
     variable: Optional[str] = None,
     threads: Optional[int] = None,
     progress: Any = None,
 ) -> BifurcationResult:
-    """A stroboscopic orbit diagram of a driven ``system``, as ``pendula bifurcation``:
-    ``param`` = (name, lo, hi, n) swept over n cell centres (default for the driven
-    pendulum: ("drive_amplitude", 1.0, 1.5, 800); required for other systems), the other
-    values the system's; per value, ``samples`` (1 to 10^6) states once per drive period
-    after ``transient`` (s, rounded up to whole periods), RK4 at ``steps_per_period``
-    (4 to 10^6). ``variable``: the state variable the plot shows (default: the first
-    velocity). All cores unless ``threads``; the result does not depend on them.
+    """A stroboscopic orbit diagram of a driven ``system``, the library's ``bifurcation``
+    study (as ``pendula bifurcation``): ``param`` = (name, lo, hi, n) swept over n cell
+    centres (default for the driven pendulum: ("drive_amplitude", 1.0, 1.5, 800); required
+    for other systems), the other values the system's; per value, ``samples`` (1 to 10^6)
+    states once per drive period after ``transient`` (s, rounded up to whole periods), RK4
+    at ``steps_per_period`` (4 to 10^6). ``variable``: the state variable the plot shows
+    (default: the first velocity). All cores unless ``threads``; the result does not depend
+    on them. :func:`pendula.study` ``("bifurcation", param="drive_amplitude=1:1.5:800",
+    ...)`` returns the same as a :class:`StudyReport`.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    if param is None:
-        if system.name != "driven-pendulum":
-            raise InvalidValueError(f"give param=(name, lo, hi, n) for {system.name}: the parameter to sweep")
-        param = _core.parse_axis(system.name, [], _DEFAULTS["bifurcation"]["param"])
-    try:
-        name, lo, hi, n = param
-    except (TypeError, ValueError):
-        raise InvalidValueError(f"invalid param {param!r}: (name, lo, hi, n)") from None
-    param = (str(name), _float("param", lo), _float("param", hi), _int("param", n, 1, 1 << 24, "values"))
+    values = [
+        ("system", system.name),
+        ("transient", _float("transient", transient)),
+        ("samples", _int("samples", samples, 1, 1_000_000, "samples")),
+        ("steps_per_period", _int("steps_per_period", steps_per_period, 4, 1_000_000, "steps")),
+    ]
+    if param is not None:
+        try:
+            name, lo, hi, n = param
+        except (TypeError, ValueError):
+            raise InvalidValueError(f"invalid param {param!r}: (name, lo, hi, n)") from None
+        # The axis as the library reads it: NAME=LO:HI:N, the bounds' shortest exact digits.
+        values.append(("param", f"{name}={_float('param', lo)!r}:{_float('param', hi)!r}:{_int('param', n, 1, 1 << 24, 'values')}"))
+    if variable is not None:
+        values.append(("variable", str(variable)))
+    if threads is not None:
+        values.append(("threads", _threads(threads)))
+    settings = [(k, float(v)) for k, v in system._changed().items()]
+    raw = timed(progress, f"bifurcation {system.name}", lambda tick: _core.run_study("bifurcation", values, settings, tick))
+    table, n = raw["tables"]["bifurcation"], int(raw["numbers"]["n"])
     names = tuple(system.names)
-    if variable is None:
-        variable = names[len(names) // 2]
-    elif variable not in names:
-        raise UnknownNameError(f"unknown variable `{variable}` of {system.name}; valid: {', '.join(names)}")
-    args = (
-        system._core,
-        param,
-        _float("transient", transient),
-        _int("samples", samples, 1, 1_000_000, "samples"),
-        _int("steps_per_period", steps_per_period, 4, 1_000_000, "steps"),
-        _threads(threads),
-    )
-    raw = timed(progress, f"bifurcation {system.name}", lambda tick: _core.bifurcation(*args, tick))
+    columns = list(table)
+    per_value = len(table["sample"]) // n
     return BifurcationResult(
         system=system,
-        param=param,
+        param=(columns[0], raw["numbers"]["lo"], raw["numbers"]["hi"], n),
         transient=float(transient),
         steps_per_period=int(steps_per_period),
-        variable=str(variable),
+        variable=raw["inputs"]["variable"],
         names=names,
-        values=raw["values"],
-        samples=raw["samples"],
-        kernel=raw["kernel"],
+        values=table[columns[0]][::per_value].copy(),
+        samples=np.stack([table[q] for q in names], axis=-1).reshape(n, per_value, len(names)),
+        kernel=raw["tables"]["run"]["kernel"][0],
     )
 
 

@@ -215,25 +215,6 @@ pub const WORK_PRECISION: Defaults = Defaults {
     ],
 };
 
-/// A stroboscopic orbit diagram of a driven system ([`crate::analysis::strobe`]).
-pub const BIFURCATION: Defaults = Defaults {
-    study: "bifurcation",
-    system: "driven-pendulum",
-    method: None,
-    dt: None,
-    t_end: None,
-    values: &[
-        Default {
-            name: "param",
-            value: Value::Text("drive_amplitude=1.0:1.5:800"),
-            why: "for driven-pendulum",
-        },
-        num("transient", 1000.0),
-        count("samples", 150),
-        count("steps_per_period", 100),
-    ],
-};
-
 /// The flip fractal of the double pendulum ([`crate::analysis::fractal`]).
 pub const FRACTAL: Defaults = Defaults {
     study: "fractal",
@@ -260,7 +241,7 @@ pub const ANIMATE: Defaults = Defaults {
 
 /// Every study's defaults, in the CLI's order.
 pub static ALL: &[&Defaults] =
-    &[&SIMULATE, &COMPARE, &CONVERGENCE, &WORK_PRECISION, &ANIMATE, &BIFURCATION, &FRACTAL, &SWEEP];
+    &[&SIMULATE, &COMPARE, &CONVERGENCE, &WORK_PRECISION, &ANIMATE, &FRACTAL, &SWEEP];
 
 #[cfg(test)]
 mod tests {

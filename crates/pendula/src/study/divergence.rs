@@ -23,7 +23,11 @@ pub const STUDY: Study = Study {
             help: "The initial separation, added to the state variable `variable`",
             kind: Kind::Real { default: 1e-9, unit: Unit::None, domain: Domain::Finite },
         },
-        Param { name: "variable", help: "The state variable to perturb", kind: Kind::Variable },
+        Param {
+            name: "variable",
+            help: "The state variable to perturb",
+            kind: Kind::Variable { velocity: false },
+        },
         Param {
             name: "saturation",
             help: "The fit uses the distances before they first exceed this",

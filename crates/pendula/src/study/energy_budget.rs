@@ -229,8 +229,11 @@ mod tests {
             report.summary
         );
         assert!(report.number("work").unwrap() < -1.0, "damping dissipates: {:?}", report.number("work"));
-        let e = (STUDY.run)(&Inputs::default(), &Budget { max_steps: Some(1000.0), max_values: None })
-            .unwrap_err();
+        let e = (STUDY.run)(
+            &Inputs::default(),
+            &Budget { max_steps: Some(1000.0), max_values: None, max_lane_steps: None },
+        )
+        .unwrap_err();
         assert!(matches!(e, Error::TooLarge { .. }), "{e}");
         let e = (STUDY.run)(&Inputs::default().name("method", "verlet"), &Budget::UNLIMITED).unwrap_err();
         assert!(e.to_string().contains("verlet needs"), "{e}");

@@ -233,7 +233,7 @@ mod tests {
         assert!(e.contains("it is for the system driven-pendulum, not pendulum"), "{e}");
         assert!(run(Inputs::default().name("preset", "nope")).contains("unknown preset `nope`"));
         assert!(run(Inputs::default().number("spectrum", 1.0)).contains("on or off"));
-        let over = Budget { max_steps: Some(1e9), max_values: Some(1e5) };
+        let over = Budget { max_steps: Some(1e9), max_values: Some(1e5), max_lane_steps: None };
         let e = (STUDY.run)(&Inputs::default().number("renormalise", 1e-3), &over).unwrap_err();
         assert!(e.to_string().contains("rows of the running estimate"), "{e}");
     }

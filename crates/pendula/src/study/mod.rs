@@ -16,6 +16,7 @@
 //! the `120deg`/`pi` value syntax is a front end's (the format crate's) job, so inputs
 //! arrive here as numbers and names.
 
+pub mod bifurcation;
 pub mod defaults;
 pub mod divergence;
 pub mod energy_budget;
@@ -113,6 +114,7 @@ pub const STUDIES: &[&Study] = &[
     &divergence::STUDY,
     &lyapunov::STUDY,
     &poincare::STUDY,
+    &bifurcation::STUDY,
     &energy_budget::STUDY,
     &round_trip::STUDY,
 ];
@@ -265,8 +267,12 @@ pub enum Kind {
     /// Methods of [`integrator::METHODS`], comma-separated, each applying to the system and
     /// named once; every method that applies ([`crate::model::applicable`]) when none is named.
     Methods,
-    /// A state variable of the system (`theta1`), by name; the first when none is named.
-    Variable,
+    /// A state variable of the system (`theta1`), by name; when none is named the first, or
+    /// the first velocity (the state's second half) when `velocity`.
+    Variable {
+        /// Whether the default is the first velocity.
+        velocity: bool,
+    },
     /// A real number in a unit, within a domain.
     Real {
         /// The value when none is given.
@@ -297,6 +303,15 @@ pub enum Kind {
         /// The section when none is given.
         default: &'static str,
     },
+    /// A parameter of the system swept over cells, `NAME=LO:HI:N` (N cell centres, as a
+    /// sweep's axis).
+    Axis {
+        /// The axis when none is given, for one system (`None`: the user must give one).
+        default: Option<(&'static str, &'static str)>,
+    },
+    /// The threads a parallel study runs on: all cores when not given (results do not
+    /// depend on them).
+    Threads,
     /// A whole number within bounds.
     Count {
         /// The value when none is given.
@@ -365,12 +380,18 @@ impl Param {
             }
             Kind::Method { default } => default.to_owned(),
             Kind::Methods => "every method that applies".to_owned(),
-            Kind::Variable => "the first state variable".to_owned(),
+            Kind::Variable { velocity: false } => "the first state variable".to_owned(),
+            Kind::Variable { velocity: true } => "the first velocity".to_owned(),
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
             Kind::Flag => "off".to_owned(),
             Kind::Optional { none, .. } => format!("none: {none}"),
             Kind::Section { default } => default.to_owned(),
+            Kind::Axis { default: Some((system, text)) } => {
+                format!("{text} for {system}; required otherwise")
+            }
+            Kind::Axis { default: None } => "none: required".to_owned(),
+            Kind::Threads => "all cores".to_owned(),
             Kind::Preset => "none".to_owned(),
         }
     }
@@ -384,9 +405,11 @@ impl Param {
             Kind::System { .. } => "system",
             Kind::Method { .. } => "method",
             Kind::Methods => "methods",
-            Kind::Variable => "variable",
+            Kind::Variable { .. } => "variable",
             Kind::Real { .. } | Kind::Optional { .. } => "real",
             Kind::Section { .. } => "section",
+            Kind::Axis { .. } => "axis",
+            Kind::Threads => "count",
             Kind::Count { .. } => "count",
             Kind::Flag => "flag",
             Kind::Preset => "preset",
@@ -477,38 +500,16 @@ pub struct Budget {
     /// The most values a report's tables may hold (a long running estimate, say); `None`
     /// for no limit.
     pub max_values: Option<f64>,
+    /// The most steps on the ensemble engine's SIMD lanes (each lane one system), which
+    /// run many times faster than the scalar integrators; `None` for no limit.
+    pub max_lane_steps: Option<f64>,
 }
 
-/// What a [`Budget`] counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Cost {
-    /// Integration steps of one system.
-    Steps,
-    /// Values in a report's tables.
-    Values,
-}
-
-impl Cost {
-    /// The verb of a refusal: "would take 2e12 steps", "would hold 4e9 values".
-    pub fn verb(self) -> &'static str {
-        match self {
-            Cost::Steps => "take",
-            Cost::Values => "hold",
-        }
-    }
-
-    /// What is counted, plural.
-    pub fn unit(self) -> &'static str {
-        match self {
-            Cost::Steps => "steps",
-            Cost::Values => "table values",
-        }
-    }
-}
+pub use crate::error::Cost;
 
 impl Budget {
     /// No limit.
-    pub const UNLIMITED: Budget = Budget { max_steps: None, max_values: None };
+    pub const UNLIMITED: Budget = Budget { max_steps: None, max_values: None, max_lane_steps: None };
 
     /// Refuses a run of `steps` steps (`what` says what they are) over the limit.
     ///
@@ -516,6 +517,14 @@ impl Budget {
     /// [`Error::TooLarge`] naming the cost and the limit.
     pub fn afford(&self, steps: f64, what: impl Into<String>) -> Result<(), Error> {
         Self::refuse(self.max_steps, Cost::Steps, steps, what)
+    }
+
+    /// Refuses a run of `steps` steps on the ensemble engine's lanes over the limit.
+    ///
+    /// # Errors
+    /// [`Error::TooLarge`] naming the cost and the limit.
+    pub fn afford_lanes(&self, steps: f64, what: impl Into<String>) -> Result<(), Error> {
+        Self::refuse(self.max_lane_steps, Cost::LaneSteps, steps, what)
     }
 
     /// Refuses a report whose tables would hold `values` values over the limit.
@@ -609,7 +618,11 @@ impl<'a> Args<'a> {
             return Err(Error::InvalidInput {
                 name: name.to_owned(),
                 value: Short(v).to_string(),
-                allowed: format!("expected a whole number of {of}, >= {min} and <= {max}"),
+                allowed: format!(
+                    "expected a whole number of {of}, >= {} and <= {}",
+                    crate::error::count(min),
+                    crate::error::count(max)
+                ),
             });
         }
         Ok(v as u64)
@@ -632,6 +645,82 @@ impl<'a> Args<'a> {
                 Err(Error::InvalidValue { name: name.to_owned(), value: v, allowed: domain.describe() })
             }
             v => Ok(v),
+        }
+    }
+
+    /// The axis parameter `name` on `info`: one of its parameters over `N` cells of
+    /// `[LO, HI]`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for none given where the study has no default for `info`, text
+    /// that is not `NAME=LO:HI:N`, a name that is not a parameter of the system, bounds not
+    /// finite with LO < HI, or N not a whole number from 1 to 10^9.
+    ///
+    /// # Panics
+    /// When `name` is not an axis parameter of the study.
+    pub fn axis(&self, name: &str, info: &crate::system::SystemInfo) -> Result<crate::sweep::Axis, Error> {
+        let Kind::Axis { default } = self.param(name).kind else {
+            panic!("{name} is not an axis parameter of {}", self.study.name)
+        };
+        let given = self.text(name)?;
+        let Some(text) = given.or(default.filter(|(s, _)| *s == info.name).map(|(_, t)| t)) else {
+            return Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: "none".into(),
+                allowed: format!("give `{name}` NAME=LO:HI:N for {}: the parameter to sweep", info.name),
+            });
+        };
+        let invalid = |allowed: String| Error::InvalidInput {
+            name: name.to_owned(),
+            value: crate::error::clip(text, 60),
+            allowed,
+        };
+        let parsed = text.split_once('=').and_then(|(q, range)| {
+            let parts: Vec<&str> = range.split(':').map(str::trim).collect();
+            let [lo, hi, n] = parts[..] else { return None };
+            Some((q.trim(), lo.parse::<f64>().ok()?, hi.parse::<f64>().ok()?, n.parse::<usize>().ok()?))
+        });
+        let Some((q, lo, hi, n)) = parsed else {
+            return Err(invalid("expected NAME=LO:HI:N, e.g. drive_amplitude=1.0:1.5:800".to_owned()));
+        };
+        let parameters = info.parameters.iter().map(|p| p.name);
+        if !info.parameters.iter().any(|p| p.name == q) {
+            return Err(invalid(format!(
+                "`{}` is not a parameter of {}{}; valid: {}",
+                crate::error::clip(q, 40),
+                info.name,
+                crate::error::did_you_mean(&suggestions(q, parameters.clone())),
+                parameters.collect::<Vec<_>>().join(", ")
+            )));
+        }
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(invalid(format!("need finite LO < HI (got {} and {})", Short(lo), Short(hi))));
+        }
+        if !(1..=1_000_000_000).contains(&n) {
+            return Err(invalid(format!("the number of cells must be from 1 to 10^9 (got {n})")));
+        }
+        Ok(crate::sweep::Axis { name: q.to_owned(), lo, hi, n })
+    }
+
+    /// The threads parameter `name`: `None` (all cores) when not given.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a value that is not a whole number from 1 to 1024.
+    ///
+    /// # Panics
+    /// When `name` is not a threads parameter of the study.
+    pub fn threads(&self, name: &str) -> Result<Option<usize>, Error> {
+        let Kind::Threads = self.param(name).kind else {
+            panic!("{name} is not a threads parameter of {}", self.study.name)
+        };
+        match self.number(name)? {
+            None => Ok(None),
+            Some(v) if v.fract() == 0.0 && (1.0..=1024.0).contains(&v) => Ok(Some(v as usize)),
+            Some(v) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: Short(v).to_string(),
+                allowed: "expected a whole number of threads, >= 1 and <= 1024".to_owned(),
+            }),
         }
     }
 
@@ -772,7 +861,7 @@ impl<'a> Args<'a> {
     }
 
     /// The variable parameter `name`: the index of the state variable of `info` it names, or
-    /// 0.
+    /// its default's.
     ///
     /// # Errors
     /// [`Error::UnknownName`] naming the valid variables.
@@ -780,16 +869,23 @@ impl<'a> Args<'a> {
     /// # Panics
     /// When `name` is not a variable parameter of the study.
     pub fn variable(&self, name: &str, info: &crate::system::SystemInfo) -> Result<usize, Error> {
-        let Kind::Variable = self.param(name).kind else {
+        let Kind::Variable { velocity } = self.param(name).kind else {
             panic!("{name} is not a variable parameter of {}", self.study.name)
         };
         match self.text(name)? {
-            None => Ok(0),
-            Some(v) => info
-                .state
-                .iter()
-                .position(|q| q.name == v)
-                .ok_or_else(|| Error::unknown_name(info.name, v, info.state.iter().map(|q| q.name))),
+            None => Ok(if velocity { info.state.len() / 2 } else { 0 }),
+            Some(v) => info.state.iter().position(|q| q.name == v).ok_or_else(|| {
+                match Error::unknown_name(info.name, v, info.state.iter().map(|q| q.name)) {
+                    // Which names it takes: the state variables.
+                    Error::UnknownName { system, name, valid, suggestions } => Error::UnknownName {
+                        system,
+                        name,
+                        valid: format!("{valid} (the state variables)"),
+                        suggestions,
+                    },
+                    e => e,
+                }
+            }),
         }
     }
 
@@ -940,17 +1036,26 @@ pub struct Column {
     pub unit: &'static str,
     /// Its values.
     pub values: Cells,
+    /// Whether its numbers are whole (an index, a count): written as integers (`3`, not
+    /// `3.0`).
+    pub whole: bool,
 }
 
 impl Column {
     /// A column of numbers (NaN for a missing value).
     pub fn numbers(name: &'static str, unit: &'static str, values: Vec<f64>) -> Column {
-        Column { name, unit, values: Cells::Numbers(values) }
+        Column { name, unit, values: Cells::Numbers(values), whole: false }
+    }
+
+    /// A column of whole numbers (an orbit's index, a count of crossings), held as numbers.
+    pub fn whole(name: &'static str, values: Vec<f64>) -> Column {
+        debug_assert!(values.iter().all(|v| v.fract() == 0.0));
+        Column { name, unit: "", values: Cells::Numbers(values), whole: true }
     }
 
     /// A column of text (names, notes).
     pub fn text(name: &'static str, values: Vec<String>) -> Column {
-        Column { name, unit: "", values: Cells::Text(values) }
+        Column { name, unit: "", values: Cells::Text(values), whole: false }
     }
 
     /// Its numbers.
@@ -1005,6 +1110,9 @@ pub struct Plot {
     pub bars: Vec<Bar>,
     /// The range of the value axis shown (a search range, say); `None` fits the values.
     pub limits: Option<(f64, f64)>,
+    /// The system whose quantity the horizontal axis is, when its symbol there differs from
+    /// the catalogue's (the driven pendulum's drive amplitude is Baker and Gollub's g).
+    pub system: Option<&'static str>,
     /// Whether the series' labels form a legend; without one (tens of orbits told apart by
     /// colour alone), each labelled series still takes the next colour.
     pub legend: bool,
@@ -1013,7 +1121,17 @@ pub struct Plot {
 impl Plot {
     /// A plot of lines and point sets (no bars, the value range fitted).
     pub fn lines(name: &'static str, title: impl Into<String>, x: Axis, y: Axis, series: Vec<Line>) -> Plot {
-        Plot { name, title: title.into(), x, y, series, bars: Vec::new(), limits: None, legend: true }
+        Plot {
+            name,
+            title: title.into(),
+            x,
+            y,
+            series,
+            bars: Vec::new(),
+            limits: None,
+            system: None,
+            legend: true,
+        }
     }
 }
 
@@ -1120,7 +1238,7 @@ mod tests {
 
     #[test]
     fn budgets_refuse_runs_over_their_limit() {
-        let b = Budget { max_steps: Some(1e6), max_values: Some(10.0) };
+        let b = Budget { max_steps: Some(1e6), max_values: Some(10.0), max_lane_steps: None };
         assert!(b.afford(1e6, "a run").is_ok());
         let e = b.afford(2e6, "a sweep").unwrap_err().to_string();
         assert_eq!(e, format!("a sweep would take {} steps, over the limit of {}", Short(2e6), Short(1e6)));

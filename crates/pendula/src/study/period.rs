@@ -216,7 +216,7 @@ mod tests {
         assert!(e.contains("`double`") && e.contains("pendulum only"), "{e}");
         let e = (STUDY.run)(
             &Inputs::default().number("dt", 1e-9),
-            &Budget { max_steps: Some(1e9), max_values: None },
+            &Budget { max_steps: Some(1e9), max_values: None, max_lane_steps: None },
         )
         .unwrap_err()
         .to_string();

@@ -177,7 +177,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         name: "poincare",
         shown: false,
         columns: vec![
-            Column::numbers("orbit", "", orbit),
+            Column::whole("orbit", orbit),
             Column::numbers("t", tu, t),
             Column::numbers(q_name, "rad", q),
             Column::numbers(MOMENTA[other], momentum, p),
@@ -192,8 +192,8 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         }
     }
     let mut orbit_columns = vec![
-        Column::numbers("orbit", "", (0..orbits.len()).map(|k| k as f64).collect()),
-        Column::numbers("crossings", "", orbits.iter().map(|o| o.t.len() as f64).collect()),
+        Column::whole("orbit", (0..orbits.len()).map(|k| k as f64).collect()),
+        Column::whole("crossings", orbits.iter().map(|o| o.t.len() as f64).collect()),
     ];
     for (q, column) in info.state.iter().zip(starts) {
         orbit_columns.push(Column::numbers(q.name, q.unit, column));

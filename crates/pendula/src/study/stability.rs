@@ -207,6 +207,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         series: Vec::new(),
         bars,
         limits: Some(H_RANGE),
+        system: None,
         legend: false,
     };
     let table = Table {
