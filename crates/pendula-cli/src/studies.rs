@@ -187,11 +187,11 @@ impl StudyCommand {
                     })
                     .collect();
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
-            say!(summary, "\n{}", crate::study::table(&header, &rows(table)));
+            say!(summary, "\n{}", crate::study::table(&header, &rows(table).collect::<Vec<_>>()));
         }
         for table in &report.tables {
             let header: Vec<&str> = table.columns.iter().map(|c| c.name).collect();
-            out.csv(&format!("{}.csv", table.name), &header, &rows(table))?;
+            out.csv_rows(&format!("{}.csv", table.name), &header, rows(table))?;
         }
         for plot in &report.plots {
             out.figure(plot.name, &pendula_viz::Figure::from(plot))?;
@@ -346,14 +346,14 @@ impl StudyCommand {
     }
 }
 
-/// A table's rows, each value as CSV and the printed tables write numbers.
-fn rows(table: &pendula::study::Table) -> Vec<Vec<String>> {
+/// A table's rows, each value as CSV and the printed tables write numbers, made one at a time.
+fn rows(table: &pendula::study::Table) -> impl Iterator<Item = Vec<String>> + '_ {
     let cell = |c: &pendula::study::Column, i: usize| match &c.values {
         Cells::Numbers(v) if c.whole => format!("{}", v[i] as i64),
         Cells::Numbers(v) => num(v[i]),
         Cells::Text(t) => t[i].clone(),
     };
-    (0..table.rows()).map(|i| table.columns.iter().map(|c| cell(c, i)).collect()).collect()
+    (0..table.rows()).map(move |i| table.columns.iter().map(|c| cell(c, i)).collect())
 }
 
 /// A number in JSON: a whole one (a count, a round end time) as an integer, so that readers

@@ -299,10 +299,21 @@ impl OutDir {
 
     /// Writes a CSV file from a header and rows of fields.
     pub fn csv(&mut self, name: &str, header: &[&str], rows: &[Vec<String>]) -> Result<()> {
+        self.csv_rows(name, header, rows.iter().cloned())
+    }
+
+    /// [`OutDir::csv`] with the rows made one at a time as they are written: a long table
+    /// is held once, as its CSV bytes, not also as strings.
+    pub fn csv_rows(
+        &mut self,
+        name: &str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = Vec<String>>,
+    ) -> Result<()> {
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(header)?;
         for row in rows {
-            w.write_record(row)?;
+            w.write_record(&row)?;
         }
         self.write(name, &w.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?)?;
         Ok(())
