@@ -186,12 +186,11 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         Short(transient),
         unit_suffix(tu),
     )];
-    let preset = inputs.values.iter().rev().find(|(n, _)| n == "preset").map(|(_, v)| v.clone());
     Ok(Report {
         study: STUDY.name,
         inputs: vec![
             ("system", Input::Name(info.name.into())),
-            ("preset", preset.unwrap_or_else(|| Input::Name("none".into()))),
+            ("preset", Input::Name(args.preset("preset")?.unwrap_or("none").into())),
             ("param", Input::Name(format!("{}={}:{}:{}", axis.name, Short(axis.lo), Short(axis.hi), axis.n))),
             ("transient", Input::Number(transient)),
             ("samples", Input::Number(samples as f64)),

@@ -103,12 +103,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
 
     let model = values.build();
     let result =
-        lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec).map_err(|e| match e {
-            Error::InvalidValue { name, value, allowed } if name == "h" => {
-                Error::InvalidValue { name: "dt".into(), value, allowed }
-            }
-            e => e,
-        })?;
+        lyapunov(&AsSystem(&*model), method, values.initial_state(), &spec).map_err(super::step_named_dt)?;
     let (tu, ru) = (info.time_unit(), info.rate_unit());
     let with = |v: f64, u: &str| format!("{}{}", Short(v), unit_suffix(u));
     let mut summary = vec![format!(
@@ -182,12 +177,11 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     if spectrum {
         numbers.push(Number { key: "sum", value: sum, unit: ru, about: "the exponents' sum" });
     }
-    let preset = inputs.values.iter().rev().find(|(n, _)| n == "preset").map(|(_, v)| v.clone());
     Ok(Report {
         study: STUDY.name,
         inputs: vec![
             ("system", Input::Name(info.name.into())),
-            ("preset", preset.unwrap_or_else(|| Input::Name("none".into()))),
+            ("preset", Input::Name(args.preset("preset")?.unwrap_or("none").into())),
             ("method", Input::Name(method.name.into())),
             ("dt", Input::Number(h)),
             ("t_end", Input::Number(t_end)),

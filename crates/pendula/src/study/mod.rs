@@ -85,11 +85,18 @@ pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error>
                 allowed: format!("{allowed} to `t_end` {}", Short(t_end)),
             }
         }
+        e => step_named_dt(e),
+    })
+}
+
+/// A library error about the step `h`, with the step named as studies call it: `dt`.
+pub fn step_named_dt(e: Error) -> Error {
+    match e {
         Error::InvalidValue { name, value, allowed } if name == "h" => {
             Error::InvalidValue { name: "dt".into(), value, allowed }
         }
         e => e,
-    })
+    }
 }
 
 /// A lower estimate of an adaptive run's steps per small-oscillation period
@@ -796,6 +803,21 @@ impl<'a> Args<'a> {
         }
     }
 
+    /// The preset parameter `name`: the preset's name, `None` when not given (checked by
+    /// [`Args::system`], which applies it).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for a number where the name belongs.
+    ///
+    /// # Panics
+    /// When `name` is not a preset parameter of the study.
+    pub fn preset(&self, name: &str) -> Result<Option<&'a str>, Error> {
+        let Kind::Preset = self.param(name).kind else {
+            panic!("{name} is not a preset parameter of {}", self.study.name)
+        };
+        self.text(name)
+    }
+
     /// The switch `name`: on when given on.
     ///
     /// # Errors
@@ -916,7 +938,7 @@ impl<'a> Args<'a> {
         let mut settings: Vec<(String, f64)> = Vec::new();
         let named = self.study.params.iter().find(|p| matches!(p.kind, Kind::Preset));
         if let Some(p) = named
-            && let Some(preset_name) = self.text(p.name)?
+            && let Some(preset_name) = self.preset(p.name)?
         {
             let chosen = crate::system::driven::find_preset(preset_name)?;
             if let Some(system) = given.filter(|g| *g != chosen.system) {
