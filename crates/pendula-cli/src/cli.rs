@@ -69,8 +69,7 @@ macro_rules! commands {
     };
 }
 
-use crate::commands::{animate, compare, convergence, fractal};
-use crate::commands::{merge, plot, report, resume, serve, sweep, work_precision};
+use crate::commands::{animate, compare, fractal, merge, plot, report, resume, serve, sweep};
 
 commands! {
     /// Integrate one system with one method and write its trajectory and a summary.
@@ -91,18 +90,6 @@ commands! {
     "compare" Compare(Box<compare::CompareArgs>) => compare::run,
     files: compare::FILES,
     examples: &["compare oscillator --dt 0.1 --t-end 1 --methods rk4,verlet"];
-    /// Global error against step size, with the fitted order of each method.
-    #[command(mut_arg("set", |a| a.help(SET_CONVERGENCE)))]
-    #[command(mut_args(|a| convergence::DEFAULTS.document(a)))]
-    "convergence" Convergence(Box<convergence::ConvergenceArgs>) => convergence::run,
-    files: convergence::FILES,
-    examples: &["convergence --t-end 0.5 --levels 2 --methods rk4"];
-    /// Error against cost (rhs evaluations, wall time) of each method over a range of steps.
-    #[command(mut_arg("set", |a| a.help(SET_WORK_PRECISION)))]
-    #[command(mut_args(|a| work_precision::DEFAULTS.document(a)))]
-    "work-precision" WorkPrecision(Box<work_precision::WorkPrecisionArgs>) => work_precision::run,
-    files: work_precision::FILES,
-    examples: &["work-precision --t-end 0.5 --methods rk4 --levels 2 --tol-levels 2"];
     /// Animate a pendulum (GIF, or MP4 with ffmpeg), optionally beside a nearby start.
     #[command(mut_args(|a| animate::DEFAULTS.document(a)))]
     "animate" Animate(Box<animate::AnimateArgs>) => animate::run,
@@ -209,10 +196,6 @@ pub struct ManArgs {
 // command runs by default (tests/cli.rs runs every example on that system).
 const SET_COMPARE: &str = "Set a parameter or initial-state variable of the system, e.g. `--set theta1=90deg \
 --set m2=2` for the double pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
-const SET_CONVERGENCE: &str = "Set a parameter or initial-state variable of the system, e.g. `--set c=0.5` \
-(the oscillator's damping, kg/s) or `--set x=0.2` (m).";
-const SET_WORK_PRECISION: &str = "Set a parameter or initial-state variable of the system, e.g. \
-`--set theta=90deg` for the pendulum (angles: `deg` or `pi` suffix; bare numbers are radians).";
 #[cfg(test)]
 mod tests {
     use clap::{CommandFactory, Parser};

@@ -27,9 +27,6 @@ pub const MAX_MEMORY_BYTES: f64 = (2u64 << 30) as f64;
 /// Bytes of an input file (`plot`, `merge`).
 pub const MAX_INPUT_BYTES: f64 = (1u64 << 30) as f64;
 pub use pendula_io::shard::MAX_DESCRIPTION_BYTES;
-/// Step sizes of a convergence or work-precision study, and tolerances of work-precision:
-/// 30 halvings span nine decades, more than double precision can resolve.
-pub const MAX_LEVELS: u64 = 30;
 /// Orbits of a Poincaré section: more are not told apart on the figure.
 pub const MAX_ORBITS: u64 = 10_000;
 /// Stroboscopic samples per parameter value of a bifurcation diagram.
@@ -40,7 +37,7 @@ pub const MAX_STEPS_PER_PERIOD: u64 = 1_000_000;
 pub const MAX_THREADS: usize = 1024;
 /// Steps of a fixed-step run (the library's own bound: 10¹³ steps take days).
 pub const MAX_STEPS: u64 = 10_000_000_000_000;
-pub use pendula::study::{ADAPTIVE_STEPS_PER_PERIOD, adaptive_steps};
+pub use pendula::study::{ADAPTIVE_STEPS_PER_PERIOD, adaptive_steps, motion_period};
 /// Bytes of a CSV value (at most 24 characters and a separator).
 pub const CSV_BYTES_PER_VALUE: f64 = 25.0;
 
@@ -182,17 +179,6 @@ pub use pendula_io::value::bytes;
 /// counts them, without its checks: for estimates of validated values).
 pub fn steps(span: f64, h: f64) -> f64 {
     (span / h).ceil().max(1.0)
-}
-
-/// The period of the motion from `y0`, s, for estimates of adaptive steps: the model's
-/// small-oscillation period, shortened for a start with more energy than the system's
-/// scale at rest — the motion is then faster by about the square root of the ratio (a
-/// pendulum spun up to K joules turns at a rate ∝ √K).
-pub fn motion_period(model: &dyn pendula::model::DynModel, y0: &[f64]) -> f64 {
-    let rest = vec![0.0; y0.len()];
-    let ratio = model.energy_scale(&rest) / model.energy_scale(y0);
-    // NaN: a start whose energy overflows, whose motion has no period to speak of.
-    model.time_scale() * if ratio.is_nan() { 0.0 } else { ratio.min(1.0).sqrt() }
 }
 
 pub use pendula_io::npy::Claim as NpyClaim;

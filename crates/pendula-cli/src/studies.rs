@@ -61,6 +61,7 @@ pub fn command(study: &'static Study) -> clap::Command {
             Kind::Flag => Arg::new(p.name).long(p.name).action(clap::ArgAction::SetTrue),
             Kind::Section { .. } => Arg::new(p.name).long(p.name).value_name("NAME=VALUE"),
             Kind::Axis { .. } => Arg::new(p.name).long(p.name).value_name("NAME=LO:HI:N"),
+            Kind::Reals { .. } => Arg::new(p.name).long(p.name).value_name("LIST").allow_hyphen_values(true),
             Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } | Kind::Threads => {
                 Arg::new(p.name)
                     .long(p.name.replace('_', "-"))
@@ -187,11 +188,11 @@ impl StudyCommand {
                     })
                     .collect();
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
-            say!(summary, "\n{}", crate::study::table(&header, &rows(table).collect::<Vec<_>>()));
+            say!(summary, "\n{}", crate::study::table(&header, &rows(table, true).collect::<Vec<_>>()));
         }
         for table in &report.tables {
             let header: Vec<&str> = table.columns.iter().map(|c| c.name).collect();
-            out.csv_rows(&format!("{}.csv", table.name), &header, rows(table))?;
+            out.csv_rows(&format!("{}.csv", table.name), &header, rows(table, false))?;
         }
         for plot in &report.plots {
             out.figure(plot.name, &pendula_viz::Figure::from(plot))?;
@@ -231,6 +232,12 @@ impl StudyCommand {
                 Kind::Real { .. } | Kind::Optional { .. } | Kind::Count { .. } | Kind::Flag => {
                     Input::Number(crate::parse::parse_value(&flag(p), text, None)?)
                 }
+                // Comma-separated, each in the value syntax.
+                Kind::Reals { .. } => Input::Numbers(
+                    text.split(',')
+                        .map(|item| crate::parse::parse_value(&flag(p), item.trim(), None))
+                        .collect::<Result<_>>()?,
+                ),
             };
             match p.kind {
                 Kind::System { .. } => system = Some(text.as_str()),
@@ -347,9 +354,14 @@ impl StudyCommand {
 }
 
 /// A table's rows, each value as CSV and the printed tables write numbers, made one at a time.
-fn rows(table: &pendula::study::Table) -> impl Iterator<Item = Vec<String>> + '_ {
-    let cell = |c: &pendula::study::Column, i: usize| match &c.values {
-        Cells::Numbers(v) if c.whole => format!("{}", v[i] as i64),
+/// A printed table (`printed`) shows a column's [`pendula::study::Column::decimals`].
+fn rows(table: &pendula::study::Table, printed: bool) -> impl Iterator<Item = Vec<String>> + '_ {
+    let cell = move |c: &pendula::study::Column, i: usize| match &c.values {
+        Cells::Numbers(v) if printed && v[i].is_finite() && c.decimals.is_some() => {
+            format!("{:.*}", c.decimals.unwrap_or_default(), v[i])
+        }
+        // A missing whole number (NaN) is an empty cell.
+        Cells::Numbers(v) if c.whole && v[i].is_finite() => format!("{}", v[i] as i64),
         Cells::Numbers(v) => num(v[i]),
         Cells::Text(t) => t[i].clone(),
     };
@@ -372,8 +384,12 @@ fn document(report: &Report) -> Value {
             Input::Number(x) => number(*x),
             Input::Name(s) => json!(s),
             Input::Flag(b) => json!(b),
+            Input::Numbers(v) => Value::Array(v.iter().map(|x| number(*x)).collect()),
         };
         doc.insert((*name).into(), v);
+    }
+    for (key, text) in &report.texts {
+        doc.insert((*key).into(), json!(text));
     }
     for n in &report.numbers {
         doc.insert(n.key.into(), number(n.value));

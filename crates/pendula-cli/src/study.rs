@@ -1,5 +1,5 @@
-//! What the study commands (compare, convergence, stability, period, oscillator-regimes,
-//! report) share: their common arguments, the output directory, tables and progress.
+//! What the study commands (compare, the registry's studies, report) share: their common
+//! arguments, the output directory, tables and progress.
 //!
 //! # Shared parts
 //!
@@ -16,14 +16,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use pendula::analysis;
-use pendula::integrator::Method;
 use pendula::system::Values;
 use pendula_viz::Figure;
 
-use pendula::error::Short;
-
-use crate::parse::{f64_arg, parse_count, parse_settings, positive_arg};
+use crate::parse::parse_settings;
 
 /// `print!` for a command's human output, through its [`Summary`]: `say!(summary, "...")`.
 macro_rules! say {
@@ -34,7 +30,7 @@ macro_rules! say {
 macro_rules! sayln {
     ($summary:expr, $($arg:tt)*) => { $summary.say(format_args!("{}\n", format_args!($($arg)*))) };
 }
-use crate::args::{Defaults, LargeArg, SetArgs, SummaryArg};
+use crate::args::{LargeArg, SetArgs, SummaryArg};
 use crate::output::{AtomicFile, CreatedDirs};
 
 // The summary's opening, beside the summary: `args` declares the flag, below this module.
@@ -57,137 +53,6 @@ pub struct Common {
     pub summary: SummaryArg,
     #[command(flatten)]
     pub large: LargeArg,
-}
-
-/// What the accuracy studies (convergence, work-precision) both take: the system, the
-/// methods and their steps.
-#[derive(Debug, Clone, Args)]
-pub struct Accuracy {
-    #[command(flatten)]
-    pub system: crate::args::SystemArg,
-    #[command(flatten)]
-    pub methods: crate::args::MethodsArg,
-    #[command(flatten)]
-    pub steps: StepRange,
-}
-
-/// A geometric range of step sizes and an end time, as convergence and work-precision take
-/// them.
-#[derive(Debug, Clone, Args)]
-pub struct StepRange {
-    /// Smallest step size, s [default: dt-max / 2^(levels - 1); without any of --dt-min,
-    /// --dt-max, --levels each method runs its own ladder of halved steps].
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt_min: Option<String>,
-    /// Largest step size, s.
-    #[arg(long, value_name = "H", allow_hyphen_values = true)]
-    pub dt_max: Option<String>,
-    /// Number of step sizes, geometrically spaced, 2 to 30.
-    #[arg(long, value_name = "N")]
-    pub levels: Option<String>,
-    /// End time at which the error is measured, s [default: the system's study horizon, a
-    /// few small-oscillation periods: 10 s for the oscillator and the pendulum, 2 s for the
-    /// double pendulum, 1.7 s for the 3-link chain, 10 for the driven pendulum]. Every run of
-    /// the study together takes at most 10^11 steps (--allow-large lifts it).
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<String>,
-}
-
-impl StepRange {
-    /// The steps, largest first, and the end time, validated.
-    pub fn resolve(&self, default_max: f64, default_levels: usize) -> Result<(Vec<f64>, f64)> {
-        let levels = match &self.levels {
-            Some(text) => parse_count("--levels", text, 2, crate::limits::MAX_LEVELS, "step sizes")? as usize,
-            None => default_levels,
-        };
-        let dt_max = positive_arg("--dt-max", self.dt_max.as_deref(), default_max, "a step size in seconds")?;
-        let fallback = dt_max / 2f64.powi(levels as i32 - 1);
-        let dt_min = positive_arg("--dt-min", self.dt_min.as_deref(), fallback, "a step size in seconds")?;
-        let t_end = f64_arg("--t-end", self.t_end.as_deref(), 10.0, "an end time in seconds")?;
-        if dt_max <= dt_min {
-            bail!(
-                "invalid step range --dt-min {} --dt-max {}: need 0 < dt-min < dt-max, both finite",
-                Short(dt_min),
-                Short(dt_max)
-            );
-        }
-        let spec = pendula::RunSpec { t0: 0.0, h: dt_min, end: pendula::End::Time(t_end) };
-        crate::parse::schedule(&spec, "--dt-min", "--t-end")?;
-        let hs =
-            (0..levels).map(|i| dt_max * (dt_min / dt_max).powf(i as f64 / (levels - 1) as f64)).collect();
-        Ok((hs, t_end))
-    }
-}
-
-impl StepRange {
-    /// The given steps (when any of --dt-min, --dt-max, --levels is given; the others take
-    /// [`StepRange::resolve`]'s defaults) or each method's default ladder, and the end time
-    /// (`default_t_end` unless --t-end is given).
-    pub fn resolve_or_default(&self, default_t_end: f64, defaults: &Defaults) -> Result<(Ladder, f64)> {
-        let t_end = f64_arg("--t-end", self.t_end.as_deref(), default_t_end, "an end time in seconds")?;
-        if self.dt_min.is_none() && self.dt_max.is_none() && self.levels.is_none() {
-            let spec = pendula::RunSpec { t0: 0.0, h: t_end, end: pendula::End::Time(t_end) };
-            crate::parse::schedule(&spec, "--t-end", "--t-end")?;
-            return Ok((Ladder::PerMethod, t_end));
-        }
-        // The end time as read (its shortest round-trip text), for `resolve` to read again.
-        let with_t = StepRange { t_end: Some(format!("{t_end:e}")), ..self.clone() };
-        let (hs, t_end) =
-            with_t.resolve(defaults.of.number("dt_max"), defaults.of.count("levels") as usize)?;
-        Ok((Ladder::Given(hs), t_end))
-    }
-}
-
-/// What an accuracy study (convergence, work-precision) costs: its reference run to `t_end`
-/// (none where the model has an exact solution; else dop853 at tolerance 1e-14, at least
-/// [`crate::limits::ADAPTIVE_STEPS_PER_PERIOD`] steps a period) and `runs`, the steps of
-/// every method's runs. Refused over the limit unless `allow_large`.
-pub fn check_study(
-    command: &str,
-    allow_large: bool,
-    values: &Values,
-    t_end: f64,
-    runs: f64,
-    how: String,
-) -> Result<()> {
-    use crate::limits::{self, Cost, Estimate};
-    let model = values.build();
-    let y0 = values.initial_state();
-    let reference = if model.exact(t_end, y0).is_some() {
-        0.0
-    } else {
-        limits::adaptive_steps(t_end, limits::motion_period(&*model, y0), f64::INFINITY)
-    };
-    limits::check(
-        command,
-        allow_large,
-        &[Estimate::new(
-            Cost::Steps,
-            runs + reference,
-            format!("{how}, and {} for the reference run", limits::round(reference)),
-        )],
-    )
-}
-
-/// A failed reference run of an accuracy study: an error naming it (exit 1 for a numerical
-/// failure, through the library error it wraps).
-pub fn reference_failed(e: pendula::Error, t_end: f64) -> anyhow::Error {
-    anyhow::Error::new(e).context(format!(
-        "the reference run (dop853 at tolerance {:e} to t = {} s) failed",
-        pendula::analysis::REFERENCE_TOLERANCE,
-        Short(t_end)
-    ))
-}
-
-/// When no run of a study gave a result and one failed numerically: that failure, as the
-/// study's error (exit 1), instead of an empty figure.
-pub fn all_failed(command: &str, produced: bool, first: Option<pendula::Error>) -> Result<()> {
-    match first {
-        Some(e) if !produced && e.is_numerical() => {
-            Err(anyhow::Error::new(e).context(format!("{command}: every run failed; the first")))
-        }
-        _ => Ok(()),
-    }
 }
 
 /// Validated system values from a name and `--set` items.
@@ -640,25 +505,3 @@ pub fn num(v: f64) -> String {
 }
 
 pub use pendula::error::short;
-
-/// Which steps each method runs.
-#[derive(Debug, Clone)]
-pub enum Ladder {
-    /// The same steps for every method (given on the command line).
-    Given(Vec<f64>),
-    /// Each method's default ladder ([`analysis::method_ladder`]).
-    PerMethod,
-}
-
-/// The horizon on defaults: the system's `study_periods` times its time scale.
-pub fn default_t_end(values: &Values) -> f64 {
-    analysis::study_horizon(values)
-}
-
-/// The steps `method` runs on `values` under `ladder`.
-pub fn steps_for(values: &Values, method: &Method, ladder: &Ladder, t_end: f64) -> Vec<f64> {
-    match ladder {
-        Ladder::Given(hs) => hs.clone(),
-        Ladder::PerMethod => analysis::method_ladder(method, values.build().time_scale(), t_end),
-    }
-}

@@ -667,9 +667,9 @@ fn schedule_errors_name_the_source_of_the_value() {
 fn set_help_examples_belong_to_the_command() {
     let commands: &[(&str, &[(&str, &str)])] = &[
         ("compare", &[("--set theta1=90deg --set m2=2", "double")]),
-        ("convergence", &[("--set c=0.5", "oscillator"), ("--set x=0.2", "oscillator")]),
+        ("convergence", &[("--set m=2", "oscillator")]),
         ("stability", &[("--set m=2", "pendulum")]),
-        ("work-precision", &[("--set theta=90deg", "pendulum")]),
+        ("work-precision", &[("--set m=2", "pendulum")]),
         ("period", &[("--set m=2", "pendulum")]),
         ("energy-budget", &[("--set m1=2", "double")]),
         ("round-trip", &[("--set m=2", "pendulum")]),

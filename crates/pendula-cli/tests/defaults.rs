@@ -18,7 +18,7 @@ fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
             .assert()
             .success();
         let s = json(&dir.path().join("s.json"));
-        let orders = s["orders"].as_object().unwrap();
+        let orders = s["tables"]["orders"].as_array().unwrap();
         assert!(orders.len() >= 5, "{}: only {} methods", info.name, orders.len());
         // The report's two convergence figures: a curve without an order is too coarse for
         // its asymptotic range or at the round-off floor, and says so; elsewhere a curve may
@@ -31,9 +31,11 @@ fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
         };
         let legends = svg_texts(&dir.path().join("c/convergence.svg"));
         let mut fitted = 0;
-        for (method, order) in orders {
+        for row in orders {
+            let (method, order) = (row["method"].as_str().unwrap(), &row["fitted_order"]);
             let declared = pendula::integrator::find(method).unwrap().order as f64;
-            let note = s["notes"][method].as_str().unwrap();
+            assert_eq!(row["declared_order"], declared, "{}: {method}", info.name);
+            let note = row["note"].as_str().unwrap();
             let legend = legends
                 .iter()
                 .find(|l| l.starts_with(&format!("{method} (")) || l.starts_with(&format!("{method}, ")))
@@ -68,7 +70,7 @@ fn convergence_on_defaults_fits_every_declared_order_or_says_why() {
             assert!(fitted + 1 >= orders.len(), "{}: {fitted} of {} fitted", info.name, orders.len());
         }
         let stdout = String::from_utf8(out.get_output().stdout.clone()).unwrap();
-        assert!(stdout.contains("fitted order") && stdout.contains("note"), "{stdout}");
+        assert!(stdout.contains("fitted_order") && stdout.contains("note"), "{stdout}");
     }
 }
 
@@ -83,14 +85,17 @@ fn work_precision_on_defaults_finishes_for_every_system() {
             .assert()
             .success();
         let s = json(&dir.path().join("s.json"));
-        for (method, points) in s["methods"].as_object().unwrap() {
-            let points = points.as_array().unwrap();
-            assert!(!points.is_empty(), "{}: {method} has no point", info.name);
-            assert!(
-                points.iter().all(|p| p["error"].as_f64().unwrap().is_finite()),
-                "{}: {method}",
-                info.name
-            );
+        let csv = std::fs::read_to_string(dir.path().join("w/work_precision.csv")).unwrap();
+        for row in s["tables"]["costs"].as_array().unwrap() {
+            let method = row["method"].as_str().unwrap();
+            // Its points: method, dt, tol, error, rhs_evals, wall_s.
+            let errors: Vec<&str> = csv
+                .lines()
+                .filter(|l| l.split(',').next() == Some(method))
+                .map(|l| l.split(',').nth(3).unwrap())
+                .collect();
+            assert!(!errors.is_empty(), "{}: {method} has no point", info.name);
+            assert!(errors.iter().all(|e| e.parse::<f64>().unwrap().is_finite()), "{}: {method}", info.name);
         }
     }
 }

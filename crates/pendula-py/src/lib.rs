@@ -49,7 +49,7 @@ use pendula::checkpoint::{Leg, Pause};
 use pendula::control::Tolerances;
 use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
 use pendula::events::{EndAtEvent, EventLocator, EventSpec};
-use pendula::integrator::{self, Method, Scheme};
+use pendula::integrator::{self, Method};
 use pendula::model::{CATALOGUE, DynModel, EnsemblePath, ensemble_path};
 use pendula::observe::{Flow, Observer, Sample};
 use pendula::system::{Quantity, Values};
@@ -77,7 +77,12 @@ pub(crate) fn raise(py: Python<'_>, class: &str, message: String) -> PyErr {
 
 /// The Python exception for a library error: its class by kind, its message the library's.
 fn to_py(py: Python<'_>, e: &Error) -> PyErr {
-    let class = match e {
+    // An error of one part of a computation is of its source's kind.
+    let kind = match e {
+        Error::In { inner, .. } => inner,
+        e => e,
+    };
+    let class = match kind {
         Error::UnknownSystem { .. }
         | Error::UnknownMethod { .. }
         | Error::UnknownPreset { .. }
@@ -90,9 +95,10 @@ fn to_py(py: Python<'_>, e: &Error) -> PyErr {
         }
         Error::StepSizeTooSmall { .. } => "StepSizeTooSmallError",
         Error::NewtonDidNotConverge { .. } => "NewtonError",
-        Error::InvalidValue { .. } | Error::InvalidInput { .. } | Error::TooLarge { .. } => {
-            "InvalidValueError"
-        }
+        Error::InvalidValue { .. }
+        | Error::InvalidInput { .. }
+        | Error::OutOfRange { .. }
+        | Error::TooLarge { .. } => "InvalidValueError",
         _ => "PendulaError",
     };
     raise(py, class, e.to_string())
@@ -126,22 +132,6 @@ fn solve_error(py: Python<'_>, e: &Error) -> PyErr {
         ),
         other => to_py(py, other),
     }
-}
-
-/// Tao's step limit (w h <= 1) for a step `h` of `method`, when it is exceeded, in the words of
-/// Python's arguments: the step is `dt`, and the binding constant w, which Python does not
-/// set, is only quoted. None for other methods and steps within the limit.
-pub(crate) fn tao_step_refusal(method: &Method, h: f64) -> Option<String> {
-    let Scheme::Tao(scheme) = &method.scheme else { return None };
-    integrator::tao::check_binding_step(scheme, h).err()?;
-    let short = pendula::error::Short;
-    Some(format!(
-        "invalid value {} for `dt`: {} is unstable above w dt = 1 (its binding constant w = {} 1/s): a dt of at most {} s",
-        short(h.abs()),
-        method.name,
-        short(scheme.binding),
-        short(integrator::tao::MAX_BINDING_STEP / scheme.binding)
-    ))
 }
 
 /// The time a failed run failed at, if the error says.
@@ -689,8 +679,8 @@ fn solve<'py>(
         // Checked here, to be named as the arguments are (the library speaks of h and of
         // its binding constant, which Python does not set).
         spec.schedule().map_err(|e| solve_error(py, &e))?;
-        if let Some(why) = tao_step_refusal(method, spec.h) {
-            return Err(raise(py, "InvalidValueError", why));
+        if let Some(refusal) = integrator::tao::step_refusal(method, spec.h) {
+            return Err(to_py(py, &refusal));
         }
     }
     let model = &*system.model;

@@ -34,7 +34,7 @@ fn studies(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
                 // The default axis is one system's: the study chooses it.
                 Kind::Axis { .. } => d.set_item("default", py.None())?,
                 Kind::Flag => d.set_item("default", false)?,
-                Kind::Real { .. } | Kind::Optional { .. } => {
+                Kind::Real { .. } | Kind::Optional { .. } | Kind::Reals { .. } => {
                     match p.kind {
                         Kind::Real { default, .. } => d.set_item("default", default)?,
                         _ => d.set_item("default", py.None())?,
@@ -88,6 +88,9 @@ fn run_study<'py>(
             Input::Flag(v.is_truthy()?)
         } else if let Ok(x) = v.extract::<f64>() {
             Input::Number(x)
+        } else if let Ok(list) = v.extract::<Vec<f64>>() {
+            // A sequence or an array of numbers (the steps of a convergence study).
+            Input::Numbers(list)
         } else {
             return Err(crate::raise(
                 py,
@@ -107,6 +110,7 @@ fn run_study<'py>(
             Input::Number(x) => given.set_item(k, x)?,
             Input::Name(s) => given.set_item(k, s)?,
             Input::Flag(b) => given.set_item(k, b)?,
+            Input::Numbers(v) => given.set_item(k, v.clone())?,
         }
     }
     out.set_item("inputs", given)?;
@@ -117,17 +121,26 @@ fn run_study<'py>(
         units.set_item(n.key, n.unit)?;
     }
     out.set_item("numbers", numbers)?;
+    let texts = PyDict::new(py);
+    for (k, v) in &report.texts {
+        texts.set_item(*k, v)?;
+    }
+    out.set_item("texts", texts)?;
     out.set_item("units", units)?;
-    let (tables, columns_units) = (PyDict::new(py), PyDict::new(py));
+    let (tables, columns_units, decimals) = (PyDict::new(py), PyDict::new(py), PyDict::new(py));
     let shown: Vec<&str> = report.tables.iter().filter(|t| t.shown).map(|t| t.name).collect();
     out.set_item("shown", shown)?;
     for t in report.tables {
         let (columns, units) = (PyDict::new(py), PyDict::new(py));
         for c in t.columns {
             units.set_item(c.name, c.unit)?;
+            if let Some(d) = c.decimals {
+                decimals.set_item((t.name, c.name), d)?;
+            }
             match c.values {
                 // An index or a count as integers.
-                Cells::Numbers(v) if c.whole => {
+                // A missing one (NaN) makes the column floats.
+                Cells::Numbers(v) if c.whole && v.iter().all(|x| x.is_finite()) => {
                     columns
                         .set_item(c.name, v.iter().map(|x| *x as i64).collect::<Vec<_>>().into_pyarray(py))?;
                 }
@@ -140,6 +153,8 @@ fn run_study<'py>(
     }
     out.set_item("tables", tables)?;
     out.set_item("columns_units", columns_units)?;
+    // (table, column) → the decimals a printed table shows.
+    out.set_item("decimals", decimals)?;
     let plots = PyList::empty(py);
     for p in report.plots {
         let d = PyDict::new(py);
@@ -164,6 +179,7 @@ fn run_study<'py>(
                     Style::Points => "points",
                     Style::LineMarkers => "line-markers",
                     Style::Dots => "dots",
+                    Style::Guide => "guide",
                 },
             )?;
             let (x, y): (Vec<f64>, Vec<f64>) = line.points.iter().map(|[x, y]| (*x, *y)).unzip();

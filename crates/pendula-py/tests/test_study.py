@@ -136,9 +136,11 @@ def test_convergence_equals_the_cli_and_orders_match_the_declared(cli, tmp_path)
     s = summary(tmp_path / "s.json")
     r = pendula.convergence()
     assert (r.t_end, r.reference) == (s["t_end"], s["reference"])
-    assert r.orders == s["orders"]
-    assert {m: d.tolist() for m, d in r.dt.items()} == s["dt"]
+    assert r.orders == {row["method"]: row["fitted_order"] for row in s["tables"]["orders"]}
     _, rows = read_csv(tmp_path / "o" / "convergence.csv")
+    assert {m: d.tolist() for m, d in r.dt.items()} == {
+        m: [float(row[1]) for row in rows if row[0] == m] for m in dict.fromkeys(row[0] for row in rows)
+    }
     for m in r.methods:
         theirs = [float(row[2]) for row in rows if row[0] == m.method]
         assert m.error.tolist() == theirs, m.method
@@ -150,8 +152,10 @@ def test_convergence_equals_the_cli_and_orders_match_the_declared(cli, tmp_path)
     cli(["convergence", "pendulum", "--methods", "rk4,euler", "--dt-max", "0.1", "--levels", "4", "--t-end", "2",
          "--out-dir", "g", "--summary", "g.json"], tmp_path)
     g = summary(tmp_path / "g.json")
-    given = pendula.convergence("pendulum", methods="rk4,euler", dts=g["dt"]["rk4"], t_end=2)
-    assert given.orders == g["orders"] and given.reference == g["reference"]
+    _, rows = read_csv(tmp_path / "g" / "convergence.csv")
+    given = pendula.convergence("pendulum", methods="rk4,euler", dts=[float(row[1]) for row in rows if row[0] == "rk4"], t_end=2)
+    assert given.orders == {row["method"]: row["fitted_order"] for row in g["tables"]["orders"]}
+    assert given.reference == g["reference"]
     assert [m.method for m in given.methods] == ["rk4", "euler"]
 
 
@@ -160,13 +164,15 @@ def test_work_precision_equals_the_cli(cli, tmp_path):
     s = summary(tmp_path / "s.json")
     r = pendula.work_precision(methods=["rk4", "dopri5", "verlet"])
     assert (r.t_end, r.reference) == (s["t_end"], s["reference"])
-    assert [m.method for m in r.methods] == list(s["methods"])
+    header, rows = read_csv(tmp_path / "o" / "work_precision.csv")
+    assert header == ["method", "dt", "tol", "error", "rhs_evals", "wall_s"]
+    assert [m.method for m in r.methods] == list(dict.fromkeys(row[0] for row in rows))
     for m in r.methods:
-        points = s["methods"][m.method]
-        assert m.dt.tolist() == [p["dt"] for p in points]
-        assert [None if math.isnan(t) else t for t in m.tol] == [p["tol"] for p in points]
-        assert m.error.tolist() == [p["error"] for p in points]
-        assert m.rhs_evals.tolist() == [p["rhs_evals"] for p in points]
+        points = [row for row in rows if row[0] == m.method]
+        assert m.dt.tolist() == [float(p[1]) for p in points]
+        assert [None if math.isnan(t) else t for t in m.tol] == [float(p[2]) if p[2] else None for p in points]
+        assert m.error.tolist() == [float(p[3]) for p in points]
+        assert m.rhs_evals.tolist() == [int(p[4]) for p in points]
         assert np.all(m.wall_s > 0)
     # The default tolerances: 10 from 1e-3 to 1e-12.
     tols = r["dopri5"].tol

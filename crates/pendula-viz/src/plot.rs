@@ -50,13 +50,18 @@ impl From<&Plot> for Figure {
                 Style::Points => Kind::Markers,
                 Style::LineMarkers => Kind::LineMarkers,
                 Style::Dots => Kind::Dots,
+                Style::Guide => Kind::Guide,
             };
-            figure = figure.with(
-                if plot.legend { line.label.clone() } else { String::new() },
-                palette(color),
-                kind,
-                line.points.iter().map(|[x, y]| (*x, *y)).collect(),
-            );
+            let label =
+                if plot.legend || line.style == Style::Guide { line.label.clone() } else { String::new() };
+            let points = line.points.iter().map(|[x, y]| (*x, *y)).collect();
+            figure = match (line.style, line.method) {
+                // A guide is grey and named on the line; a method's series takes the method's
+                // colour and marker, as in every figure.
+                (Style::Guide, _) => figure.with(label, crate::GUIDE, kind, points),
+                (_, Some(method)) => figure.with_style(label, crate::method_style(method), kind, points),
+                _ => figure.with(label, palette(color), kind, points),
+            };
         }
         figure
     }
@@ -80,8 +85,8 @@ mod tests {
             system: None,
             legend: true,
             series: vec![
-                Line { label: "a".into(), style: Style::Solid, points: vec![[0.0, 1.0], [1.0, 2.0]] },
-                Line { label: "fit".into(), style: Style::Dashed, points: vec![[0.0, 1.0]] },
+                Line::new("a", Style::Solid, vec![[0.0, 1.0], [1.0, 2.0]]),
+                Line::new("fit", Style::Dashed, vec![[0.0, 1.0]]),
             ],
         };
         let f = Figure::from(&plot);
@@ -96,9 +101,7 @@ mod tests {
         assert!(f.png().is_ok());
         // An unlabelled series takes the colour of the labelled one before it.
         let mut paired = plot.clone();
-        paired
-            .series
-            .insert(1, Line { label: String::new(), style: Style::Points, points: vec![[0.5, 1.5]] });
+        paired.series.insert(1, Line::new("", Style::Points, vec![[0.5, 1.5]]));
         let f = Figure::from(&paired);
         assert_eq!(f.series[0].color, f.series[1].color);
         assert_ne!(f.series[1].color, f.series[2].color);

@@ -68,9 +68,13 @@ pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refus
             Value::String(s) => Input::Name(s),
             Value::Number(n) => Input::Number(n.as_f64().unwrap_or(f64::NAN)),
             Value::Bool(b) => Input::Flag(b),
+            // A list of numbers (the steps of a convergence study).
+            Value::Array(items) if items.iter().all(Value::is_number) => {
+                Input::Numbers(items.iter().filter_map(Value::as_f64).collect())
+            }
             other => {
                 return Err(Refusal(format!(
-                    "invalid value {other} for `{name}`: a number or a name, or true or false for a switch"
+                    "invalid value {other} for `{name}`: a number or a name, a list of numbers, or true or false for a switch"
                 )));
             }
         };
@@ -114,6 +118,8 @@ pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refus
         .iter()
         .map(|n| json!({"key": n.key, "value": n.value, "unit": n.unit, "about": n.about}))
         .collect();
+    let texts: serde_json::Map<String, Value> =
+        report.texts.iter().map(|(k, v)| ((*k).to_owned(), json!(v))).collect();
     let inputs: serde_json::Map<String, Value> = report
         .inputs
         .iter()
@@ -122,12 +128,13 @@ pub fn run(request: StudyRequest, limits: &crate::Limits) -> Result<Value, Refus
                 Input::Number(x) => json!(x),
                 Input::Name(s) => json!(s),
                 Input::Flag(b) => json!(b),
+                Input::Numbers(v) => json!(v),
             };
             ((*k).to_owned(), v)
         })
         .collect();
     Ok(json!({
         "type": "study", "study": report.study, "inputs": inputs, "summary": report.summary,
-        "numbers": numbers, "tables": tables, "plots": plots,
+        "numbers": numbers, "texts": texts, "tables": tables, "plots": plots,
     }))
 }

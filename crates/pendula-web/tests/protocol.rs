@@ -531,7 +531,11 @@ async fn the_librarys_studies_run_in_the_lab_with_the_librarys_results() {
         (json!({"cmd": "study", "name": "energy-budgte"}), "did you mean `energy-budget`"),
         (json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": -1}}), "invalid value -1 for `dt`"),
         (json!({"cmd": "study", "name": "energy-budget", "inputs": {"t_end": 1e9}}), "over the limit"),
-        (json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": [1]}}), "a number or a name"),
+        (
+            json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": [1]}}),
+            "for `dt`: one number, not a list",
+        ),
+        (json!({"cmd": "study", "name": "energy-budget", "inputs": {"dt": {"a": 1}}}), "a number or a name"),
     ] {
         send(&mut ws, request.clone()).await;
         let error = next_text(&mut ws, "error", 5 * SEC).await;

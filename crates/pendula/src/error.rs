@@ -190,6 +190,26 @@ pub enum Error {
         /// The limit.
         limit: f64,
     },
+    /// A value refused with a reason that depends on it (a step above a method's limit, in
+    /// words of the parameter the user gave).
+    #[error("invalid value {} for `{name}`: {why}", Short(*.value))]
+    OutOfRange {
+        /// The parameter.
+        name: String,
+        /// The offending value.
+        value: f64,
+        /// Why it is refused and what is allowed, in words.
+        why: String,
+    },
+    /// An error of one part of a larger computation (the reference run of an accuracy
+    /// study), with that part named; its kind is its source's.
+    #[error("{context}: {inner}")]
+    In {
+        /// The part, in words.
+        context: String,
+        /// What went wrong there (not a `source`: the message already carries it).
+        inner: Box<Error>,
+    },
 }
 
 /// What a [`crate::study::Budget`] counts.
@@ -259,6 +279,16 @@ impl std::error::Error for ObserverFailure {
     }
 }
 
+/// A library error about the step `h`, with the step named as studies call it: `dt`.
+pub fn step_named_dt(e: Error) -> Error {
+    match e {
+        Error::InvalidValue { name, value, allowed } if name == "h" => {
+            Error::InvalidValue { name: "dt".into(), value, allowed }
+        }
+        e => e,
+    }
+}
+
 impl Error {
     /// Whether this is the failure of one run that a study reports beside its other runs —
     /// a step that blew up, did not converge, or was refused (Tao's maps above ω h = 1, a
@@ -269,6 +299,7 @@ impl Error {
             Error::NonFinite { .. }
                 | Error::NewtonDidNotConverge { .. }
                 | Error::InvalidValue { .. }
+                | Error::OutOfRange { .. }
                 | Error::UnmetRequirement { .. }
         )
     }
@@ -276,6 +307,9 @@ impl Error {
     /// Whether this is a numerical failure of a run (the CLI's exit 1), not a refusal of
     /// the input.
     pub fn is_numerical(&self) -> bool {
+        if let Error::In { inner, .. } = self {
+            return inner.is_numerical();
+        }
         matches!(
             self,
             Error::NonFinite { .. }

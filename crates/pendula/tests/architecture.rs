@@ -299,7 +299,8 @@ fn a_planted_cycle_is_found() {
 #[test]
 fn the_cli_module_graph_has_no_cycle() {
     let graph = cli_module_graph();
-    assert!(graph.len() >= 30, "found only {:?}", graph.keys());
+    // A scan that finds the modules (29 when convergence and work-precision moved to the registry).
+    assert!(graph.len() >= 25, "found only {:?}", graph.keys());
     for module in ["crate", "cli", "parse", "config", "study", "output", "commands::sweep", "commands::merge"]
     {
         assert!(graph.contains_key(module), "no module {module} in {:?}", graph.keys());
@@ -307,7 +308,7 @@ fn the_cli_module_graph_has_no_cycle() {
     // The scan finds imports: grouped, nested, through `super::`, and macros.
     assert!(graph["cli"].contains("commands::report"), "the list of commands: {graph:?}");
     assert!(graph["commands::compare"].contains("study"), "{graph:?}");
-    assert!(graph["commands::convergence"].contains("study"), "the say! macro: {graph:?}");
+    assert!(graph["studies"].contains("study"), "the registry's commands: {graph:?}");
     assert!(graph["parse"].is_empty(), "parsing is the bottom layer: it imports {:?}", graph["parse"]);
     assert_eq!(cycle(&graph), None, "the CLI's modules' graph: {graph:?}");
 }

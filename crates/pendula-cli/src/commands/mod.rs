@@ -10,13 +10,10 @@
 //! --gallery DIR` regenerates it, a test compares it with the README's captions). `compare` gives
 //! every method the same cost (evaluations per simulated second; implicit methods' steps calibrated
 //! by pilot runs), runs the methods in parallel, and extrapolates a crossover beyond the run from
-//! RK4's fitted drift; `convergence` and `work-precision` take their horizon from the catalogue's
-//! `study_periods` and `Model::time_scale`, and report a method's failure per method instead of
-//! aborting.
+//! RK4's fitted drift.
 
 pub mod animate;
 pub mod compare;
-pub mod convergence;
 pub mod fractal;
 pub mod merge;
 pub mod plot;
@@ -24,4 +21,3 @@ pub mod report;
 pub mod resume;
 pub mod serve;
 pub mod sweep;
-pub mod work_precision;

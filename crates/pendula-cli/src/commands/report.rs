@@ -430,17 +430,16 @@ fn energy_section(page: &mut Page, command: &'static str, lead: &str, caption: &
 /// The orders table of one convergence run.
 fn convergence_table(page: &mut Page, command: &'static str) -> Result<()> {
     let s = page.run(command)?.context("convergence writes a summary")?;
-    let rows: Vec<Vec<String>> = s["orders"]
-        .as_object()
+    let rows: Vec<Vec<String>> = s["tables"]["orders"]
+        .as_array()
         .context("orders")?
         .iter()
-        .map(|(m, o)| {
-            let declared = pendula::integrator::find(m).map(|m| m.order.to_string()).unwrap_or_default();
+        .map(|row| {
             vec![
-                m.clone(),
-                declared,
-                o.as_f64().map_or("-".into(), |o| format!("{o:.3}")),
-                s["notes"][m].as_str().unwrap_or("").to_owned(),
+                row["method"].as_str().unwrap_or("").to_owned(),
+                row["declared_order"].to_string(),
+                row["fitted_order"].as_f64().map_or("-".into(), |o| format!("{o:.3}")),
+                row["note"].as_str().unwrap_or("").to_owned(),
             ]
         })
         .collect();
@@ -553,8 +552,8 @@ fn build(page: &mut Page) -> Result<()> {
     }
 
     let wp = "work-precision pendulum";
-    let (w, _) = page.summary(wp)?;
-    let costs = work_precision_rows(&w);
+    let (_, dir) = page.summary(wp)?;
+    let costs = work_precision_rows(&dir.join("work_precision.csv"))?;
     // The cheapest method to reach the target error, and what RK4 spends for it.
     let reach = |m: &str| costs.iter().find(|c| c.0 == m).and_then(|c| c.1);
     let cheapest = costs.iter().filter_map(|c| c.1.map(|n| (c.0.as_str(), n))).min_by_key(|c| c.1);
@@ -915,23 +914,38 @@ fn read_csv(path: &Path) -> Result<Vec<Vec<f64>>> {
 /// The error the work-precision section quotes the cost of.
 const WP_TARGET: f64 = 1e-6;
 
-/// Per method of a work-precision summary: the fewest evaluations of a run whose error is at
-/// most [`WP_TARGET`] (none when no run gets there), the smallest error, and its evaluations.
-fn work_precision_rows(s: &Value) -> Vec<(String, Option<u64>, f64, u64)> {
+/// A method's row of the work-precision table: its name, the fewest evaluations to
+/// [`WP_TARGET`] (if reached), its smallest error and the evaluations there.
+type CostRow = (String, Option<u64>, f64, u64);
+
+/// Per method of a work-precision table (`work_precision.csv`: method, dt, tol, error,
+/// rhs_evals, wall_s): the fewest evaluations of a run whose error is at most [`WP_TARGET`]
+/// (none when no run gets there), the smallest error, and its evaluations.
+fn work_precision_rows(path: &Path) -> Result<Vec<CostRow>> {
+    let mut reader =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    // (method, its (error, evaluations)), in the order the methods ran.
+    let mut methods: Vec<(String, Vec<(f64, u64)>)> = Vec::new();
+    for record in reader.records() {
+        let r = record.with_context(|| format!("cannot read {}", path.display()))?;
+        let (m, error, evals) = (&r[0], r[3].parse::<f64>(), r[4].parse::<u64>());
+        let (Ok(error), Ok(evals)) = (error, evals) else { continue };
+        if methods.last().is_none_or(|(name, _)| name != m) {
+            methods.push((m.to_owned(), Vec::new()));
+        }
+        if error.is_finite()
+            && let Some((_, points)) = methods.last_mut()
+        {
+            points.push((error, evals));
+        }
+    }
     let mut rows = Vec::new();
-    for (m, points) in s["methods"].as_object().into_iter().flatten() {
-        let points: Vec<(f64, u64)> = points
-            .as_array()
-            .into_iter()
-            .flatten()
-            .filter_map(|p| Some((p["error"].as_f64()?, p["rhs_evals"].as_u64()?)))
-            .filter(|p| p.0.is_finite())
-            .collect();
+    for (m, points) in methods {
         let Some(best) = points.iter().copied().min_by(|a, b| a.0.total_cmp(&b.0)) else { continue };
         let reach = points.iter().filter(|p| p.0 <= WP_TARGET).map(|p| p.1).min();
-        rows.push((m.clone(), reach, best.0, best.1));
+        rows.push((m, reach, best.0, best.1));
     }
-    rows
+    Ok(rows)
 }
 
 /// Per method of a stability summary: its largest stable step, its note, and whether that

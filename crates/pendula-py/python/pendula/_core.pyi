@@ -58,30 +58,9 @@ def ensemble(
     progress: Optional[Callable[[int], None]] = None,
 ) -> tuple[npt.NDArray[np.float64], str]: ...
 
-# The studies (`crates/pendula-py/src/study.rs`), wrapped by `pendula.study`.
+# The fractal (`crates/pendula-py/src/study.rs`), wrapped by `pendula.study`; the other
+# studies run through `run_study` (`crates/pendula-py/src/studies.rs`).
 
-def lyapunov(
-    system: CoreSystem,
-    method: str,
-    dt: float,
-    t_end: float,
-    transient: float,
-    renormalise: float,
-    spectrum: bool,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
-def poincare(
-    system: CoreSystem,
-    energy: float,
-    count: int,
-    section: str,
-    value: float,
-    t_end: float,
-    method: str,
-    dt: Optional[float],
-    tol: float,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
 def fractal(
     system: CoreSystem,
     theta1: tuple[float, float, int],
@@ -95,31 +74,6 @@ def fractal(
     pixels: Optional[tuple[int, int]] = None,
     times: Optional[tuple[list[float], list[float]]] = None,
 ) -> dict[str, Any]: ...
-def bifurcation(
-    system: CoreSystem,
-    param: tuple[str, float, float, int],
-    transient: float,
-    samples: int,
-    steps_per_period: int,
-    threads: Optional[int] = None,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
-def convergence(
-    system: CoreSystem,
-    methods: Optional[list[str]] = None,
-    dts: Optional[list[float]] = None,
-    t_end: Optional[float] = None,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
-def work_precision(
-    system: CoreSystem,
-    tols: list[float],
-    methods: Optional[list[str]] = None,
-    dts: Optional[list[float]] = None,
-    t_end: Optional[float] = None,
-    progress: Optional[Callable[[int], None]] = None,
-) -> dict[str, Any]: ...
-def tolerance_ladder(loosest: float, tightest: float, levels: int) -> list[float]: ...
 
 # `Solution.animate()` (`crates/pendula-py/src/animate.rs`).
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import html
 import inspect
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Optional
 
@@ -24,8 +25,9 @@ __all__ = ["StudyReport", "study", "FUNCTIONS", "install"]
 @dataclass(frozen=True, eq=False)
 class StudyReport:
     """What a study found: ``summary`` (sentences), ``numbers`` (by key, with ``units``),
-    ``tables`` (name → column → array, with ``columns_units``), ``plots`` (drawn by
-    :meth:`plot`), and the ``inputs`` as the run used them (defaults filled in)."""
+    ``texts`` (words by key), ``tables`` (name → column → array, with ``columns_units``),
+    ``plots`` (drawn by :meth:`plot`), and the ``inputs`` as the run used them (defaults
+    filled in)."""
 
     study: str
     inputs: Mapping[str, Any]
@@ -37,6 +39,10 @@ class StudyReport:
     plots: tuple
     #: The names of the tables short enough to print whole (``str`` prints them).
     shown: tuple = ()
+    #: The words a caption quotes, by key (``reference``: what errors are measured against).
+    texts: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    #: (table, column) → the decimals ``str`` prints (a fitted order to 3); arrays keep every digit.
+    decimals: Mapping[tuple, int] = dataclasses.field(default_factory=dict)
 
     def __str__(self) -> str:
         parts = ["\n".join(self.summary)]
@@ -49,8 +55,18 @@ class StudyReport:
             numeric = [isinstance(c, np.ndarray) for c in columns.values()]
             # A whole column (an index, a count) as integers, as the CSV writes it.
             whole = [isinstance(c, np.ndarray) and c.dtype.kind == "i" for c in columns.values()]
-            cell = lambda v, n, w: str(int(v)) if w else ("" if np.isnan(v) else repr(float(v))) if n else str(v)  # noqa: E731
-            rows = [[cell(v, n, w) for v, n, w in zip(values, numeric, whole)] for values in zip(*columns.values())]
+            places = [self.decimals.get((name, c)) for c in columns]
+
+            def cell(v, n, w, d):
+                if not n:
+                    return str(v)
+                if w:
+                    return str(int(v))
+                if np.isnan(v):
+                    return ""
+                return repr(float(v)) if d is None else f"{v:.{d}f}"
+
+            rows = [[cell(v, n, w, d) for v, n, w, d in zip(values, numeric, whole, places)] for values in zip(*columns.values())]
             widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(header)]
             align = lambda t, w, n: t.rjust(w) if n else t.ljust(w)  # noqa: E731
             lines = ["  ".join(align(h, w, n) for h, w, n in zip(header, widths, numeric)).rstrip()]
@@ -92,6 +108,12 @@ class StudyReport:
             return ax
         styles = {"solid": "-", "dashed": "--", "points": "o", "line-markers": "o-", "dots": "."}
         for s in p["series"]:
+            if s["style"] == "guide":
+                # A guide, not data: thin, dashed, grey, named at its end rather than in the legend.
+                ax.plot(s["x"], s["y"], "--", color="0.6", linewidth=0.8)
+                if len(s["x"]):
+                    ax.annotate(s["label"], (s["x"][-1], s["y"][-1]), color="0.4", fontsize="small")
+                continue
             ax.plot(s["x"], s["y"], styles[s["style"]], label=s["label"])
         for axis, set_label, set_scale in (("x", ax.set_xlabel, ax.set_xscale), ("y", ax.set_ylabel, ax.set_yscale)):
             a = p[axis]
@@ -116,7 +138,15 @@ def study(name: str, system: Any = None, *, progress: Any = None, **params: Any)
     parameters as keyword arguments; unknown names raise :class:`UnknownNameError` with the
     valid ones, values out of range :class:`InvalidValueError`."""
     # A list of methods may come as a sequence: the library reads them comma-separated.
-    values = [(k, ",".join(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()]
+    # Other sequences (a convergence study's steps) go as lists of numbers.
+    def value(v: Any) -> Any:
+        if isinstance(v, (list, tuple)) and all(isinstance(x, str) for x in v):
+            return ",".join(v)
+        if isinstance(v, (list, tuple, np.ndarray)):
+            return [float(x) for x in np.asarray(v, dtype=np.float64).reshape(-1)]
+        return v
+
+    values = [(k, value(v)) for k, v in params.items()]
     settings: list = []
     if system is not None:
         from . import System
@@ -138,6 +168,8 @@ def study(name: str, system: Any = None, *, progress: Any = None, **params: Any)
         columns_units=raw["columns_units"],
         plots=tuple(raw["plots"]),
         shown=tuple(raw["shown"]),
+        texts=raw["texts"],
+        decimals=raw["decimals"],
     )
 
 

@@ -749,7 +749,7 @@ class ConvergenceResult(_Pickled):
 
 
 def convergence(
-    system: "System | str" = _DEFAULTS["convergence"]["system"],
+    system: "System | str" = _REGISTRY["convergence"]["system"],
     *,
     methods: "Sequence[str] | str | None" = None,
     dts: Any = None,
@@ -757,44 +757,59 @@ def convergence(
     progress: Any = None,
 ) -> ConvergenceResult:
     """The order of convergence of ``methods`` (names, or a comma-separated string; default:
-    every method that applies) on ``system``, as ``pendula convergence``: the max-norm error
-    at ``t_end`` (s; default: the system's study horizon, a few small-oscillation periods)
-    against the exact solution or a dop853 reference at tolerance 1e-14, at the steps
-    ``dts`` (s; default: each method's own ladder of halved steps), and the order fitted
-    where the errors are in the asymptotic range. A method that fails at some step keeps
-    the errors of the others and says why (``failure``).
+    every method that applies) on ``system``, the library's ``convergence`` study (as
+    ``pendula convergence``): the max-norm error at ``t_end`` (s; default: the system's study
+    horizon, a few small-oscillation periods) against the exact solution or a dop853
+    reference at tolerance 1e-14, at the steps ``dts`` (s; default: each method's own ladder
+    of halved steps), and the order fitted where the errors are in the asymptotic range. A
+    method that fails at some step keeps the errors of the others and says why
+    (``failure``). :func:`pendula.study` ``("convergence", ...)`` takes the geometric ladder
+    (``dt_min``, ``dt_max``, ``levels``) too.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    args = (
-        system._core,
-        _names(methods),
-        _steps("dts", dts),
-        None if t_end is None else _float("t_end", t_end),
-    )
-    raw = timed(progress, f"convergence {system.name}", lambda tick: _core.convergence(*args, tick))
+    values = _accuracy_inputs(system, methods, dts, t_end)
+    settings = [(k, float(v)) for k, v in system._changed().items()]
+    raw = timed(progress, f"convergence {system.name}", lambda tick: _core.run_study("convergence", values, settings, tick))
+    points, orders, fits = (raw["tables"][t] for t in ("convergence", "orders", "fits"))
+    methods_out = []
+    for i, m in enumerate(orders["method"]):
+        mine = np.array([name == m for name in points["method"]], dtype=bool)
+        fitted = not math.isnan(orders["fitted_order"][i])
+        methods_out.append(
+            MethodConvergence(
+                method=m,
+                dt=points["dt"][mine].copy(),
+                error=points["error"][mine].copy(),
+                order=float(orders["fitted_order"][i]) if fitted else None,
+                fit=(int(fits["points"][i]), float(fits["dt_min"][i]), float(fits["dt_max"][i])) if fitted else None,
+                reason=fits["reason"][i] or None,
+                failure=fits["failure"][i] or None,
+                note=orders["note"][i],
+                label=fits["label"][i],
+            )
+        )
     return ConvergenceResult(
         system=system,
-        t_end=float(raw["t_end"]),
-        reference=raw["reference"],
-        methods=tuple(
-            MethodConvergence(
-                method=m["method"],
-                dt=m["dt"],
-                error=m["error"],
-                order=m["order"],
-                fit=m["fit"],
-                reason=m["reason"],
-                failure=m["failure"],
-                note=m["note"],
-                label=m["label"],
-            )
-            for m in raw["methods"]
-        ),
+        t_end=float(raw["inputs"]["t_end"]),
+        reference=raw["texts"]["reference"],
+        methods=tuple(methods_out),
     )
+
+
+def _accuracy_inputs(system: "System", methods: Any, dts: Any, t_end: Any) -> list:
+    """The inputs of an accuracy study (convergence, work-precision) that are given."""
+    values: list = [("system", system.name)]
+    if methods is not None:
+        values.append(("methods", ",".join(_names(methods))))
+    if dts is not None:
+        values.append(("dts", _steps("dts", dts)))
+    if t_end is not None:
+        values.append(("t_end", _float("t_end", t_end)))
+    return values
 
 
 # Work-precision diagrams -------------------------------------------------------------
@@ -860,7 +875,7 @@ class WorkPrecisionResult(_Pickled):
 
 
 def work_precision(
-    system: "System | str" = _DEFAULTS["work-precision"]["system"],
+    system: "System | str" = _REGISTRY["work-precision"]["system"],
     *,
     methods: "Sequence[str] | str | None" = None,
     dts: Any = None,
@@ -869,32 +884,39 @@ def work_precision(
     progress: Any = None,
 ) -> WorkPrecisionResult:
     """Error against cost of ``methods`` (default: every method that applies) on
-    ``system``, as ``pendula work-precision``: fixed-step methods at the steps ``dts`` (s;
-    default: each method's own ladder), the adaptive pairs (dopri5, dop853) at the
-    tolerances ``tols`` (rtol = atol; default: 10 from 1e-3 to 1e-12, geometric), the error
-    at ``t_end`` (s; default: the system's study horizon) against the exact solution or a
-    dop853 reference. Wall times are medians of runs repeated for at least 20 ms.
+    ``system``, the library's ``work-precision`` study (as ``pendula work-precision``):
+    fixed-step methods at the steps ``dts`` (s; default: each method's own ladder), the
+    adaptive pairs (dopri5, dop853) at the tolerances ``tols`` (rtol = atol; default: 10 from
+    1e-3 to 1e-12, geometric), the error at ``t_end`` (s; default: the system's study horizon)
+    against the exact solution or a dop853 reference. Wall times are medians of runs repeated
+    for at least 20 ms.
 
     ``progress``: by default (None) a line with the time elapsed appears where a terminal or
     notebook shows it, once the call has taken 3 s; ``True`` shows it from the start,
     ``False`` never; a callable gets the seconds elapsed, about every 20 ms.
     """
     system = _system(system)
-    wp = _DEFAULTS["work-precision"]
-    tols = _core.tolerance_ladder(wp["tol_max"], wp["tol_min"], wp["tol_levels"]) if tols is None else _steps("tols", tols)
-    args = (
-        system._core,
-        tols,
-        _names(methods),
-        _steps("dts", dts),
-        None if t_end is None else _float("t_end", t_end),
-    )
-    raw = timed(progress, f"work-precision {system.name}", lambda tick: _core.work_precision(*args, tick))
+    values = _accuracy_inputs(system, methods, dts, t_end)
+    if tols is not None:
+        values.append(("tols", _steps("tols", tols)))
+    settings = [(k, float(v)) for k, v in system._changed().items()]
+    raw = timed(progress, f"work-precision {system.name}", lambda tick: _core.run_study("work-precision", values, settings, tick))
+    points, costs = raw["tables"]["work_precision"], raw["tables"]["costs"]
+    out = []
+    for i, m in enumerate(costs["method"]):
+        mine = np.array([name == m for name in points["method"]], dtype=bool)
+        out.append(
+            MethodWork(
+                method=m,
+                **{k: np.asarray(points[k])[mine].copy() for k in ("dt", "tol", "error", "rhs_evals", "wall_s")},
+                failure=costs["failure"][i] or None,
+            )
+        )
     return WorkPrecisionResult(
         system=system,
-        t_end=float(raw["t_end"]),
-        reference=raw["reference"],
-        methods=tuple(MethodWork(**m) for m in raw["methods"]),
+        t_end=float(raw["inputs"]["t_end"]),
+        reference=raw["texts"]["reference"],
+        methods=tuple(out),
     )
 
 

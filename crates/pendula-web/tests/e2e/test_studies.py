@@ -82,3 +82,34 @@ def test_a_switch_is_a_checkbox_and_a_preset_a_list(browser, server, shots):
     page.screenshot(path=str(shots / "studies-lyapunov.png"), full_page=True)
     assert not page.js_errors, page.js_errors
     page.close()
+
+
+def test_a_list_of_steps_is_a_text_field_read_as_numbers(browser, server, shots):
+    page = open_lab(browser, server)
+    page.click("#tab-studies")
+    page.select_option("#study-name", "convergence")
+    # The steps are a list: typed comma-separated, read by the library as numbers.
+    assert page.get_attribute("[data-param=dts]", "data-kind") == "reals"
+    page.fill("[data-param=methods]", "rk4,verlet")
+    page.fill("[data-param=dts]", "0.1, 0.05, 0.025, 0.0125")
+    page.fill("[data-param=t_end]", "2")
+    page.click("#study-run")
+    page.wait_for_function("lab.study && lab.study.study === 'convergence'", timeout=15000)
+    report = pendula.convergence(methods="rk4,verlet", dts=[0.1, 0.05, 0.025, 0.0125], t_end=2)
+    assert page.evaluate("lab.study.inputs.dts") == [0.1, 0.05, 0.025, 0.0125]
+    assert page.evaluate("lab.study.texts.reference") == report.reference == "exact solution"
+    orders = page.evaluate(
+        "(() => { const t = lab.study.tables.find(t => t.name === 'orders');"
+        " const col = n => t.columns.find(c => c.name === n).values;"
+        " return Object.fromEntries(col('method').map((m, i) => [m, col('fitted_order')[i]])); })()"
+    )
+    assert orders == report.orders
+    assert abs(orders["rk4"] - 4) < 0.1 and abs(orders["verlet"] - 2) < 0.1
+    page.screenshot(path=str(shots / "studies-convergence.png"), full_page=True)
+    # A step that is not a number is refused by name.
+    page.fill("[data-param=dts]", "0.1, fast")
+    page.click("#study-run")
+    page.wait_for_function("document.getElementById('study-status').textContent.startsWith('Refused')", timeout=15000)
+    assert any("`dts`" in e and "numbers" in e for e in page.evaluate("lab.errors")), page.evaluate("lab.errors")
+    assert not page.js_errors, page.js_errors
+    page.close()

@@ -31,6 +31,32 @@ pub struct Dropped {
     pub error: Error,
 }
 
+impl Dropped {
+    /// Why it was dropped, with the step named `dt` as the studies' parameters name it (the
+    /// run loop's `h`), and Tao's refusal as the largest `dt` allowed.
+    pub fn why(&self) -> Error {
+        if self.adaptive {
+            return self.error.clone();
+        }
+        if let Error::InvalidValue { .. } = self.error
+            && let Some(refusal) = crate::integrator::tao::step_refusal(self.method, self.x)
+        {
+            return refusal;
+        }
+        crate::error::step_named_dt(self.error.clone())
+    }
+
+    /// Where (`dt` or `tol`) and why it was dropped: `at dt = 0.01: …`.
+    pub fn note(&self) -> String {
+        format!(
+            "at {} = {}: {}",
+            if self.adaptive { "tol" } else { "dt" },
+            crate::error::Short(self.x),
+            self.why()
+        )
+    }
+}
+
 /// The problem both studies solve: `model` from `y0` to `t_end`, against the state
 /// `reference` there.
 #[derive(Clone, Copy)]

@@ -100,6 +100,24 @@ pub fn check_binding_step(scheme: &TaoScheme, h: f64) -> Result<(), Error> {
     Ok(())
 }
 
+/// The refusal of a step `dt` above a Tao method's limit, in the words of a user who gave
+/// the step as `dt` (not the run loop's ω h): the largest step allowed, with the binding
+/// constant it follows from. `None` when `method` is not Tao's or `dt` is within its limit.
+pub fn step_refusal(method: &Method, dt: f64) -> Option<Error> {
+    let Scheme::Tao(scheme) = &method.scheme else { return None };
+    check_binding_step(scheme, dt).err()?;
+    Some(Error::OutOfRange {
+        name: "dt".into(),
+        value: dt.abs(),
+        why: format!(
+            "{} is unstable above w dt = 1 (its binding constant w = {} 1/s): a dt of at most {} s",
+            method.name,
+            Short(scheme.binding),
+            Short(MAX_BINDING_STEP / scheme.binding)
+        ),
+    })
+}
+
 impl Method {
     /// This method with binding constant ω (Tao's methods only).
     ///

@@ -205,6 +205,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
             Number { key: "n", value: n, unit: "", about: "the parameter's values" },
             Number { key: "wall_s", value: wall, unit: "s", about: "the wall-clock time it took" },
         ],
+        texts: Vec::new(),
         tables: vec![
             Table { name: "bifurcation", shown: false, columns: table },
             Table {

@@ -184,37 +184,6 @@ pub const COMPARE: Defaults = Defaults {
     ],
 };
 
-/// Orders of convergence (each method's own ladder of steps).
-pub const CONVERGENCE: Defaults = Defaults {
-    study: "convergence",
-    system: "oscillator",
-    method: None,
-    dt: None,
-    t_end: None,
-    values: &[LADDER_DT_MAX, LADDER_LEVELS],
-};
-
-/// The largest step of a given ladder (when --dt-min, --dt-max or --levels is given), s.
-const LADDER_DT_MAX: Default = num("dt_max", 0.05);
-/// The steps of a given ladder.
-const LADDER_LEVELS: Default = count("levels", 5);
-
-/// Error against cost.
-pub const WORK_PRECISION: Defaults = Defaults {
-    study: "work-precision",
-    system: "pendulum",
-    method: None,
-    dt: None,
-    t_end: None,
-    values: &[
-        LADDER_DT_MAX,
-        LADDER_LEVELS,
-        num("tol_max", 1e-3),
-        num("tol_min", 1e-12),
-        count("tol_levels", 10),
-    ],
-};
-
 /// The flip fractal of the double pendulum ([`crate::analysis::fractal`]).
 pub const FRACTAL: Defaults = Defaults {
     study: "fractal",
@@ -240,8 +209,7 @@ pub const ANIMATE: Defaults = Defaults {
 };
 
 /// Every study's defaults, in the CLI's order.
-pub static ALL: &[&Defaults] =
-    &[&SIMULATE, &COMPARE, &CONVERGENCE, &WORK_PRECISION, &ANIMATE, &FRACTAL, &SWEEP];
+pub static ALL: &[&Defaults] = &[&SIMULATE, &COMPARE, &ANIMATE, &FRACTAL, &SWEEP];
 
 #[cfg(test)]
 mod tests {

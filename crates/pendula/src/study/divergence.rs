@@ -194,6 +194,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         ],
         summary,
         numbers,
+        texts: Vec::new(),
         tables: vec![table],
         plots: vec![plot],
     })

@@ -134,6 +134,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         inputs: run_inputs(&values, method, dt, t_end),
         summary,
         numbers,
+        texts: Vec::new(),
         tables: vec![table],
         plots,
     })

@@ -191,6 +191,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         ],
         summary,
         numbers,
+        texts: Vec::new(),
         tables: vec![Table { name: "lyapunov", shown: false, columns }, exponents],
         plots: vec![plot],
     })

@@ -16,6 +16,7 @@
 //! the `120deg`/`pi` value syntax is a front end's (the format crate's) job, so inputs
 //! arrive here as numbers and names.
 
+pub mod accuracy;
 pub mod bifurcation;
 pub mod defaults;
 pub mod divergence;
@@ -89,15 +90,7 @@ pub fn schedule(dt: f64, t_end: f64) -> Result<crate::simulate::Schedule, Error>
     })
 }
 
-/// A library error about the step `h`, with the step named as studies call it: `dt`.
-pub fn step_named_dt(e: Error) -> Error {
-    match e {
-        Error::InvalidValue { name, value, allowed } if name == "h" => {
-            Error::InvalidValue { name: "dt".into(), value, allowed }
-        }
-        e => e,
-    }
-}
+pub use crate::error::step_named_dt;
 
 /// A lower estimate of an adaptive run's steps per small-oscillation period
 /// (`Model::time_scale`): DOP853 takes about 40 at tolerance 1e-6 on the chaotic double
@@ -113,8 +106,21 @@ pub fn adaptive_steps(span: f64, period: f64, h_max: f64) -> f64 {
     by_period.max(span / h_max).max(1.0)
 }
 
+/// The period of the motion from `y0` on `model`, s, for estimates of adaptive steps: the
+/// model's small-oscillation period, shortened for a start with more energy than the
+/// system's scale at rest — the motion is then faster by about the square root of the
+/// ratio (a pendulum spun up to K joules turns at a rate ∝ √K).
+pub fn motion_period(model: &dyn crate::model::DynModel, y0: &[f64]) -> f64 {
+    let rest = vec![0.0; y0.len()];
+    let ratio = model.energy_scale(&rest) / model.energy_scale(y0);
+    // NaN: a start whose energy overflows, whose motion has no period to speak of.
+    model.time_scale() * if ratio.is_nan() { 0.0 } else { ratio.min(1.0).sqrt() }
+}
+
 /// Every study, in the order front ends list them.
 pub const STUDIES: &[&Study] = &[
+    &accuracy::CONVERGENCE,
+    &accuracy::WORK_PRECISION,
     &stability::STUDY,
     &period::STUDY,
     &regimes::STUDY,
@@ -295,6 +301,17 @@ pub enum Kind {
     /// A named set of a system's settings ([`crate::system::driven::PRESETS`]): it picks the
     /// system when none is named, and its settings come before the user's.
     Preset,
+    /// Real numbers, a list, that may be left out (then the study does something else, which
+    /// `none` says): the steps of a convergence study. Front ends take a list (`--dts
+    /// 0.1,0.05`; `dts=[0.1, 0.05]`), or the same comma-separated as text.
+    Reals {
+        /// Their unit, as [`Kind::Real`]'s.
+        unit: Unit,
+        /// The values each may take.
+        domain: Domain,
+        /// What the study does without them, in a phrase (shown as their default).
+        none: &'static str,
+    },
     /// A real number that may be left out (then the study does something else, which
     /// `none` says: `adaptive steps at tol`).
     Optional {
@@ -392,7 +409,7 @@ impl Param {
             Kind::Real { default, .. } => Short(default).to_string(),
             Kind::Count { default, .. } => default.to_string(),
             Kind::Flag => "off".to_owned(),
-            Kind::Optional { none, .. } => format!("none: {none}"),
+            Kind::Optional { none, .. } | Kind::Reals { none, .. } => format!("none: {none}"),
             Kind::Section { default } => default.to_owned(),
             Kind::Axis { default: Some((system, text)) } => {
                 format!("{text} for {system}; required otherwise")
@@ -414,6 +431,7 @@ impl Param {
             Kind::Methods => "methods",
             Kind::Variable { .. } => "variable",
             Kind::Real { .. } | Kind::Optional { .. } => "real",
+            Kind::Reals { .. } => "reals",
             Kind::Section { .. } => "section",
             Kind::Axis { .. } => "axis",
             Kind::Threads => "count",
@@ -435,7 +453,7 @@ impl Param {
     /// The unit of a real parameter (given or optional); `None` for other kinds.
     pub fn real_unit(&self) -> Option<Unit> {
         match self.kind {
-            Kind::Real { unit, .. } | Kind::Optional { unit, .. } => Some(unit),
+            Kind::Real { unit, .. } | Kind::Optional { unit, .. } | Kind::Reals { unit, .. } => Some(unit),
             _ => None,
         }
     }
@@ -450,6 +468,8 @@ pub enum Input {
     Name(String),
     /// A switch's state.
     Flag(bool),
+    /// Numbers, a list.
+    Numbers(Vec<f64>),
 }
 
 impl fmt::Display for Input {
@@ -458,6 +478,10 @@ impl fmt::Display for Input {
             Input::Number(v) => write!(f, "{}", Short(*v)),
             Input::Name(s) => f.write_str(s),
             Input::Flag(b) => write!(f, "{b}"),
+            Input::Numbers(v) => {
+                let items: Vec<String> = v.iter().map(|x| Short(*x).to_string()).collect();
+                write!(f, "{}", items.join(","))
+            }
         }
     }
 }
@@ -476,6 +500,12 @@ impl Inputs {
     /// `self` with `name` set to the number `v`.
     pub fn number(mut self, name: &str, v: f64) -> Self {
         self.values.push((name.to_owned(), Input::Number(v)));
+        self
+    }
+
+    /// `self` with `name` set to the numbers `v`.
+    pub fn numbers(mut self, name: &str, v: &[f64]) -> Self {
+        self.values.push((name.to_owned(), Input::Numbers(v.to_vec())));
         self
     }
 
@@ -584,6 +614,59 @@ impl<'a> Args<'a> {
     fn given(&self, name: &str) -> Option<&'a Input> {
         // The last one given wins, as for repeated flags.
         self.inputs.values.iter().rev().find(|(n, _)| n == name).map(|(_, v)| v)
+    }
+
+    /// Whether the user gave `name` (a study whose parameters act together, as a ladder's
+    /// bounds and count, asks).
+    pub fn is_given(&self, name: &str) -> bool {
+        self.given(name).is_some()
+    }
+
+    /// The list parameter `name`: `None` when not given, else at least one value, each
+    /// within its domain. Text is read as comma-separated numbers.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for an empty list or text that is not numbers;
+    /// [`Error::InvalidValue`] naming the first value outside the domain.
+    ///
+    /// # Panics
+    /// When `name` is not a list parameter of the study.
+    pub fn reals(&self, name: &str) -> Result<Option<Vec<f64>>, Error> {
+        let Kind::Reals { domain, .. } = self.param(name).kind else {
+            panic!("{name} is not a list parameter of {}", self.study.name)
+        };
+        let values = match self.given(name) {
+            None => return Ok(None),
+            Some(Input::Numbers(v)) => v.clone(),
+            Some(Input::Number(v)) => vec![*v],
+            Some(Input::Name(text)) => {
+                text.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<Vec<f64>, _>>().map_err(
+                    |_| Error::InvalidInput {
+                        name: name.to_owned(),
+                        value: crate::error::clip(text, 60),
+                        allowed: "numbers, comma-separated".to_owned(),
+                    },
+                )?
+            }
+            Some(Input::Flag(b)) => {
+                return Err(Error::InvalidInput {
+                    name: name.to_owned(),
+                    value: b.to_string(),
+                    allowed: "numbers, not a bool".to_owned(),
+                });
+            }
+        };
+        if values.is_empty() {
+            return Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: "[]".to_owned(),
+                allowed: "at least one value".to_owned(),
+            });
+        }
+        if let Some(v) = values.iter().find(|v| !domain.contains(**v)) {
+            return Err(Error::InvalidValue { name: name.to_owned(), value: *v, allowed: domain.describe() });
+        }
+        Ok(Some(values))
     }
 
     fn param(&self, name: &str) -> &'static Param {
@@ -787,6 +870,11 @@ impl<'a> Args<'a> {
                 name: name.to_owned(),
                 value: b.to_string(),
                 allowed: "a number, not a bool".to_owned(),
+            }),
+            Some(list @ Input::Numbers(_)) => Err(Error::InvalidInput {
+                name: name.to_owned(),
+                value: crate::error::clip(&list.to_string(), 40),
+                allowed: "one number, not a list".to_owned(),
             }),
         }
     }
@@ -993,6 +1081,8 @@ pub struct Report {
     pub summary: Vec<String>,
     /// The numbers a caption or a summary quotes, by key, with units.
     pub numbers: Vec<Number>,
+    /// The words a caption quotes, by key (`reference`: what errors are measured against).
+    pub texts: Vec<(&'static str, String)>,
     /// Its tables.
     pub tables: Vec<Table>,
     /// Its plots.
@@ -1061,23 +1151,31 @@ pub struct Column {
     /// Whether its numbers are whole (an index, a count): written as integers (`3`, not
     /// `3.0`).
     pub whole: bool,
+    /// The decimals a printed table shows (a fitted order to 3); files keep every digit.
+    pub decimals: Option<usize>,
 }
 
 impl Column {
     /// A column of numbers (NaN for a missing value).
     pub fn numbers(name: &'static str, unit: &'static str, values: Vec<f64>) -> Column {
-        Column { name, unit, values: Cells::Numbers(values), whole: false }
+        Column { name, unit, values: Cells::Numbers(values), whole: false, decimals: None }
     }
 
-    /// A column of whole numbers (an orbit's index, a count of crossings), held as numbers.
+    /// A column of whole numbers (an orbit's index, a count of crossings), held as numbers;
+    /// NaN for a missing one (written as an empty cell, `null`, or NaN in a float array).
     pub fn whole(name: &'static str, values: Vec<f64>) -> Column {
-        debug_assert!(values.iter().all(|v| v.fract() == 0.0));
-        Column { name, unit: "", values: Cells::Numbers(values), whole: true }
+        debug_assert!(values.iter().all(|v| v.fract() == 0.0 || v.is_nan()));
+        Column { name, unit: "", values: Cells::Numbers(values), whole: true, decimals: None }
     }
 
     /// A column of text (names, notes).
     pub fn text(name: &'static str, values: Vec<String>) -> Column {
-        Column { name, unit: "", values: Cells::Text(values), whole: false }
+        Column { name, unit: "", values: Cells::Text(values), whole: false, decimals: None }
+    }
+
+    /// This column, printed with `decimals` decimals (files keep every digit).
+    pub fn printed_to(self, decimals: usize) -> Column {
+        Column { decimals: Some(decimals), ..self }
     }
 
     /// Its numbers.
@@ -1192,12 +1290,25 @@ pub struct Line {
     pub style: Style,
     /// Its points (x, y).
     pub points: Vec<[f64; 2]>,
+    /// The method whose results it shows, if one: drawn in the method's colour and marker,
+    /// as in every figure of it.
+    pub method: Option<&'static str>,
 }
 
 impl Line {
     /// A series `label` drawn as `style` through `points`.
     pub fn new(label: impl Into<String>, style: Style, points: Vec<[f64; 2]>) -> Line {
-        Line { label: label.into(), style, points }
+        Line { label: label.into(), style, points, method: None }
+    }
+
+    /// A series of `method`'s results, in its colour and marker.
+    pub fn of_method(
+        method: &'static str,
+        label: impl Into<String>,
+        style: Style,
+        points: Vec<[f64; 2]>,
+    ) -> Line {
+        Line { label: label.into(), style, points, method: Some(method) }
     }
 }
 
@@ -1214,6 +1325,9 @@ pub enum Style {
     LineMarkers,
     /// Small dots (thousands of points: a section's crossings).
     Dots,
+    /// A guide, not data (a slope of reference): thin, dashed and grey, its label written
+    /// at its end rather than in the legend.
+    Guide,
 }
 
 #[cfg(test)]

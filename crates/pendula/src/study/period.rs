@@ -176,7 +176,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         ("dt", Input::Number(dt)),
         ("max_amplitude", Input::Number(max)),
     ];
-    Ok(Report { study: STUDY.name, inputs, summary, numbers, tables: vec![table], plots })
+    Ok(Report { study: STUDY.name, inputs, summary, numbers, texts: Vec::new(), tables: vec![table], plots })
 }
 
 /// Degrees to radians as the value syntax reads `5deg`: (deg · π) / 180.

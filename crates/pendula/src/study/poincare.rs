@@ -260,6 +260,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
                 about: "the largest |H − E| at a crossing",
             },
         ],
+        texts: Vec::new(),
         tables: vec![crossings_table, Table { name: "orbits", shown: false, columns: orbit_columns }],
         plots: vec![plot],
     })

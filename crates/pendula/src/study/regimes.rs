@@ -299,6 +299,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         inputs: vec![("system", Input::Name(base.info().name.into()))],
         summary,
         numbers,
+        texts: Vec::new(),
         tables,
         plots: vec![decay, amplitude, phase],
     })

@@ -107,6 +107,7 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
                 about: "the largest distance of the two runs at the same time",
             },
         ],
+        texts: Vec::new(),
         tables: vec![Table {
             name: "round-trip",
             shown: false,
