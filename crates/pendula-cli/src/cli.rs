@@ -28,7 +28,8 @@ over the limits without --allow-large); 130, 143, 129 interrupted by SIGINT, SIG
 #[derive(Debug)]
 pub struct CommandInfo {
     /// Its name on the command line; empty for the library's studies (one subcommand each,
-    /// listed by [`pendula::study::STUDIES`]).
+    /// listed by [`pendula::study::STUDIES`], but for those with a command of their own:
+    /// [`crate::studies::OWN_COMMANDS`]).
     pub name: &'static str,
     /// The files it writes in its study directory (`*` stands for any text: compare's phase
     /// portraits are named after the methods). A `--summary` or other output of the run that
@@ -210,7 +211,7 @@ mod tests {
         let listed: Vec<String> = COMMANDS
             .iter()
             .flat_map(|c| match c.name {
-                "" => pendula::study::STUDIES.iter().map(|s| s.name.to_owned()).collect(),
+                "" => crate::studies::registered().map(|s| s.name.to_owned()).collect(),
                 name => vec![name.to_owned()],
             })
             .collect();

@@ -13,6 +13,16 @@ use serde_json::{Map, Value, json};
 
 use crate::study::{Common, OutDir, num};
 
+/// Studies the CLI presents with a command of its own over the same library spec: `compare`
+/// writes the files it wrote before the registry (`summary.csv`, its energy, trajectory and
+/// phase figures), which `pendula report` reads.
+pub const OWN_COMMANDS: &[&str] = &["compare"];
+
+/// The registry's studies that are subcommands here.
+pub fn registered() -> impl Iterator<Item = &'static Study> {
+    STUDIES.iter().copied().filter(|s| !OWN_COMMANDS.contains(&s.name))
+}
+
 /// A study command as parsed: which study, and its arguments.
 #[derive(Debug, Clone)]
 pub struct StudyCommand {
@@ -122,9 +132,7 @@ impl FromArgMatches for StudyCommand {
         let Some((name, sub)) = matches.subcommand() else {
             return Err(clap::Error::new(clap::error::ErrorKind::MissingSubcommand));
         };
-        let study = STUDIES
-            .iter()
-            .copied()
+        let study = registered()
             .find(|s| s.name == name)
             .ok_or_else(|| clap::Error::new(clap::error::ErrorKind::InvalidSubcommand))?;
         Ok(StudyCommand { study, matches: sub.clone() })
@@ -138,7 +146,7 @@ impl FromArgMatches for StudyCommand {
 
 impl clap::Subcommand for StudyCommand {
     fn augment_subcommands(cmd: clap::Command) -> clap::Command {
-        STUDIES.iter().fold(cmd, |cmd, s| cmd.subcommand(command(s)))
+        registered().fold(cmd, |cmd, s| cmd.subcommand(command(s)))
     }
 
     fn augment_subcommands_for_update(cmd: clap::Command) -> clap::Command {
@@ -146,7 +154,7 @@ impl clap::Subcommand for StudyCommand {
     }
 
     fn has_subcommand(name: &str) -> bool {
-        STUDIES.iter().any(|s| s.name == name)
+        registered().any(|s| s.name == name)
     }
 }
 
@@ -160,21 +168,14 @@ impl StudyCommand {
     pub fn run(&self) -> Result<()> {
         let common = Common::from_arg_matches(&self.matches)?;
         let inputs = self.inputs(&common)?;
-        let limited = !common.large.allow_large;
-        let budget = Budget {
-            max_steps: limited.then_some(crate::limits::MAX_SCALAR_STEPS),
-            // The tables are written as CSV: each value a cell.
-            max_values: limited
-                .then_some(crate::limits::MAX_OUTPUT_BYTES / crate::limits::CSV_BYTES_PER_VALUE),
-            max_lane_steps: limited.then_some(crate::limits::MAX_LANE_STEPS),
-        };
+        let budget = budget(common.large.allow_large);
         // Checked before the output directory is touched: bad input leaves no trace.
         let files: Vec<String> =
             self.study.files.iter().flat_map(|f| ["csv", "png", "svg"].map(|e| format!("{f}.{e}"))).collect();
         let files: Vec<&str> = files.iter().map(String::as_str).collect();
         let mut out = OutDir::new(common.out_dir.as_deref(), self.study.name, &files)?;
         let summary = common.summary.open()?;
-        let report = (self.study.run)(&inputs, &budget).map_err(|e| self.error(e))?;
+        let report = (self.study.run)(&inputs, &budget).map_err(|e| error(self.study, e))?;
         for line in &report.summary {
             sayln!(summary, "{line}");
         }
@@ -302,54 +303,73 @@ impl StudyCommand {
         }
         Ok(inputs)
     }
+}
 
-    /// A library error with parameter names spelled as flags.
-    fn error(&self, e: pendula::Error) -> anyhow::Error {
-        let mut names: Vec<(&str, String)> = self.study.params.iter().map(|p| (p.name, flag(p))).collect();
-        names.push(("set", "--set".to_owned()));
-        let names: Vec<(&str, &str)> = names.iter().map(|(n, f)| (*n, f.as_str())).collect();
-        match e {
-            // Worded as every command's refusal over the limits (the budget's limit is the same).
-            pendula::Error::TooLarge { what, cost, amount, .. } => {
-                let estimate = match cost {
-                    pendula::study::Cost::Steps => {
-                        crate::limits::Estimate::new(crate::limits::Cost::Steps, amount, what)
-                    }
-                    pendula::study::Cost::LaneSteps => {
-                        crate::limits::Estimate::new(crate::limits::Cost::LaneSteps, amount, what)
-                    }
-                    // Each value a CSV cell.
-                    pendula::study::Cost::Values => crate::limits::Estimate::new(
-                        crate::limits::Cost::Output,
-                        amount * crate::limits::CSV_BYTES_PER_VALUE,
-                        what,
-                    ),
-                };
-                crate::limits::check(self.study.name, false, &[estimate]).err().unwrap_or_else(|| {
-                    anyhow::anyhow!("{}: refusing a request over the limits", self.study.name)
-                })
-            }
-            pendula::Error::InvalidInput { name, value, allowed } => {
-                let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
-                let allowed = respell(self.study, &allowed);
-                if value.parse::<f64>().is_ok() {
-                    anyhow::anyhow!("invalid {shown} {value}: {allowed}")
-                } else {
-                    anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
+/// The CLI's limits as a study's budget: none with `--allow-large`.
+pub fn budget(allow_large: bool) -> Budget {
+    let limited = !allow_large;
+    Budget {
+        max_steps: limited.then_some(crate::limits::MAX_SCALAR_STEPS),
+        // The tables are written as CSV: each value a cell.
+        max_values: limited.then_some(crate::limits::MAX_OUTPUT_BYTES / crate::limits::CSV_BYTES_PER_VALUE),
+        max_lane_steps: limited.then_some(crate::limits::MAX_LANE_STEPS),
+    }
+}
+
+/// A library error of `study` with its parameter names spelled as flags.
+pub fn error(study: &Study, e: pendula::Error) -> anyhow::Error {
+    let mut names: Vec<(&str, String)> = study.params.iter().map(|p| (p.name, flag(p))).collect();
+    names.push(("set", "--set".to_owned()));
+    let names: Vec<(&str, &str)> = names.iter().map(|(n, f)| (*n, f.as_str())).collect();
+    match e {
+        // Worded as every command's refusal over the limits (the budget's limit is the same).
+        pendula::Error::TooLarge { what, cost, amount, .. } => {
+            let estimate = match cost {
+                pendula::study::Cost::Steps => {
+                    crate::limits::Estimate::new(crate::limits::Cost::Steps, amount, what)
                 }
-            }
-            pendula::Error::InvalidValue { name, value, allowed }
-                if names.iter().any(|(n, _)| *n == name) =>
-            {
-                let shown = names.iter().find(|(n, _)| *n == name).map_or(name.as_str(), |(_, f)| f);
-                anyhow::anyhow!(
-                    "invalid {shown} {}: {}",
-                    pendula::error::Short(value),
-                    respell(self.study, allowed)
-                )
-            }
-            e => crate::parse::flag_error(e, &names),
+                pendula::study::Cost::LaneSteps => {
+                    crate::limits::Estimate::new(crate::limits::Cost::LaneSteps, amount, what)
+                }
+                // Each value a CSV cell.
+                pendula::study::Cost::Values => crate::limits::Estimate::new(
+                    crate::limits::Cost::Output,
+                    amount * crate::limits::CSV_BYTES_PER_VALUE,
+                    what,
+                ),
+            };
+            crate::limits::check(study.name, false, &[estimate])
+                .err()
+                .unwrap_or_else(|| anyhow::anyhow!("{}: refusing a request over the limits", study.name))
         }
+        e => respelled(e, &names),
+    }
+}
+
+/// A library error with the parameters it names (`name`, and `` `name` `` in its words)
+/// spelled as their flags in `names` ((parameter, flag) pairs).
+pub fn respelled(e: pendula::Error, names: &[(&str, &str)]) -> anyhow::Error {
+    let flag_of = |name: &str| names.iter().find(|(n, _)| *n == name).map(|(_, f)| *f);
+    let words = |text: &str| names.iter().fold(text.to_owned(), |t, (n, f)| t.replace(&format!("`{n}`"), f));
+    match e {
+        pendula::Error::InvalidInput { name, value, allowed } => {
+            let shown = flag_of(&name).unwrap_or(&name);
+            let allowed = words(&allowed);
+            if value.parse::<f64>().is_ok() {
+                anyhow::anyhow!("invalid {shown} {value}: {allowed}")
+            } else {
+                anyhow::anyhow!("invalid {shown} `{value}`: {allowed}")
+            }
+        }
+        pendula::Error::InvalidValue { name, value, allowed } if flag_of(&name).is_some() => {
+            let shown = flag_of(&name).unwrap_or_default();
+            anyhow::anyhow!("invalid {shown} {}: {}", pendula::error::Short(value), words(allowed))
+        }
+        pendula::Error::OutOfRange { name, value, why } if flag_of(&name).is_some() => {
+            let shown = flag_of(&name).unwrap_or_default();
+            anyhow::anyhow!("invalid {shown} {}: {why}", pendula::error::Short(value))
+        }
+        e => crate::parse::flag_error(e, names),
     }
 }
 

@@ -13,10 +13,7 @@ use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use pendula::Error;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_times_cancellable};
-use pendula::ensemble::BatchMethod;
-use pendula::error::Short;
-use pendula::integrator::{self, Method, Scheme};
-use pendula::system::{Model, double::DoublePendulum};
+use pendula::integrator::{self, Method};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -25,15 +22,6 @@ use crate::{CoreSystem, interruptible_counted, raise, to_py};
 /// An `InvalidValueError` for `name` = `value`, with what is allowed.
 fn invalid(py: Python<'_>, name: &str, value: impl std::fmt::Display, allowed: &str) -> PyErr {
     raise(py, "InvalidValueError", format!("invalid value {value} for `{name}`: {allowed}"))
-}
-
-/// `value` unless it is not finite and > 0.
-fn positive(py: Python<'_>, name: &str, value: f64) -> PyResult<f64> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(invalid(py, name, Short(value), "a finite number > 0"))
-    }
 }
 
 /// A worker pool of `threads` (default: every core).
@@ -71,59 +59,18 @@ pub(crate) fn fractal<'py>(
     pixels: Option<(usize, usize)>,
     times: Option<(Vec<f64>, Vec<f64>)>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let info = system.values.info();
-    if !std::ptr::eq(info, <DoublePendulum as Model>::INFO) {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            format!("invalid system `{}`: the flip fractal is the double pendulum's (`double`)", info.name),
-        ));
-    }
-    let pendulum = DoublePendulum::from_values(&system.values);
-    if pendulum.is_forced() {
-        return Err(raise(
-            py,
-            "InvalidValueError",
-            "invalid system: the fractal's ensemble kernels integrate the free double pendulum (damping and drive_amplitude must be 0)".to_owned(),
-        ));
-    }
-    let axis = |name: &str, (lo, hi, n): (f64, f64, usize)| -> PyResult<GridAxis> {
-        if !(lo.is_finite() && hi.is_finite() && lo < hi && n >= 1) {
-            return Err(raise(
-                py,
-                "InvalidValueError",
-                format!(
-                    "invalid {name} = ({lo}, {hi}, {n}): (lo, hi, n) with finite lo < hi (rad) and n >= 1"
-                ),
-            ));
-        }
-        Ok(GridAxis { lo, hi, n })
-    };
-    let (theta1, theta2) = (axis("theta1", theta1)?, axis("theta2", theta2)?);
-    let t_max = positive(py, "t_max", t_max)?;
-    let h = positive(py, "dt", dt)?;
-    if h > t_max {
-        return Err(invalid(py, "dt", Short(h), &format!("at most t_max = {} s", Short(t_max))));
-    }
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(invalid(py, "tolerance", Short(tolerance), "a finite time >= 0 (s)"));
-    }
     let method: &'static Method = integrator::find(method).map_err(|e| to_py(py, &e))?;
-    let Some(batch) = BatchMethod::of(method) else {
-        return Err(raise(
-            py,
-            "UnsuitableMethodError",
-            format!(
-                "invalid method `{}`: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
-                method.name
-            ),
-        ));
-    };
-    if let Scheme::Tao(scheme) = method.scheme {
-        integrator::tao::check_binding_step(&scheme, h).map_err(|e| to_py(py, &e))?;
-    }
+    let (theta1, theta2) = (GridAxis::from(theta1), GridAxis::from(theta2));
+    let spec = FractalSpec::new(&system.values, theta1, theta2, t_max, dt, method, tolerance).map_err(
+        |e| match e {
+            // A method the ensemble engine does not run is unsuitable, as Python classes it.
+            Error::InvalidInput { ref name, .. } if name == "method" => {
+                raise(py, "UnsuitableMethodError", e.to_string())
+            }
+            e => to_py(py, &e),
+        },
+    )?;
     let pool = pool(py, threads)?;
-    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
     let all = theta1.n * theta2.n;
     // A part of the map (`pixels`, for `pendula.distributed`): its flip times alone, row-major
     // pixel indices [start, end). Or the whole map's flip times already computed (`times`,

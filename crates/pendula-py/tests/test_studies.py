@@ -1,6 +1,7 @@
 """The library's study registry in Python: one function per study, its parameters, checks
 and report the library's, and its numbers those `pendula STUDY` writes for the same inputs."""
 
+import csv
 import json
 import math
 import os
@@ -72,6 +73,31 @@ def test_the_cli_reports_the_same_numbers(tmp_path):
         assert doc[key] == value, key
     assert out.stderr.splitlines()[:2] == list(r.summary)
     assert math.isclose(doc["t_end"], 3.0)
+
+
+def test_compare_is_the_clis_comparison(tmp_path):
+    """`pendula.compare` runs the library's spec that `pendula compare` presents: the same
+    steps, counts, errors and growth as its summary.csv, the same opening sentence."""
+    cli = os.environ.get("PENDULA_CLI", "target/debug/pendula")
+    args = ["pendulum", "--methods", "rk4,verlet", "--evals-per-second", "40", "--t-end", "300"]
+    out = subprocess.run(
+        [cli, "compare", *args, "--out-dir", str(tmp_path / "c")], capture_output=True, text=True, check=True
+    )
+    r = pendula.compare("pendulum", methods="rk4,verlet", evals_per_second=40, t_end=300)
+    assert out.stdout.splitlines()[0] == r.summary[0]
+    with open(tmp_path / "c" / "summary.csv") as f:
+        rows = list(csv.DictReader(f))
+    table = r.tables["compare"]
+    assert [row["method"] for row in rows] == list(table["method"])
+    for i, row in enumerate(rows):
+        for key in ("dt", "max_rel_energy_error", "max_abs_energy_error", "drift_rate"):
+            assert float(row[key]) == table[key][i], key
+        for key in ("steps", "rhs_evals", "cost_evals"):
+            assert int(row[key]) == table[key][i], key
+        assert row["growth"] == table["growth"][i]
+    # RK4's energy error drifts; Verlet's, at the same cost, stays bounded.
+    assert list(table["growth"]) == ["growing", "bounded"]
+    assert abs(table["cost_evals"][1] / table["cost_evals"][0] - 1) < 0.05
 
 
 def test_a_report_plots_with_matplotlib():

@@ -10,17 +10,12 @@ pub use pendula::analysis::compare::{
     crossovers, default_t_end, equal_cost_step, round_sig, round_time,
 };
 use pendula::analysis::{Growth, envelope};
+use pendula::study::compare::growth_word;
 use pendula::system::Values;
-use pendula::{End, RunSpec};
 use pendula_viz::{Figure, Kind, Scale, axis_label, method_style, pretty, with_unit};
-use rayon::prelude::*;
 use serde_json::json;
 
-use pendula::error::Short;
-
 use crate::args::{Defaults, SystemArg};
-use crate::limits::{self, Cost, Estimate, round};
-use crate::parse::positive_arg;
 use crate::study::{self, Common, OutDir, num, short};
 
 #[derive(Debug, Clone, Args)]
@@ -60,74 +55,37 @@ pub const FILES: &[&str] = &[
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let system = args.system.name(&DEFAULTS);
-    let values = study::values(system, &args.common.set.items)?;
-    let steps = match &args.dt {
-        Some(text) => Steps::Equal(positive_arg("--dt", Some(text), 0.0, "a step size in seconds")?),
-        None => Steps::EqualCost(positive_arg(
-            "--evals-per-second",
-            args.evals_per_second.as_deref(),
-            DEFAULT_EVALS_PER_SECOND,
-            "a number of evaluations per second > 0",
-        )?),
-    };
-    let t_end =
-        positive_arg("--t-end", args.t_end.as_deref(), default_t_end(system), "an end time in seconds")?;
-    let model = values.build();
-    let methods = args.methods.resolve(&*model)?;
-    // What it costs: at one step, every method's steps; at equal cost, every method's
-    // evaluations, each counted as a step (a step costs at least one).
-    let per_method = match steps {
-        Steps::Equal(h) => limits::steps(t_end, h),
-        Steps::EqualCost(n) => (t_end * n).ceil(),
-    };
-    let how = match steps {
-        Steps::Equal(h) => {
-            format!("{} methods x {} steps of {} s", methods.len(), round(per_method), Short(h))
-        }
-        Steps::EqualCost(n) => {
-            format!("{} methods x {} evaluations/s x {} s", methods.len(), Short(n), Short(t_end))
-        }
-    };
-    limits::check(
-        "compare",
-        args.common.large.allow_large,
-        &[Estimate::new(Cost::Steps, methods.len() as f64 * per_method, how)],
-    )?;
-    match steps {
-        Steps::Equal(h) => {
-            crate::parse::schedule(&RunSpec { t0: 0.0, h, end: End::Time(t_end) }, "--dt", "--t-end")?;
-        }
-        Steps::EqualCost(n) if per_method > limits::MAX_STEPS as f64 => anyhow::bail!(
-            "invalid --t-end {}: at {} evaluations per second it is more than 10^13 steps",
-            Short(t_end),
-            Short(n)
-        ),
-        Steps::EqualCost(_) => {}
+    // The flags as the library's study reads them (pendula::study::compare): it checks the
+    // inputs and the work before anything is written.
+    let study = &pendula::study::compare::STUDY;
+    let mut inputs = pendula::study::Inputs::default().name("system", system);
+    if let Some(text) = &args.methods.methods {
+        inputs = inputs.name("methods", text);
     }
+    for (name, flag, text) in [
+        ("evals_per_second", "--evals-per-second", &args.evals_per_second),
+        ("dt", "--dt", &args.dt),
+        ("t_end", "--t-end", &args.t_end),
+    ] {
+        if let Some(text) = text {
+            inputs = inputs.number(name, crate::parse::parse_value(flag, text, None)?);
+        }
+    }
+    if !args.common.set.items.is_empty() {
+        inputs.set = crate::parse::parse_settings(pendula::model::find(system)?, &args.common.set.items)?;
+    }
+    let read = pendula::study::Args::new(study, &inputs).and_then(|a| {
+        pendula::study::compare::Spec::read(&a, &crate::studies::budget(args.common.large.allow_large))
+    });
+    let spec = read.map_err(|e| crate::studies::error(study, e))?;
     let mut out = OutDir::new(args.common.out_dir.as_deref(), "compare", FILES)?;
     let summary = args.common.summary.open()?;
 
-    let bar = study::progress(methods.len() as u64, "compare");
-    // The methods' runs are independent: one per core, in the order given.
-    let runs = methods
-        .par_iter()
-        .map(|method| {
-            let run = compare_one(&values, method, steps, t_end);
-            bar.inc(1);
-            run
-        })
-        .collect::<Result<Vec<_>, pendula::Error>>()?;
+    let bar = study::progress(spec.methods.len() as u64, "compare");
+    let comparison = spec.run(|| bar.inc(1)).map_err(|e| crate::studies::error(study, e))?;
     bar.finish_and_clear();
-    // Every method failed and one numerically: the run's failure (exit 1), not a table of
-    // failures with empty figures.
-    if runs.iter().all(|r| r.failed.is_some()) && runs.iter().any(|r| r.failed == Some("failed")) {
-        let first = runs.iter().find(|r| r.failed == Some("failed")).expect("one failed");
-        let context = format!("compare: every method failed; the first, {}", first.method);
-        return Err(match first.error.clone() {
-            Some(e) => anyhow::Error::new(e).context(context),
-            None => anyhow::anyhow!("{context}: {}", first.failure.as_deref().unwrap_or("")),
-        });
-    }
+    let (values, steps, t_end) = (&comparison.spec.values, comparison.spec.steps, comparison.spec.t_end);
+    let runs = &comparison.runs;
 
     let header = [
         "method",
@@ -157,27 +115,15 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 num(r.max_rel_energy_error),
                 num(r.max_abs_energy_error),
                 num(r.drift_rate),
-                r.failed.unwrap_or_else(|| r.growth.map_or("", Growth::word)).to_owned(),
+                growth_word(r).to_owned(),
                 r.failure.clone().unwrap_or_default(),
             ]
         })
         .collect();
     out.csv("summary.csv", &header, &rows)?;
-    let model_scale = model.energy_scale(values.initial_state());
+    let model_scale = comparison.energy_scale;
     let info = values.info();
-    let eu = info.energy_unit();
-    sayln!(
-        summary,
-        "{system}: {} over {t_end} {}, {}; relative to the energy scale {} {eu} ({})",
-        pendula::analysis::EnergyBalance::new(&*model, values.initial_state()).quantity(),
-        info.time_unit(),
-        match steps {
-            Steps::Equal(h) => format!("every method at h = {h}"),
-            Steps::EqualCost(n) => format!("every method at the same cost, {n} evaluations per unit time"),
-        },
-        short(model_scale),
-        info.energy_scale,
-    );
+    sayln!(summary, "{}", comparison.opening());
     let shown: Vec<Vec<String>> = runs
         .iter()
         .map(|r| {
@@ -201,12 +147,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             &shown
         )
     );
-    let crossings = crossovers(&runs);
-    for c in &crossings {
+    let crossings = &comparison.crossovers;
+    for c in crossings {
         sayln!(summary, "{}", c.sentence(info.time_unit()));
     }
 
-    for (name, figure) in figures(&values, &runs, steps, t_end) {
+    for (name, figure) in figures(values, runs, steps, t_end) {
         out.figure(&name, &figure)?;
     }
     let doc = json!({

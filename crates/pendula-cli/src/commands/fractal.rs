@@ -15,7 +15,6 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use pendula::analysis::fractal::{FractalSpec, GridAxis, assemble, flip_fractal_with_progress, flip_times};
-use pendula::system::{Model, double::DoublePendulum};
 use pendula_viz::{Heatmap, Rgb};
 use serde_json::json;
 
@@ -278,12 +277,6 @@ fn parse(args: &FractalArgs) -> Result<Parsed> {
         }
     }
     let values = info.values(&settings)?;
-    let pendulum = DoublePendulum::from_values(&values);
-    if pendulum.is_forced() {
-        bail!(
-            "invalid --set: the fractal's ensemble kernels integrate the free double pendulum (damping and drive_amplitude must be 0)"
-        );
-    }
     let mut theta1 = GridAxis { lo: -std::f64::consts::PI, hi: std::f64::consts::PI, n: 512 };
     let mut theta2 = theta1;
     let mut seen = Vec::new();
@@ -302,19 +295,21 @@ fn parse(args: &FractalArgs) -> Result<Parsed> {
     }
     let t_max = DEFAULTS.positive("t_max", &args.t_max, "a time in seconds")?;
     let h = args.stepping.positive_dt(&DEFAULTS)?;
-    if h > t_max {
-        bail!("invalid --dt {}: must be at most --t-max {}", Short(h), Short(t_max));
-    }
     let tolerance = DEFAULTS.non_negative("tolerance", &args.tolerance, "a time in seconds")?;
     let method = args.stepping.method(&DEFAULTS)?;
-    let Some(batch) = pendula::ensemble::BatchMethod::of(method) else {
-        bail!(
-            "invalid --method {}: the fractal runs on the ensemble engine: rk4, tao-2 or tao-4",
-            method.name
-        );
-    };
-    crate::parse::binding_step(method, h, "--dt")?;
-    let spec = FractalSpec { pendulum, theta1, theta2, t_max, h, method: batch, tolerance };
+    // The library checks the fractal (pendula::analysis::fractal::FractalSpec::new); its
+    // errors name the inputs, here spelled as flags.
+    let flags = [
+        ("dt", "--dt"),
+        ("t_max", "--t-max"),
+        ("tolerance", "--tolerance"),
+        ("method", "--method"),
+        ("set", "--set"),
+        ("theta1", "--grid"),
+        ("theta2", "--grid"),
+    ];
+    let spec = FractalSpec::new(&values, theta1, theta2, t_max, h, method, tolerance)
+        .map_err(|e| crate::studies::respelled(e, &flags))?;
     Ok(Parsed { spec, method, values })
 }
 

@@ -25,6 +25,13 @@ impl GridAxis {
     }
 }
 
+impl From<(f64, f64, usize)> for GridAxis {
+    /// (lo, hi, n), as Python passes an axis.
+    fn from((lo, hi, n): (f64, f64, usize)) -> Self {
+        GridAxis { lo, hi, n }
+    }
+}
+
 /// What to compute.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FractalSpec {
@@ -43,6 +50,99 @@ pub struct FractalSpec {
     /// A pixel is converged when its flip times at h and h/2 differ by at most this, s (and
     /// both or neither flip).
     pub tolerance: f64,
+}
+
+impl FractalSpec {
+    /// The fractal of the double pendulum `values` (its parameters; it starts from rest at
+    /// each pixel) over `theta1` × `theta2`, at steps `dt` and `dt`/2 of `method` to `t_max`,
+    /// converged within `tolerance` (s), checked before any work. Errors name the inputs as
+    /// every front end's keywords do (`dt`, `t_max`, `tolerance`, `method`, `theta1`), and
+    /// `set` for the pendulum's own settings.
+    ///
+    /// # Errors
+    /// Another system, a damped or driven pendulum (the ensemble kernels integrate the free
+    /// one), an empty or reversed axis, times not finite and > 0, `dt` above `t_max`, a
+    /// negative tolerance, a method the ensemble engine does not run, or a Tao step above
+    /// its limit.
+    pub fn new(
+        values: &crate::system::Values,
+        theta1: GridAxis,
+        theta2: GridAxis,
+        t_max: f64,
+        dt: f64,
+        method: &'static crate::integrator::Method,
+        tolerance: f64,
+    ) -> Result<FractalSpec, Error> {
+        let info = values.info();
+        let invalid = |name: &str, value: String, allowed: String| Error::InvalidInput {
+            name: name.into(),
+            value,
+            allowed,
+        };
+        if info.name != "double" {
+            return Err(invalid(
+                "system",
+                info.name.into(),
+                "the flip fractal is the double pendulum's (`double`)".into(),
+            ));
+        }
+        let pendulum = <DoublePendulum as crate::system::Model>::from_values(values);
+        if pendulum.is_forced() {
+            let forcing = ["damping", "drive_amplitude"]
+                .into_iter()
+                .find(|q| values.get(q) != 0.0)
+                .map(|q| format!("{q}={}", crate::error::Short(values.get(q))));
+            return Err(invalid(
+                "set",
+                forcing.unwrap_or_default(),
+                "the fractal's ensemble kernels integrate the free double pendulum (damping and drive_amplitude must be 0)"
+                    .into(),
+            ));
+        }
+        for (name, a) in [("theta1", theta1), ("theta2", theta2)] {
+            if !(a.lo.is_finite() && a.hi.is_finite() && a.lo < a.hi && a.n >= 1) {
+                return Err(invalid(
+                    name,
+                    format!("({}, {}, {})", a.lo, a.hi, a.n),
+                    "(lo, hi, n) with finite lo < hi (rad) and n >= 1".into(),
+                ));
+            }
+        }
+        for (name, v) in [("t_max", t_max), ("dt", dt)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidValue {
+                    name: name.into(),
+                    value: v,
+                    allowed: "must be finite and > 0",
+                });
+            }
+        }
+        if dt > t_max {
+            return Err(invalid(
+                "dt",
+                crate::error::Short(dt).to_string(),
+                format!("must be at most `t_max` {}", crate::error::Short(t_max)),
+            ));
+        }
+        if !(tolerance.is_finite() && tolerance >= 0.0) {
+            return Err(Error::InvalidValue {
+                name: "tolerance".into(),
+                value: tolerance,
+                allowed: "must be finite and >= 0 (s)",
+            });
+        }
+        let Some(batch) = BatchMethod::of(method) else {
+            return Err(invalid(
+                "method",
+                method.name.into(),
+                "the fractal runs on the ensemble engine: rk4, tao-2 or tao-4".into(),
+            ));
+        };
+        if let Some(refusal) = crate::integrator::tao::step_refusal(method, dt) {
+            return Err(refusal);
+        }
+        Ok(FractalSpec { pendulum, theta1, theta2, t_max, h: dt, method: batch, tolerance })
+    }
 }
 
 /// The result of [`flip_fractal`]: arrays of θ₂-rows of θ₁-pixels (θ₁ fastest).

@@ -36,7 +36,7 @@ pub use crate::simulate::adaptive::solve_adaptive;
 use crate::system::{Hamiltonian, Model, System};
 
 /// More steps than this is surely a mistake (10¹³ steps take days).
-const MAX_STEPS: f64 = 1e13;
+pub const MAX_STEPS: f64 = 1e13;
 
 /// Where a run ends.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -18,6 +18,7 @@
 
 pub mod accuracy;
 pub mod bifurcation;
+pub mod compare;
 pub mod defaults;
 pub mod divergence;
 pub mod energy_budget;
@@ -119,6 +120,7 @@ pub fn motion_period(model: &dyn crate::model::DynModel, y0: &[f64]) -> f64 {
 
 /// Every study, in the order front ends list them.
 pub const STUDIES: &[&Study] = &[
+    &compare::STUDY,
     &accuracy::CONVERGENCE,
     &accuracy::WORK_PRECISION,
     &stability::STUDY,
