@@ -113,3 +113,24 @@ def test_a_list_of_steps_is_a_text_field_read_as_numbers(browser, server, shots)
     assert any("`dts`" in e and "numbers" in e for e in page.evaluate("lab.errors")), page.evaluate("lab.errors")
     assert not page.js_errors, page.js_errors
     page.close()
+
+
+def test_compare_runs_in_the_lab_as_in_python(browser, server, shots):
+    page = open_lab(browser, server)
+    page.click("#tab-studies")
+    page.select_option("#study-name", "compare")
+    page.select_option("[data-param=system]", "pendulum")
+    for name, value in (("methods", "rk4,verlet"), ("evals_per_second", "40"), ("t_end", "300")):
+        page.fill(f"[data-param={name}]", value)
+    page.fill("#study-set", "theta=2.6")
+    page.click("#study-run")
+    page.wait_for_function("lab.study && lab.study.study === 'compare'", timeout=15000)
+    report = pendula.compare(pendula.System("pendulum", theta=2.6), methods="rk4,verlet", evals_per_second=40, t_end=300)
+    shown = page.eval_on_selector_all(".study-summary", "ps => ps.map(p => p.textContent)")
+    assert shown == list(report.summary)
+    growth = page.evaluate("lab.study.tables[0].columns.find(c => c.name === 'growth').values")
+    assert growth == list(report.tables["compare"]["growth"]) == ["growing", "bounded"]
+    page.wait_for_function("[...document.querySelectorAll('img.study-plot')].every(i => i.complete && i.naturalWidth > 0)")
+    page.screenshot(path=str(shots / "studies-compare.png"), full_page=True)
+    assert not page.js_errors, page.js_errors
+    page.close()
