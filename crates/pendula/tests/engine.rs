@@ -6,13 +6,43 @@
 //! operations; for the partitioned methods the (q, p) steppers) to rounding.
 
 use pendula::ensemble::engine::{LaneMethod, LaneOutcome, LaneSpec};
-use pendula::integrator::{self, Scheme};
+use pendula::integrator::explicit_rk::Tableau;
+use pendula::integrator::{self, Method, Requirement, Scheme};
 use pendula::model::{CATALOGUE, lane_method};
 use pendula::observe::Ignore;
 use pendula::system::Values;
 use pendula::{End, RunSpec};
 
 use crate::support::{max_diff, samples, values};
+
+/// A test method the catalogue does not hold: an explicit tableau of `stages` stages.
+const fn test_method(name: &'static str, order: u32, tableau: &'static Tableau) -> Method {
+    Method {
+        name,
+        title: name,
+        order,
+        requirement: Requirement::Any,
+        symplectic: false,
+        symmetric: false,
+        description: "a test tableau",
+        reference: "Hairer, Norsett, Wanner, Solving ODEs I, §II.1",
+        scheme: Scheme::ExplicitRk(tableau),
+    }
+}
+
+/// Heun's method, 2 stages, order 2.
+static HEUN: Method = test_method(
+    "heun (test)",
+    2,
+    &Tableau { c: &[0.0, 1.0], a: &[&[], &[1.0]], b: &[1.0, 1.0], denominator: 2.0 },
+);
+
+/// Kutta's third-order method, 3 stages.
+static KUTTA3: Method = test_method(
+    "kutta-3 (test)",
+    3,
+    &Tableau { c: &[0.0, 0.5, 1.0], a: &[&[], &[0.5], &[-1.0, 2.0]], b: &[1.0, 4.0, 1.0], denominator: 6.0 },
+);
 
 /// Every catalogued system with its defaults, and the variants with forces or structure.
 fn variants() -> Vec<Values> {
@@ -64,7 +94,11 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
         let np = info.parameters.len();
         // 37 members: two full lane groups and a padded one.
         let all = members(&base, 37, false);
-        for method in integrator::METHODS.iter().filter(|m| matches!(m.scheme, Scheme::ExplicitRk(_))) {
+        // The catalogue's explicit methods (1 and 4 stages) and the test tableaus of 2 and 3:
+        // a kernel for every number of stages the engine admits.
+        let explicit =
+            integrator::METHODS.iter().copied().filter(|m| matches!(m.scheme, Scheme::ExplicitRk(_)));
+        for method in explicit.chain([&HEUN, &KUTTA3]) {
             let model = base.build();
             let lanes = lane_method(method, &*model).expect("the engine runs every explicit method");
             let (h, steps) = if info.dimensionless { (0.05, 400) } else { (2e-3, 400) };
@@ -111,9 +145,17 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
             checked.push(format!("{} {}", info.name, method.name));
         }
     }
-    // Every catalogued system, with both explicit methods.
+    // Every catalogued system, with every explicit method and both test tableaus.
     for entry in CATALOGUE {
         assert!(checked.iter().any(|c| c.starts_with(&format!("{} ", entry.name))), "{} not run", entry.name);
+        for test in [&HEUN, &KUTTA3] {
+            assert!(
+                checked.contains(&format!("{} {}", entry.name, test.name)),
+                "{} {} not run",
+                entry.name,
+                test.name
+            );
+        }
     }
 }
 

@@ -154,7 +154,7 @@ pub struct LaneOutcome {
 /// freedom).
 pub fn supports(info: &SystemInfo, method: &LaneMethod) -> bool {
     match method {
-        LaneMethod::Rk(tableau) => tableau.b.len() <= MAX_STAGES && info.state.len() <= MAX_DIM,
+        LaneMethod::Rk(tableau) => (1..=MAX_STAGES).contains(&tableau.b.len()) && info.state.len() <= MAX_DIM,
         LaneMethod::KickDrift { .. } => info.state.len() == KICK_DRIFT_DIM,
     }
 }
@@ -315,7 +315,7 @@ pub(crate) fn run_group<M: Model>(
     macro_rules! go {
         ($fma:tt, $wide:tt) => {{
             match spec.method {
-                LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len() == 1),
+                LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len()),
                 LaneMethod::KickDrift { scheme, .. } => {
                     // Compiled only for the dimension it runs on (`supports`).
                     if const { M::DIM == KICK_DRIFT_DIM } {
@@ -333,24 +333,34 @@ pub(crate) fn run_group<M: Model>(
             }
         }};
     }
+    // Kernels for every number of stages up to MAX_STAGES, each unrolled.
+    macro_rules! by_stages {
+        ($fma:tt, $wide:tt, $d:tt, $stages:expr) => {
+            match $stages {
+                1 => with!($fma, $wide, $d, 1),
+                2 => with!($fma, $wide, $d, 2),
+                3 => with!($fma, $wide, $d, 3),
+                _ => with!($fma, $wide, $d, 4),
+            }
+        };
+    }
     macro_rules! rk {
-        ($fma:tt, $wide:tt, $one:expr) => {{
-            let one = $one;
-            if M::DIM == 2 {
-                if one { with!($fma, $wide, 2, 1) } else { with!($fma, $wide, 2, 4) }
-            } else if M::DIM == 4 {
-                if one { with!($fma, $wide, 4, 1) } else { with!($fma, $wide, 4, 4) }
+        ($fma:tt, $wide:tt, $stages:expr) => {{
+            const { assert!(MAX_STAGES == 4, "a kernel for each number of stages") };
+            let stages = $stages;
+            // Only the dimensions this system has are compiled (`if const`).
+            if const { M::DIM == 2 } {
+                by_stages!($fma, $wide, 2, stages)
+            } else if const { M::DIM == 4 } {
+                by_stages!($fma, $wide, 4, stages)
             } else {
                 // A family (the chain): its members' dimensions, padded to 4, 8 or 16
                 // variables (the padding stays zero: the chain's equations read and write its
-                // first 2n), each unrolled.
-                match (dim, one) {
-                    (..=4, true) => with!($fma, $wide, 4, 1),
-                    (..=4, false) => with!($fma, $wide, 4, 4),
-                    (..=8, true) => with!($fma, $wide, 8, 1),
-                    (..=8, false) => with!($fma, $wide, 8, 4),
-                    (_, true) => with!($fma, $wide, 16, 1),
-                    (_, false) => with!($fma, $wide, 16, 4),
+                // first 2n).
+                match dim {
+                    ..=4 => by_stages!($fma, $wide, 4, stages),
+                    ..=8 => by_stages!($fma, $wide, 8, stages),
+                    _ => by_stages!($fma, $wide, 16, stages),
                 }
             }
         }};
