@@ -65,10 +65,11 @@ use rayon::prelude::*;
 
 use super::{CHUNK, has_fma};
 
-/// Members per lane group of the engine: two halves of one AVX-512 vector per value, whose
-/// independent chains of operations hide each other's latency (8 alone measured slower on the
-/// hand-written kernels this engine replaced: 1.14 s against 0.87 s on one core).
-pub const LANES: usize = 16;
+/// Members per lane group, the ensemble's one [`super::LANES`]: in the engine, two halves of
+/// one AVX-512 vector per value, whose independent chains of operations hide each other's
+/// latency (8 alone measured slower on the hand-written kernels this engine replaced: 1.14 s
+/// against 0.87 s on one core).
+pub use super::LANES;
 use crate::integrator::explicit_rk::{
     Plan, Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update, plan,
 };
