@@ -525,8 +525,8 @@ pub struct ScalarSpec<'a> {
 
 /// Runs `count` members of `info` one scalar run each, in parallel on rayon's current
 /// pool: member i's values (every quantity, in the catalogue's order) written by
-/// `member(i, values)`, its final state and first flip time (s, NaN if none: |θ| passing π,
-/// linearly interpolated within the step) stored by `store(i, state, flip_time, row)` into
+/// `member(i, values)`, its final state and first flip time (s, NaN if none: where the cubic
+/// Hermite interpolant of an angle passes ±π within the step, as on the lanes) stored by `store(i, state, flip_time, row)` into
 /// row i of `out` (rows of `row_len`). The ensemble's scalar path, for methods without lanes.
 ///
 /// # Errors
@@ -555,7 +555,7 @@ pub fn run_scalar(
         member(i, &mut v);
         let values = info.values(&settings(info, &v)).map_err(|error| CellError { cell: None, error })?;
         let mut watch = FlipWatch {
-            previous: vec![0.0; angles.len()],
+            previous: vec![[0.0; 2]; angles.len()],
             angles: &angles,
             t_previous: 0.0,
             flip_time: f64::NAN,
@@ -570,10 +570,14 @@ pub fn run_scalar(
     })
 }
 
-/// Watches a scalar run for the first flip (linear interpolation of |θ| within the step).
+/// Watches a scalar run for the first flip: where the cubic Hermite interpolant of an angle
+/// that crossed (its values and rates, the velocities `dim / 2` further on, at both ends of
+/// the step) passes ±π — the rule of the lanes ([`crate::ensemble::engine`]) and of the
+/// event locator, so that a sweep's `flip_time` does not depend on which path ran it.
 struct FlipWatch<'a> {
     angles: &'a [usize],
-    previous: Vec<f64>,
+    /// The angles' values and rates at the end of the previous step.
+    previous: Vec<[f64; 2]>,
     t_previous: f64,
     flip_time: f64,
     stop: bool,
@@ -582,23 +586,31 @@ struct FlipWatch<'a> {
 impl Observer for FlipWatch<'_> {
     fn observe(&mut self, s: &Sample<'_>) -> Flow {
         use std::f64::consts::PI;
+        let rate = s.y.len() / 2;
         if s.step > 0 && self.flip_time.is_nan() {
+            let h = s.t - self.t_previous;
             let mut fraction = f64::INFINITY;
-            for (&i, &old) in self.angles.iter().zip(&self.previous) {
-                let (a, b) = (old.abs(), s.y[i].abs());
-                if a <= PI && b > PI {
-                    fraction = fraction.min((PI - a) / (b - a));
+            for (&i, &[a, da]) in self.angles.iter().zip(&self.previous) {
+                let (b, db) = (s.y[i], s.y[i + rate]);
+                if a.abs() <= PI && b.abs() > PI {
+                    fraction = fraction.min(crate::events::hermite_crossing(
+                        h,
+                        s.t,
+                        [a, da],
+                        [b, db],
+                        PI.copysign(b),
+                    ));
                 }
             }
             if fraction.is_finite() {
-                self.flip_time = self.t_previous + fraction * (s.t - self.t_previous);
+                self.flip_time = self.t_previous + fraction * h;
                 if self.stop {
                     return Flow::Break(Stop::Enough);
                 }
             }
         }
         for (p, &i) in self.previous.iter_mut().zip(self.angles) {
-            *p = s.y[i];
+            *p = [s.y[i], s.y[i + rate]];
         }
         self.t_previous = s.t;
         Flow::Continue(())
