@@ -23,9 +23,7 @@
 //! updates a progress bar) every 20 ms (by default the bar shows itself only where a terminal or a
 //! notebook watches and the run, judged by its progress after 0.5 s, will take 3 s or more:
 //! `dense.show_bar`); a Ctrl-C sets the flag that the run's observer and the engine
-//! (`LaneSpec::cancel`, between lane groups; the double pendulum's kernel through
-//! `ensemble::run_into_cancellable`/`run_values_cancellable` and `flip_times_cancellable`, before
-//! each work item) poll, so that one call over all the members or pixels keeps every thread busy to
+//! (`LaneSpec::cancel`, between lane groups, also under `flip_times_cancellable`) poll, so that one call over all the members or pixels keeps every thread busy to
 //! the end and still stops within a work item's time. Library errors become the classes of
 //! `crates/pendula-py/python/pendula/errors.py` by their kind. The pure-Python layer
 //! (`crates/pendula-py/python/pendula/`) holds what Python users see: `__init__.py` (`System`,
@@ -861,8 +859,7 @@ fn ensemble<'py>(
         info.values(&settings_of(&v))
             .map_err(|e| raise(py, "InvalidValueError", format!("member {i}: {e}")))?;
     }
-    let swept: Vec<&str> = param_names.iter().map(String::as_str).collect();
-    let path = ensemble_path(method, &system.values, &swept);
+    let path = ensemble_path(method, &system.values);
     let cols = dim + 1 + usize::from(energy_error);
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if threads == 0 {
@@ -904,24 +901,6 @@ fn ensemble<'py>(
                         |i: usize, o: &LaneOutcome, row: &mut [f64]| write(i, &o.state, o.flip_time, row);
                     model.ensemble(info, m, &member, &spec, &mut data, cols, &store)
                 }
-                EnsemblePath::DoubleKernel(batch) => {
-                    let spec = pendula::ensemble::BatchSpec {
-                        method: batch,
-                        h: dt,
-                        steps,
-                        stop_at_flip: until_flip,
-                        track_flips: true,
-                    };
-                    pendula::ensemble::run_values_cancellable(
-                        m,
-                        &member,
-                        &spec,
-                        &mut data,
-                        cols,
-                        &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
-                        Some(flag),
-                    )
-                }
                 EnsemblePath::Scalar => {
                     // One scalar run per member, as a sweep's scalar cells run.
                     let spec = pendula::sweep::ScalarSpec {
@@ -951,7 +930,6 @@ fn ensemble<'py>(
         numpy::ndarray::Array2::from_shape_vec((m, cols), data).expect("m rows").into_pyarray(py),
         match path {
             EnsemblePath::Engine(_) => "simd lanes (ensemble engine)",
-            EnsemblePath::DoubleKernel(_) => "simd lanes (the double pendulum's kernel)",
             EnsemblePath::Scalar => "scalar",
         },
     ))

@@ -142,8 +142,8 @@ def test_bad_input_names_the_value():
 
 @pytest.mark.parametrize("method", ["gauss-legendre-4", "tao-4"])
 def test_ctrl_c_interrupts_a_long_sweep_quickly(method):
-    # Minutes of work on the scalar path and on the double pendulum's kernel (which takes
-    # its cells in slices to look at the flag); SIGINT after 0.3 s must end it within 0.2 s.
+    # Minutes of work on the scalar path and on Tao's lanes (which look at the flag before
+    # each lane group); SIGINT after 0.3 s must end it within 0.2 s.
     latency = ctrl_c_latency(
         lambda: pendula.sweep("double", ["theta1=-3:3:2000", "theta2=-3:3:500"], method=method, dt=0.001, steps=5_000),
         after=0.3,

@@ -8,10 +8,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use pendula::analysis::fractal::{FractalSpec, GridAxis, converged, flip_times_at};
-use pendula::ensemble::BatchMethod;
 use pendula::integrator;
-use pendula::system::Model;
-use pendula::system::double::DoublePendulum;
 use serde::Deserialize;
 use serde_json::json;
 
@@ -67,12 +64,6 @@ impl FractalRequest {
             return refuse(format!("t_max / dt = {:.0} steps per pixel: at most 10^7", t_max / dt));
         }
         let method = integrator::find(self.method.as_deref().unwrap_or("rk4"))?;
-        let Some(batch) = BatchMethod::of(method) else {
-            return refuse(format!(
-                "method {}: the fractal runs rk4, tao-2 or tao-4 (the ensemble engine's)",
-                method.name
-            ));
-        };
         let axis = |name: &str, range: Option<[f64; 2]>| -> Result<GridAxis, crate::config::Refusal> {
             let [lo, hi] = range.unwrap_or([-std::f64::consts::PI, std::f64::consts::PI]);
             if !(lo.is_finite()
@@ -98,9 +89,9 @@ impl FractalRequest {
             ["m1", "m2", "l1", "l2", "g"].iter().map(|n| (n.to_string(), values.get(n))).collect();
         settings.push(("damping".into(), 0.0));
         settings.push(("drive_amplitude".into(), 0.0));
-        let pendulum = DoublePendulum::from_values(&double.values(&settings)?);
+        // The library's checks (the method among those the engine runs on it, Tao's step).
         Ok(Job {
-            spec: FractalSpec { pendulum, theta1, theta2, t_max, h: dt, method: batch, tolerance: TOLERANCE },
+            spec: FractalSpec::new(&double.values(&settings)?, theta1, theta2, t_max, dt, method, TOLERANCE)?,
         })
     }
 }

@@ -508,11 +508,7 @@ pub(crate) fn hello(limits: &Limits) -> Value {
         .iter()
         .map(|m| json!({"name": m.name, "title": m.title, "order": m.order}))
         .collect();
-    let fractal_methods: Vec<&str> = pendula::integrator::METHODS
-        .iter()
-        .filter(|m| pendula::ensemble::BatchMethod::of(m).is_some())
-        .map(|m| m.name)
-        .collect();
+    let fractal_methods = pendula::analysis::fractal::methods();
     json!({
         "type": "hello",
         "version": env!("CARGO_PKG_VERSION"),

@@ -122,7 +122,7 @@ async fn bad_commands_get_an_error_frame_and_the_session_lives_on() {
         (r#"{"cmd":"fractal","size":100000}"#, "size = 100000"),
         (r#"{"cmd":"fractal","t_max":1e9}"#, "t_max"),
         (r#"{"cmd":"fractal","theta1":[1,1]}"#, "theta1"),
-        (r#"{"cmd":"fractal","method":"verlet"}"#, "rk4, tao-2 or tao-4"),
+        (r#"{"cmd":"fractal","method":"verlet"}"#, "euler, rk4, tao-2, tao-4"),
     ];
     for (text, expected) in cases {
         ws.send(Message::Text(text.into())).await.unwrap();
@@ -255,7 +255,7 @@ async fn the_fractal_comes_coarse_first_then_whole_with_flags_equal_to_the_libra
         theta2: axis,
         t_max: 20.0,
         h: 0.01,
-        method: pendula::ensemble::BatchMethod::Rk4,
+        method: pendula::ensemble::engine::LaneMethod::of(&pendula::integrator::explicit_rk::RK4).unwrap(),
         tolerance: 0.01,
     };
     let reference = flip_fractal(&spec).unwrap();

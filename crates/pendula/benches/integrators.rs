@@ -17,7 +17,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use ode_solvers::dop_shared::OutputType;
 use ode_solvers::{Dop853, Rk4, System as OdeSystem, Vector4};
 use pendula::control::Tolerances;
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
+use pendula::ensemble::engine::{LaneMethod, LaneSpec};
+use pendula::ensemble::{self, Member, MemberResult};
 use pendula::integrator::embedded::DOP853;
 use pendula::integrator::explicit_rk::RK4;
 use pendula::model::find;
@@ -103,8 +104,14 @@ fn benches(c: &mut Criterion) {
     };
     let members: Vec<Member> =
         (0..64 * 64).map(|c| Member { pendulum, state: [cell(c % 64), cell(c / 64), 0.0, 0.0] }).collect();
-    let spec =
-        BatchSpec { method: BatchMethod::Rk4, h: 1e-2, steps: 100, stop_at_flip: false, track_flips: true };
+    let spec = LaneSpec {
+        method: LaneMethod::of(&RK4).unwrap(),
+        h: 1e-2,
+        steps: 100,
+        stop_at_flip: false,
+        track_flips: true,
+        cancel: None,
+    };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; members.len()];
     w3.bench_function("pendula ensemble", |b| {

@@ -130,14 +130,21 @@ impl Values {
 /// ([`crate::ensemble::engine::supports`]): explicit Runge–Kutta methods of at most four
 /// stages on every catalogued system, damped and driven variants included; the explicit
 /// partitioned methods (symplectic Euler, Störmer–Verlet, the Yoshida compositions) on
-/// separable systems, kick–drift. Answered before any step is taken: the callers choose the
-/// engine by this, never by names.
+/// separable systems, kick–drift; Tao's maps on the non-separable Hamiltonian systems (the
+/// double pendulum undamped, the chain while its state fits). Answered before any step is
+/// taken, from the system's structure: the callers choose the engine by this, never by names.
+/// (A member of an ensemble that lacks what the method needs — a damped one, when damping is
+/// swept — is refused by the engine, naming it, as a scalar run refuses it.)
 pub fn lane_method(method: &'static Method, model: &dyn DynModel) -> Option<LaneMethod> {
-    let lanes = match method.scheme {
-        Scheme::ExplicitRk(tableau) => LaneMethod::Rk(tableau),
-        Scheme::Partitioned(scheme) if model.separable() => LaneMethod::KickDrift { method, scheme },
-        _ => return None,
+    let lanes = LaneMethod::of(method)?;
+    let fits = match lanes {
+        LaneMethod::Rk(_) => true,
+        LaneMethod::KickDrift { .. } => model.separable(),
+        LaneMethod::Tao { .. } => model.check(method).is_ok() && !model.separable(),
     };
+    if !fits {
+        return None;
+    }
     engine::supports(model.info(), &lanes).then_some(lanes)
 }
 
@@ -145,30 +152,18 @@ pub fn lane_method(method: &'static Method, model: &dyn DynModel) -> Option<Lane
 /// compare names).
 #[derive(Debug, Clone, Copy)]
 pub enum EnsemblePath {
-    /// Tao's map on lanes for the free double pendulum ([`crate::ensemble::run_values`]).
-    DoubleKernel(crate::ensemble::BatchMethod),
-    /// The general engine ([`DynModel::ensemble`]) with this method: every system with an
+    /// The engine ([`DynModel::ensemble`]) with this method: every system with an
     /// explicit tableau, forces included; separable systems with kick–drift.
     Engine(LaneMethod),
     /// No lanes for this method: one scalar run per member.
     Scalar,
 }
 
-/// The engine for an ensemble of `method` runs of the system of `base`, whose members differ
-/// from `base` in the quantities named `swept`. (With kick–drift, a swept member that is not
-/// separable — damped — is refused by the engine, as a scalar run refuses it.)
-pub fn ensemble_path(method: &'static Method, base: &Values, swept: &[&str]) -> EnsemblePath {
-    let info = base.info();
-    if std::ptr::eq(info, double::DoublePendulum::INFO)
-        && let Some(tao @ crate::ensemble::BatchMethod::Tao(_)) = crate::ensemble::BatchMethod::of(method)
-    {
-        // Tao's map on lanes integrates the free pendulum's Hamiltonian; forced members
-        // run one by one.
-        let forcing = ["damping", "drive_amplitude"];
-        if !forcing.iter().any(|n| base.get(n) != 0.0 || swept.contains(n)) {
-            return EnsemblePath::DoubleKernel(tao);
-        }
-    }
+/// The engine for an ensemble of `method` runs of the system of `base` (its members differ
+/// from it in some quantities; one that lacks what the method needs — damped, with
+/// kick–drift or Tao's map — is refused by the engine, naming it, as a scalar run refuses
+/// it).
+pub fn ensemble_path(method: &'static Method, base: &Values) -> EnsemblePath {
     match lane_method(method, &*base.build()) {
         Some(lanes) => EnsemblePath::Engine(lanes),
         None => EnsemblePath::Scalar,
@@ -260,6 +255,19 @@ pub trait DynModel: DynSystem {
         row_len: usize,
         store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
     ) -> Result<(), Error>;
+    /// Samples `count` members of this system (built from the entry `info`) once per drive
+    /// period on the ensemble engine: see [`crate::ensemble::engine::stroboscopic`].
+    ///
+    /// # Errors
+    /// As [`crate::ensemble::engine::stroboscopic`].
+    fn stroboscopic(
+        &self,
+        info: &'static SystemInfo,
+        count: usize,
+        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        strobe: &engine::Strobe<'_>,
+        out: &mut [f64],
+    ) -> Result<(), Error>;
     /// Runs this system alone in the engine arithmetic (see
     /// [`crate::ensemble::engine::solve_one`]): bit for bit what a lane of
     /// [`DynModel::ensemble`] gives it.
@@ -333,10 +341,10 @@ pub trait DynModel: DynSystem {
         pause: &Pause<'_>,
     ) -> Result<Leg<Report>, Error>;
     /// [`DynModel::solve_resumable`], on the fastest path the library has for this system and
-    /// method: fixed-step RK4 on the free double pendulum runs the ensemble engine's
-    /// single-trajectory kernel ([`crate::ensemble::rk4_trajectory_resumable`]: the engine's
-    /// arithmetic, which differs from the reference by rounding), everything else
-    /// [`DynModel::solve_resumable`]. The choice depends only on the model, the method and
+    /// method: fixed steps of an explicit Runge–Kutta tableau the ensemble engine runs on the
+    /// system take its one lane ([`crate::ensemble::engine::solve_one_resumable`]: the engine's
+    /// arithmetic, bit for bit a lane of a sweep, which differs from the reference by
+    /// rounding), everything else [`DynModel::solve_resumable`]. The choice depends only on the model, the method and
     /// the stepping, so a run continued from a checkpoint takes the path it was saved on.
     ///
     /// # Errors
@@ -367,6 +375,16 @@ impl<M: Model> DynModel for M {
         store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
     ) -> Result<(), Error> {
         engine::run::<M, f64>(info, count, member, spec, out, row_len, store)
+    }
+    fn stroboscopic(
+        &self,
+        info: &'static SystemInfo,
+        count: usize,
+        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        strobe: &engine::Strobe<'_>,
+        out: &mut [f64],
+    ) -> Result<(), Error> {
+        engine::stroboscopic::<M>(info, count, member, strobe, out)
     }
     fn solve_lane(
         &self,
@@ -433,12 +451,12 @@ impl<M: Model> DynModel for M {
         from: Option<&RunState>,
         pause: &Pause<'_>,
     ) -> Result<Leg<Report>, Error> {
-        let double = (self as &dyn std::any::Any).downcast_ref::<double::DoublePendulum>();
-        if let (Stepping::Fixed(spec), Some(d)) = (stepping, double)
-            && !d.is_forced()
-            && crate::ensemble::BatchMethod::of(method) == Some(crate::ensemble::BatchMethod::Rk4)
+        // Fixed steps of an explicit tableau the engine runs on this system: its one lane.
+        if let (Stepping::Fixed(spec), Scheme::ExplicitRk(tableau)) = (stepping, method.scheme)
+            && engine::supports(Model::info(self), &LaneMethod::Rk(tableau))
         {
-            return crate::ensemble::rk4_trajectory_resumable(d, y0, spec, observer, from, pause);
+            let lanes = LaneMethod::Rk(tableau);
+            return engine::solve_one_resumable(self, lanes, y0, spec, observer, from, pause);
         }
         self.solve_resumable(method, y0, stepping, observer, from, pause)
     }

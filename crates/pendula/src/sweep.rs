@@ -3,9 +3,8 @@
 //! columns ([`Record`]). This is what `pendula sweep` and Python's `pendula.sweep` compute;
 //! they parse their own arguments, and write, shard and merge files themselves.
 //!
-//! Where [`crate::model::ensemble_path`] says so the cells run on the SIMD lanes (the
-//! double pendulum's kernel, or the general [`crate::ensemble::engine`]); everything else runs the
-//! scalar integrators cell by cell ([`run_scalar`]), in parallel on rayon's current pool.
+//! Where [`crate::model::ensemble_path`] says so the cells run on the SIMD lanes of the
+//! [`crate::ensemble::engine`]; everything else runs the scalar integrators cell by cell ([`run_scalar`]), in parallel on rayon's current pool.
 //! Either way a cell's result depends on its values alone: the output is bitwise the same
 //! for any thread count, any range of cells computed at a time (shards, checkpoint chunks)
 //! and any cancellation check.
@@ -28,7 +27,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rayon::prelude::*;
 
 use crate::ensemble::engine::{LaneOutcome, LaneSpec};
-use crate::ensemble::{BatchSpec, StoreValues};
 use crate::integrator::{Method, Scheme};
 use crate::model::EnsemblePath;
 use crate::observe::{Flow, Observer, Sample, Stop};
@@ -375,17 +373,15 @@ impl Sweep {
     }
 
     /// The engine the cells run on, as [`crate::model::ensemble_path`] decides it for the
-    /// method, the first cell's values and the swept quantities.
+    /// method and the first cell's values.
     pub fn path(&self) -> EnsemblePath {
-        let swept: Vec<&str> = self.spec.axes.iter().map(|a| a.name.as_str()).collect();
         let first = self.values(0).expect("a validated sweep's first cell");
-        crate::model::ensemble_path(self.spec.method, &first, &swept)
+        crate::model::ensemble_path(self.spec.method, &first)
     }
 
     /// The engine's description, for people and descriptions of the output.
     pub fn kernel(&self) -> &'static str {
         match self.path() {
-            EnsemblePath::DoubleKernel(_) => "simd lanes (the double pendulum's kernel)",
             EnsemblePath::Engine(_) => "simd lanes (ensemble engine)",
             EnsemblePath::Scalar => "scalar, per cell",
         }
@@ -395,9 +391,7 @@ impl Sweep {
     /// (`out.len()` a multiple of the column count), in parallel on rayon's current pool;
     /// `done` is called once per finished cell (a progress count). When `cancel` is set (by
     /// another thread) the computation stops with [`Error::Interrupted`], `out` then
-    /// incomplete: at the next lane group on the engine, the next cell on the scalar path,
-    /// the next slice of one work item per thread (256 cells each) on the double pendulum's
-    /// kernel.
+    /// incomplete: at the next lane group on the engine, the next cell on the scalar path.
     ///
     /// # Errors
     /// A cell's failure ([`Error::NonFinite`], a scalar method's own) with its index in the
@@ -456,11 +450,6 @@ impl Sweep {
         let (h, steps, until_flip) = (self.spec.h, self.spec.steps, self.spec.until_flip);
         let track_flips = self.spec.records.contains(&Record::FlipTime);
         match self.path() {
-            EnsemblePath::DoubleKernel(method) => {
-                let spec = BatchSpec { method, h, steps, stop_at_flip: until_flip, track_flips };
-                crate::ensemble::run_values_cancellable(count, &fill, &spec, out, cols, &store_row, cancel)
-                    .map_err(lanes_error)
-            }
             EnsemblePath::Engine(method) => {
                 let spec = LaneSpec { method, h, steps, stop_at_flip: until_flip, track_flips, cancel };
                 let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
@@ -506,6 +495,9 @@ impl Sweep {
 fn settings(info: &SystemInfo, v: &[f64]) -> Vec<(String, f64)> {
     info.quantities().map(|q| q.name.to_owned()).zip(v.iter().copied()).collect()
 }
+
+/// Stores member i's final state and flip time into its row.
+pub type StoreValues<'a, T> = dyn Fn(usize, &[f64], f64, &mut [T]) + Sync + 'a;
 
 /// What [`run_scalar`] runs: every member `steps` fixed steps of `h` with `method`.
 #[derive(Debug, Clone, Copy)]

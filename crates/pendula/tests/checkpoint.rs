@@ -107,16 +107,7 @@ fn run(
         let pause = Pause { at: f64::INFINITY, flag: Some(&flag) };
         flag.store(false, Ordering::Relaxed);
         let leg = if fast {
-            let Stepping::Fixed(spec) = stepping else { unreachable!() };
-            let pendulum = DoublePendulum::from_values(v);
-            pendula::ensemble::rk4_trajectory_resumable(
-                &pendulum,
-                v.initial_state(),
-                spec,
-                &mut observers,
-                from,
-                &pause,
-            )?
+            model.solve_fastest(method, v.initial_state(), stepping, &mut observers, from, &pause)?
         } else {
             model.solve_resumable(method, v.initial_state(), stepping, &mut observers, from, &pause)?
         };
@@ -186,13 +177,25 @@ fn every_fixed_step_method_continues_bit_for_bit() {
     }
 }
 
-/// The double pendulum's RK4 fast path (the ensemble engine's arithmetic, energies from the
-/// step's trigonometry), and a damped run whose energy balance integrates the work.
+/// The fast path of fixed-step explicit methods (the ensemble engine's one lane) on the free,
+/// the damped and the driven double pendulum, the chain and the pendulum, and a damped run
+/// whose energy balance integrates the work.
 #[test]
 fn the_fast_path_and_the_energy_balance_continue_bit_for_bit() {
     let double = values("double", &[("theta1", 2.9), ("theta2", 2.0)]);
     check(&double, &integrator::explicit_rk::RK4, &fixed(0.005, 1.0013), &["flip", "zero:theta1"], true);
     let damped = values("double", &[("damping", 0.3), ("theta1", 2.0)]);
+    check(&damped, &integrator::explicit_rk::RK4, &fixed(0.004, 0.4), &["zero:theta2"], true);
+    let driven = values("double", &[("drive_amplitude", 2.0), ("drive_frequency", 1.5)]);
+    check(&driven, &integrator::explicit_rk::EULER, &fixed(0.004, 0.4), &["zero:theta1"], true);
+    check(&values("chain", &[("links", 3.0)]), &integrator::explicit_rk::RK4, &fixed(0.004, 0.4), &[], true);
+    check(
+        &values("pendulum", &[]),
+        &integrator::explicit_rk::RK4,
+        &fixed(0.01, 1.003),
+        &["zero:theta"],
+        true,
+    );
     check(&damped, &integrator::explicit_rk::RK4, &fixed(0.004, 0.4), &["zero:theta2"], false);
     check(&damped, &integrator::gauss_legendre::GAUSS_LEGENDRE_4, &fixed(0.004, 0.4), &[], false);
 }

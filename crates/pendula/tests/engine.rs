@@ -388,3 +388,84 @@ fn a_sweeps_flip_times_are_the_same_on_lanes_and_on_the_scalar_path() {
         assert!(flips > cells / 4, "{system}: only {flips} of {cells} cells flipped");
     }
 }
+
+/// Tao's maps run on lanes for every non-separable Hamiltonian system whose state and copy
+/// fit the lane record — the double pendulum, free and driven, and the chain up to 4 links —
+/// each member bit for bit its run alone in one lane, and within rounding of the scalar
+/// stepper (glibc's trigonometry, no fused operations) with as many gradient evaluations.
+/// Damped members have no Hamiltonian and are refused (see `forced.rs`); the 5-link chain's
+/// state with its copy exceeds the record and runs one member at a time.
+#[test]
+fn tao_lanes_run_every_non_separable_system_bit_for_bit() {
+    let systems = [
+        values("double", &[]),
+        values("double", &[("drive_amplitude", 2.0), ("drive_frequency", 3.0)]),
+        values("chain", &[("links", 2.0)]),
+        values("chain", &[("links", 3.0)]),
+        values("chain", &[("links", 4.0), ("m3", 2.0), ("l2", 0.5)]),
+    ];
+    let tao: Vec<&'static integrator::Method> =
+        integrator::METHODS.iter().copied().filter(|m| matches!(m.scheme, Scheme::Tao(_))).collect();
+    assert_eq!(tao.len(), 2);
+    let mut checked = 0;
+    for base in &systems {
+        let info = base.info();
+        let dim = info.state.len();
+        let np = info.parameters.len();
+        let all = members(base, 37, true);
+        let model = base.build();
+        for &method in &tao {
+            let lanes = lane_method(method, &*model).expect("Tao's lanes on a non-separable system");
+            assert!(matches!(lanes, LaneMethod::Tao { .. }), "{lanes:?}");
+            let (h, steps) = (2e-3, 400);
+            let spec =
+                LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
+            let mut out = vec![0.0; all.len() * dim];
+            model
+                .ensemble(
+                    info,
+                    all.len(),
+                    &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
+                    &spec,
+                    &mut out,
+                    dim,
+                    &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..row.len()]),
+                )
+                .unwrap();
+            for (i, m) in all.iter().enumerate() {
+                let settings: Vec<(String, f64)> =
+                    info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
+                let one = info.values(&settings).unwrap().build();
+                let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
+                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap();
+                let lane = &out[i * dim..(i + 1) * dim];
+                assert!(
+                    lane.iter().zip(&alone.state).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "{} {} member {i}: lane {lane:?}, alone {:?}",
+                    info.name,
+                    method.name,
+                    alone.state
+                );
+                let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap();
+                let scale = reference.state.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+                let diff = max_diff(lane, &reference.state);
+                assert!(
+                    diff <= 1e-9 * scale,
+                    "{} {} member {i}: {diff} from the scalar stepper",
+                    info.name,
+                    method.name
+                );
+                assert_eq!(alone.rhs_evals, reference.rhs_evals, "{} {}", info.name, method.name);
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, systems.len() * tao.len());
+    // Separable systems take kick-drift; the 5-link chain's state and copy exceed the record.
+    for base in [values("pendulum", &[]), values("oscillator", &[]), values("chain", &[("links", 5.0)])] {
+        let model = base.build();
+        for &method in &tao {
+            assert!(lane_method(method, &*model).is_none(), "{} {}", base.info().name, method.name);
+        }
+    }
+}

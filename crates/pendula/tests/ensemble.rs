@@ -2,7 +2,8 @@
 //! events, bitwise determinism across thread counts and chunkings, and non-finite members
 //! reported by index (its sine and cosine: trig.rs).
 
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
+use pendula::ensemble::engine::{LaneMethod, LaneSpec};
+use pendula::ensemble::{self, Member, MemberResult};
 use pendula::events::{EventLocator, EventSpec};
 use pendula::integrator::explicit_rk::RK4;
 use pendula::system::double::DoublePendulum;
@@ -26,8 +27,13 @@ fn members() -> Vec<Member> {
     out
 }
 
+/// RK4 as the lanes run it.
+fn rk4() -> LaneMethod {
+    LaneMethod::of(&RK4).unwrap()
+}
+
 fn run(members: &[Member], steps: u64, stop_at_flip: bool) -> Vec<MemberResult> {
-    let spec = BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps, stop_at_flip, track_flips: true };
+    let spec = LaneSpec { method: rk4(), h: 0.01, steps, stop_at_flip, track_flips: true, cancel: None };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; members.len()];
     ensemble::run(members, &spec, &mut out).unwrap();
     out
@@ -120,7 +126,7 @@ fn a_non_finite_member_is_named() {
     ms[13].state[2] = f64::INFINITY;
     for track_flips in [true, false] {
         let spec =
-            BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips };
+            LaneSpec { method: rk4(), h: 0.01, steps: 10, stop_at_flip: false, track_flips, cancel: None };
         let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
         let err = ensemble::run(&ms, &spec, &mut out).unwrap_err();
         let pendula::Error::NonFiniteMember { member, t } = err else {
@@ -140,12 +146,13 @@ fn tao_lanes_match_the_scalar_tao() {
     use pendula::integrator::tao::TAO_4;
     let Scheme::Tao(scheme) = TAO_4.scheme else { unreachable!() };
     let ms = members();
-    let spec = BatchSpec {
-        method: BatchMethod::Tao(scheme),
+    let spec = LaneSpec {
+        method: LaneMethod::Tao { method: &TAO_4, scheme },
         h: 0.002,
         steps: 100,
         stop_at_flip: false,
         track_flips: true,
+        cancel: None,
     };
     let with = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -169,7 +176,7 @@ fn tao_lanes_match_the_scalar_tao() {
 /// Angles beyond the trigonometry's fast range take its exact reduction: members started at
 /// θ = 1e7, −2.5e6 and 1e17 rad, and one at 524 287.9 rad that passes half the fast range
 /// (2¹⁹, where a lane group leaves the fast kernel) a third of the way through. On the RK4
-/// lanes (flips tracked or not), the tao-4 lanes and the single-trajectory kernel they agree
+/// lanes (flips tracked or not) and the tao-4 lanes, and on one lane alone, they agree
 /// with the scalar integrators (glibc) to 1e-11, as members at ordinary angles do (measured:
 /// 7e-15), and the other members of their lane groups get the same bits as in a run without
 /// them.
@@ -184,12 +191,18 @@ fn huge_angles_take_the_exact_reduction() {
     for &(i, k, angle) in &changed {
         huge[i].state[k] = angle;
     }
-    let batch =
-        |method, h, track_flips| BatchSpec { method, h, steps: 100, stop_at_flip: false, track_flips };
+    let batch = |method, h, track_flips| LaneSpec {
+        method,
+        h,
+        steps: 100,
+        stop_at_flip: false,
+        track_flips,
+        cancel: None,
+    };
     for (spec, scalar_method) in [
-        (batch(BatchMethod::Rk4, 0.01, true), &RK4),
-        (batch(BatchMethod::Rk4, 0.01, false), &RK4),
-        (batch(BatchMethod::Tao(tao), 0.002, true), &TAO_4),
+        (batch(rk4(), 0.01, true), &RK4),
+        (batch(rk4(), 0.01, false), &RK4),
+        (batch(LaneMethod::Tao { method: &TAO_4, scheme: tao }, 0.002, true), &TAO_4),
     ] {
         let run = |ms: &[Member]| {
             let mut out = vec![MemberResult { state: [0.0; 4], flip_time: 0.0 }; ms.len()];
@@ -210,14 +223,18 @@ fn huge_angles_take_the_exact_reduction() {
                 pendula::solve(&m.pendulum, scalar_method, &m.state, &steps, &mut pendula::observe::Ignore)
                     .unwrap();
             let mut paths = vec![("lanes", after[i].state)];
-            if spec.method == BatchMethod::Rk4 {
-                let one =
-                    ensemble::rk4_trajectory(&m.pendulum, &m.state, &steps, &mut pendula::observe::Ignore);
-                paths.push(("single trajectory", one.unwrap().state.try_into().unwrap()));
-            }
+            // One member alone on the engine's one lane (the fast path of a single run).
+            let one = pendula::ensemble::engine::solve_one(
+                &m.pendulum,
+                spec.method,
+                &m.state,
+                &steps,
+                &mut pendula::observe::Ignore,
+            );
+            paths.push(("one lane", one.unwrap().state.try_into().unwrap()));
             for (path, state) in paths {
                 let d = state.iter().zip(&scalar.state).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-                let name = if spec.method == BatchMethod::Rk4 { "rk4" } else { "tao-4" };
+                let name = if matches!(spec.method, LaneMethod::Rk(_)) { "rk4" } else { "tao-4" };
                 eprintln!("{name} {path}, member {i} at {angle:e}: {d:.2e}");
                 assert!(d < 1e-11, "{name} {path}, member {i} at {angle:e}: {d:e} from the scalar path");
             }

@@ -2,12 +2,13 @@
 //! the generalized forces, a closed form), the Hamiltonian form of the driven pendulum, and
 //! the ensemble paths that must refuse what they do not implement.
 
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
+use pendula::ensemble::engine::{LaneMethod, LaneSpec};
+use pendula::ensemble::{self, Member, MemberResult};
 use pendula::integrator::explicit_rk::RK4;
 use pendula::observe::Recorder;
 use pendula::system::double::DoublePendulum;
 use pendula::system::{Energy, Hamiltonian, Model, System};
-use pendula::{End, Error, RunSpec};
+use pendula::{End, RunSpec};
 
 fn forced() -> DoublePendulum {
     DoublePendulum {
@@ -82,8 +83,9 @@ fn driven_hamiltonian_form_gives_the_lagrangian_equations() {
 }
 
 /// RK4 on lanes runs damped and driven pendulums (the double pendulum's one set of
-/// equations has the forces, issue 13); Tao's lanes, which implement the free Hamiltonian,
-/// and the single-trajectory fast path refuse them.
+/// equations has the forces, issue 13); Tao's lanes run the driven one (its Hamiltonian
+/// depends on time) and refuse the damped one, naming it; the single-trajectory fast path
+/// refuses both.
 #[test]
 fn ensemble_paths_run_or_refuse_forced_pendulums() {
     let free = Member { pendulum: DoublePendulum::default(), state: [1.0, 0.5, 0.0, 0.0] };
@@ -91,8 +93,14 @@ fn ensemble_paths_run_or_refuse_forced_pendulums() {
     members[21].pendulum.damping = 0.2;
     members[30].pendulum.drive_amplitude = 2.0;
     members[30].pendulum.drive_frequency = 3.0;
-    let spec =
-        BatchSpec { method: BatchMethod::Rk4, h: 0.01, steps: 10, stop_at_flip: false, track_flips: false };
+    let spec = LaneSpec {
+        method: LaneMethod::of(&RK4).unwrap(),
+        h: 0.01,
+        steps: 10,
+        stop_at_flip: false,
+        track_flips: false,
+        cancel: None,
+    };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: f64::NAN }; members.len()];
     ensemble::run(&members, &spec, &mut out).unwrap();
     let run = RunSpec { t0: 0.0, h: 0.01, end: End::Steps(10) };
@@ -106,20 +114,54 @@ fn ensemble_paths_run_or_refuse_forced_pendulums() {
     }
     assert_ne!(out[21].state, out[0].state, "the damping acts");
     assert_ne!(out[30].state, out[0].state, "the drive acts");
-    let tao = BatchSpec {
-        method: BatchMethod::Tao(pendula::integrator::tao::TaoScheme { weights: &[1.0], binding: 100.0 }),
-        ..spec
-    };
+    // Tao's lanes integrate the Hamiltonian, driven or not: the damped member has none and
+    // is refused, named, before any step; without it the driven member runs, as the scalar
+    // tao-2 runs it.
+    let scheme = pendula::integrator::tao::TaoScheme { weights: &[1.0], binding: 100.0 };
+    let tao =
+        LaneSpec { method: LaneMethod::Tao { method: &pendula::integrator::tao::TAO_2, scheme }, ..spec };
     let refused = ensemble::run(&members, &tao, &mut out).unwrap_err();
     assert!(
-        matches!(&refused, pendula::Error::UnmetRequirement { reason, .. } if reason == "member 21 is damped or driven"),
+        matches!(&refused, pendula::Error::UnmetRequirement { reason, .. }
+            if reason.starts_with("member 21: ") && reason.contains("damping = 0.2")),
         "{refused}"
     );
+    members[21].pendulum.damping = 0.0;
+    ensemble::run(&members, &tao, &mut out).unwrap();
+    let tao2 = pendula::integrator::tao::TAO_2.with_binding(100.0).unwrap();
+    let m = members[30];
+    let reference =
+        pendula::solve(&m.pendulum, &tao2, &m.state, &run, &mut Recorder::default()).unwrap().state;
+    let diff = out[30].state.iter().zip(&reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(diff < 1e-12, "driven member on tao lanes: {:?} against {reference:?}", out[30].state);
+    assert_ne!(out[30].state, out[0].state, "the drive acts on Tao's lanes");
 
-    let spec = spec_steps;
-    let driven = DoublePendulum { drive_amplitude: 1.0, ..DoublePendulum::default() };
-    let err = ensemble::rk4_trajectory(&driven, &[1.0, 0.5, 0.0, 0.0], &spec, &mut Recorder::default());
-    assert!(matches!(err, Err(Error::UnmetRequirement { .. })), "{err:?}");
+    // The fast path of a single run (the engine's one lane) runs forced pendulums too: the
+    // same bits as their lanes in the RK4 ensemble above.
+    let rk4 = LaneMethod::of(&RK4).unwrap();
+    for i in [21, 30] {
+        let m = members[i];
+        let spec = LaneSpec {
+            method: rk4,
+            h: 0.01,
+            steps: 10,
+            stop_at_flip: false,
+            track_flips: false,
+            cancel: None,
+        };
+        let mut lanes = [MemberResult { state: [0.0; 4], flip_time: f64::NAN }];
+        ensemble::run(&[m], &spec, &mut lanes).unwrap();
+        let one = pendula::ensemble::engine::solve_one(
+            &m.pendulum,
+            rk4,
+            &m.state,
+            &spec_steps,
+            &mut Recorder::default(),
+        )
+        .unwrap()
+        .state;
+        assert_eq!(one, lanes[0].state, "member {i}");
+    }
 }
 
 #[test]

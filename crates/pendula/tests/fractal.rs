@@ -3,7 +3,8 @@
 //! determinism across thread counts.
 
 use pendula::analysis::fractal::{FractalSpec, GridAxis, cannot_flip, converged, flip_fractal};
-use pendula::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
+use pendula::ensemble::engine::{LaneMethod, LaneSpec};
+use pendula::ensemble::{self, Member, MemberResult};
 use pendula::system::double::DoublePendulum;
 
 fn spec() -> FractalSpec {
@@ -14,7 +15,7 @@ fn spec() -> FractalSpec {
         theta2: axis(30),
         t_max: 15.0,
         h: 0.01,
-        method: BatchMethod::Rk4,
+        method: LaneMethod::of(&pendula::integrator::explicit_rk::RK4).unwrap(),
         tolerance: 0.01,
     }
 }
@@ -28,12 +29,13 @@ fn independent(spec: &FractalSpec, h: f64) -> Vec<f64> {
             state: [spec.theta1.centre(i % n1), spec.theta2.centre(i / n1), 0.0, 0.0],
         })
         .collect();
-    let batch = BatchSpec {
+    let batch = LaneSpec {
         method: spec.method,
         h,
         steps: (spec.t_max / h).ceil() as u64,
         stop_at_flip: true,
         track_flips: true,
+        cancel: None,
     };
     let mut out = vec![MemberResult { state: [0.0; 4], flip_time: f64::NAN }; members.len()];
     ensemble::run(&members, &batch, &mut out).unwrap();

@@ -101,7 +101,7 @@ pub const DEFAULTS: Defaults = crate::args::Defaults::of(
     &pendula::study::defaults::FRACTAL,
     &[
         ("dt", "The convergence check runs at half of it."),
-        ("method", "rk4, tao-2 or tao-4 (the ensemble engine's)."),
+        ("method", "A method the ensemble engine runs on the double pendulum: euler, rk4, tao-2, tao-4."),
         ("set", "Parameters only (m1, m2, l1, l2, g): the pendulum starts at rest."),
     ],
 );

@@ -508,8 +508,8 @@ def fractal(
 ) -> FractalResult:
     """The double pendulum's flip fractal, as ``pendula fractal``: released from rest at the
     cell centres of ``theta1`` × ``theta2`` ((lo, hi, n), rad), the time to the first flip
-    (either rod past ±π) up to ``t_max`` (s), on the ensemble engine with ``method`` (rk4,
-    tao-2 or tao-4) at ``dt`` (s) and again at dt/2 for the per-pixel convergence flag
+    (either rod past ±π) up to ``t_max`` (s), on the ensemble engine with ``method`` (euler,
+    rk4, tao-2 or tao-4) at ``dt`` (s) and again at dt/2 for the per-pixel convergence flag
     (agreement within ``tolerance`` s). ``system``: the double pendulum with its parameters
     (undamped, undriven); its initial-state values are not used. All cores unless
     ``threads``; the result does not depend on them. Ctrl-C stops it within a slice of

@@ -3,8 +3,20 @@
 //! two step sizes, so that every pixel carries a convergence flag.
 
 use crate::Error;
-use crate::ensemble::{self, BatchMethod, BatchSpec, Member, MemberResult};
+use crate::ensemble::engine::{self, LaneMethod, LaneOutcome, LaneSpec};
+use crate::system::Model;
 use crate::system::double::DoublePendulum;
+
+/// The methods the fractal runs: those the ensemble engine runs on the free double pendulum
+/// ([`crate::model::lane_method`]), in the catalogue's order.
+pub fn methods() -> Vec<&'static str> {
+    crate::integrator::METHODS.iter().filter(|m| lane_method(m).is_some()).map(|m| m.name).collect()
+}
+
+/// How the engine runs `method` on the free double pendulum, if it does.
+fn lane_method(method: &'static crate::integrator::Method) -> Option<LaneMethod> {
+    crate::model::lane_method(method, &DoublePendulum::default())
+}
 
 /// One axis of the grid: `n` cell centres lo + (i + ½)(hi − lo)/n (the convention of
 /// `pendula sweep`).
@@ -33,7 +45,7 @@ impl From<(f64, f64, usize)> for GridAxis {
 }
 
 /// What to compute.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct FractalSpec {
     /// The pendulum (undamped and undriven: the ensemble kernels' equations).
     pub pendulum: DoublePendulum,
@@ -45,8 +57,8 @@ pub struct FractalSpec {
     pub t_max: f64,
     /// Step size of the main run, s; the check runs at h/2.
     pub h: f64,
-    /// The method (RK4 or a Tao map).
-    pub method: BatchMethod,
+    /// The method, as the ensemble engine runs it ([`methods`]).
+    pub method: LaneMethod,
     /// A pixel is converged when its flip times at h and h/2 differ by at most this, s (and
     /// both or neither flip).
     pub tolerance: f64,
@@ -131,11 +143,11 @@ impl FractalSpec {
                 allowed: "must be finite and >= 0 (s)",
             });
         }
-        let Some(batch) = BatchMethod::of(method) else {
+        let Some(batch) = lane_method(method) else {
             return Err(invalid(
                 "method",
                 method.name.into(),
-                "the fractal runs on the ensemble engine: rk4, tao-2 or tao-4".into(),
+                format!("the fractal runs on the ensemble engine: {}", methods().join(", ")),
             ));
         };
         if let Some(refusal) = crate::integrator::tao::step_refusal(method, dt) {
@@ -225,8 +237,8 @@ pub fn flip_times(
     flip_times_cancellable(spec, pixels, tick, None)
 }
 
-/// [`flip_times`], stopped early when `cancel` is set: the ensemble's work items look at it
-/// before they start ([`ensemble::run_into_cancellable`]), so that one call over the whole
+/// [`flip_times`], stopped early when `cancel` is set: the engine looks at it before each
+/// lane group ([`LaneSpec::cancel`]), so that one call over the whole
 /// map keeps every thread busy to the end and still stops promptly.
 ///
 /// # Errors
@@ -279,22 +291,32 @@ pub fn flip_times_at(
         .collect();
     tick((pixels.len() - allowed.len()) as u64);
     let steps = (spec.t_max / h).ceil() as u64;
-    let batch = BatchSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true };
-    let member = |k: usize| {
+    let lanes = LaneSpec { method: spec.method, h, steps, stop_at_flip: true, track_flips: true, cancel };
+    let d = spec.pendulum;
+    let member = |k: usize, v: &mut [f64]| {
         let (a, b) = start(allowed[k]);
-        Member { pendulum: spec.pendulum, state: [a, b, 0.0, 0.0] }
+        let p = [d.m1, d.m2, d.l1, d.l2, d.g, d.damping, d.drive_amplitude, d.drive_frequency];
+        v[..8].copy_from_slice(&p);
+        v[8..].copy_from_slice(&[a, b, 0.0, 0.0]);
     };
     let mut times = vec![f64::NAN; allowed.len()];
-    let store = |_: &Member, r: &MemberResult, row: &mut [f64]| {
+    let store = |_: usize, r: &LaneOutcome, row: &mut [f64]| {
         row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
         tick(1);
     };
-    ensemble::run_into_cancellable(allowed.len(), &member, &batch, &mut times, 1, &store, cancel).map_err(
-        |e| match e {
-            Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
-            other => other,
-        },
-    )?;
+    engine::run::<DoublePendulum, _>(
+        DoublePendulum::INFO,
+        allowed.len(),
+        &member,
+        &lanes,
+        &mut times,
+        1,
+        &store,
+    )
+    .map_err(|e| match e {
+        Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },
+        other => other,
+    })?;
     let mut image = vec![f64::NAN; pixels.len()];
     for (k, t) in allowed.iter().zip(times) {
         image[*k - pixels.start] = t;

@@ -1,28 +1,26 @@
-//! Stroboscopic samples of a driven system on the scalar path: the state once per drive
-//! period, after a transient — the section of the extended phase space at drive phase 0.
-//! (The damped, driven pendulum also runs on the ensemble engine:
-//! [`crate::ensemble::driven`].)
+//! Stroboscopic samples of a driven system: the state once per drive period, after a
+//! transient — the section of the extended phase space at drive phase 0. One run on the
+//! scalar path ([`stroboscopic`]); an orbit diagram, many values at once, on the ensemble
+//! engine's lanes ([`orbit_diagram`], [`crate::ensemble::engine::stroboscopic`]).
 
 use std::ops::ControlFlow;
 
-use rayon::prelude::*;
-
-use crate::ensemble::driven::{self, DrivenMember, StroboSpec};
+use crate::ensemble::engine::Strobe;
 use crate::integrator::Method;
 use crate::integrator::explicit_rk::RK4;
 use crate::model::DynModel;
 use crate::observe::{Flow, Observer, Sample};
-use crate::system::{Model, Values, driven::DrivenPendulum, wrap_angle};
+use crate::system::Values;
 use crate::{End, Error, RunSpec};
 
 /// Keeps the state every `every` steps once `from` steps have passed.
-struct Strobe {
+struct Sampler {
     every: u64,
     from: u64,
     rows: Vec<f64>,
 }
 
-impl Observer for Strobe {
+impl Observer for Sampler {
     fn observe(&mut self, s: &Sample<'_>) -> Flow {
         if s.step >= self.from && s.step > 0 && s.step.is_multiple_of(self.every) {
             self.rows.extend_from_slice(s.y);
@@ -49,7 +47,7 @@ pub fn stroboscopic(
     let every = u64::from(steps_per_period);
     let steps = every * (transient_periods + samples as u64);
     let spec = RunSpec { t0: 0.0, h: period / f64::from(steps_per_period), end: End::Steps(steps) };
-    let mut strobe = Strobe { every, from: every * (transient_periods + 1), rows: Vec::new() };
+    let mut strobe = Sampler { every, from: every * (transient_periods + 1), rows: Vec::new() };
     model.solve(method, y0, &spec, &mut strobe)?;
     Ok(strobe.rows)
 }
@@ -69,15 +67,15 @@ pub struct OrbitDiagramSpec {
 /// varied along the diagram's axis), the state once per drive period 2π/`drive_frequency`
 /// for `spec.samples` periods after ⌈transient / period⌉ periods, by RK4 at
 /// `spec.steps_per_period` steps a period, from the values' initial state. Rows of the state
-/// (values × samples rows), angles wrapped into [−π, π). The damped, driven pendulum runs on
-/// the ensemble engine's SIMD lanes ([`driven::stroboscopic`]), any other driven system the
-/// scalar RK4 per value; both in parallel on rayon's current pool, with results that do not
-/// depend on its size.
+/// (values × samples rows), angles wrapped into [−π, π). Every system runs on the ensemble
+/// engine's SIMD lanes ([`crate::ensemble::engine::stroboscopic`]), each value stepping its
+/// own period, in parallel on rayon's current pool, with results that do not depend on its
+/// size.
 ///
 /// # Errors
 /// [`Error::InvalidValue`] for a drive frequency that is not > 0, fewer than 4 steps a
-/// period or a transient that is not finite and ≥ 0; on the lanes
-/// [`Error::NonFiniteMember`] (member = index into `values`), else the runs' errors.
+/// period or a transient that is not finite and ≥ 0; [`Error::NonFiniteMember`] (member =
+/// index into `values`).
 pub fn orbit_diagram(values: &[Values], spec: &OrbitDiagramSpec) -> Result<Vec<f64>, Error> {
     if !(spec.transient.is_finite() && spec.transient >= 0.0) {
         return Err(Error::InvalidValue {
@@ -106,46 +104,24 @@ pub fn orbit_diagram(values: &[Values], spec: &OrbitDiagramSpec) -> Result<Vec<f
         let period = 2.0 * std::f64::consts::PI / w;
         periods.push((period, (spec.transient / period).ceil() as u64));
     }
-    let Some(info) = values.first().map(Values::info) else { return Ok(Vec::new()) };
-    if driven::runs(info) {
-        let members: Vec<DrivenMember> = values
-            .iter()
-            .zip(&periods)
-            .map(|(v, (_, transient))| DrivenMember {
-                pendulum: DrivenPendulum::from_values(v),
-                state: [v.initial_state()[0], v.initial_state()[1]],
-                transient_periods: *transient,
-            })
-            .collect();
-        let mut data = vec![0.0; members.len() * spec.samples * 2];
-        let strobe = StroboSpec { steps_per_period: spec.steps_per_period, samples: spec.samples };
-        driven::stroboscopic(&members, &strobe, &mut data)?;
-        return Ok(data);
-    }
-    let state = info.state;
-    let rows: Vec<Vec<f64>> = values
-        .par_iter()
-        .zip(&periods)
-        .map(|(v, (period, transient))| {
-            let model = v.build();
-            let mut rows = stroboscopic(
-                &*model,
-                &RK4,
-                v.initial_state(),
-                *period,
-                spec.steps_per_period,
-                *transient,
-                spec.samples,
-            )?;
-            for row in rows.chunks_exact_mut(state.len()) {
-                for (x, q) in row.iter_mut().zip(state) {
-                    if q.is_angle() {
-                        *x = wrap_angle(*x);
-                    }
-                }
-            }
-            Ok(rows)
-        })
-        .collect::<Result<_, Error>>()?;
-    Ok(rows.concat())
+    let Some(first) = values.first() else { return Ok(Vec::new()) };
+    let info = first.info();
+    // Every system's RK4 runs on the engine's lanes, each value stepping its own period.
+    let quantities: Vec<&str> = info.quantities().map(|q| q.name).collect();
+    let member = |i: usize, v: &mut [f64]| {
+        for (slot, name) in v.iter_mut().zip(&quantities) {
+            *slot = values[i].get(name);
+        }
+    };
+    let crate::integrator::Scheme::ExplicitRk(tableau) = RK4.scheme else { unreachable!("RK4 is explicit") };
+    let strobe = Strobe {
+        tableau,
+        steps_per_period: spec.steps_per_period,
+        samples: spec.samples,
+        periods: &|i| periods[i],
+        cancel: None,
+    };
+    let mut data = vec![0.0; values.len() * spec.samples * info.state.len()];
+    first.build().stroboscopic(info, values.len(), &member, &strobe, &mut data)?;
+    Ok(data)
 }

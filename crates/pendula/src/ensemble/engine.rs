@@ -16,9 +16,10 @@
 //! `RkStep` (every system, every explicit Runge–Kutta method: `Equations` over `Lanes`, the
 //! integrators' own stages `fixed_stages`, `fixed_update`), `KickDrift` (symplectic Euler,
 //! Störmer–Verlet and the Yoshida compositions on separable systems: the integrators' own
-//! `kick_drift`, in the velocities) and Tao's map for the free double pendulum (`TaoStep` in
-//! `crates/pendula/src/ensemble/mod.rs`, on the pendulum's own Hamiltonian gradient, state (q, p)
-//! and the copy (x, y)); `solve_one` is one member alone, bit for bit a lane's result.
+//! `kick_drift`, in the velocities) and `TaoLanes` (Tao's map on the non-separable Hamiltonian
+//! systems: the integrators' own `tao_step` over the equations' own gradient `Canonical`, state
+//! (q, p) and the copy (x, y), converted from and to (q, q') by the model's own maps);
+//! `solve_one` is one member alone, bit for bit a lane's result.
 //!
 //! The ensemble engine, `crates/pendula/src/ensemble/engine.rs`, advances 16 members of any
 //! catalogued system at once with any explicit Runge–Kutta method of at most four stages, and of
@@ -49,17 +50,13 @@
 //! data flow, and a lane group that may have gone beyond runs again with a copy of its kernel that
 //! reduces such angles exactly, by Payne–Hanek, in `crates/pendula/src/num/trig/exact.rs`).
 //! `engine::solve_one` is one member in the same arithmetic, bit for bit a lane.
-//! `crates/pendula/src/ensemble/mod.rs` is the double pendulum's typed front (`Member`,
-//! `BatchSpec`: the fractal's form; RK4 goes to the engine) and Tao's map on lanes for the free
-//! double pendulum, its gradient the pendulum's own `hamiltonian_gradient` over one lane at a time.
-//! `ensemble::rk4_trajectory` (`crates/pendula/src/ensemble/trajectory.rs`; the pendulum's
-//! `accelerations_from`, one test of the two angles per evaluation picks the fast or the full-range
-//! trigonometry) is one double pendulum with a per-step observer, which `simulate` uses for the
-//! free double pendulum with rk4 (the energy comes with each sample, from the step's trigonometry);
-//! it refuses damped or driven pendulums, which take the general path.
-//! `crates/pendula/src/ensemble/driven.rs` is the same engine for the damped, driven pendulum
-//! (stroboscopic samples, one shared drive-phase table because every lane takes M steps per
-//! period).
+//! `crates/pendula/src/ensemble/mod.rs` is the double pendulum's typed front (`Member`, `run`).
+//! `engine::solve_one_resumable` is the fast path of a single fixed-step run
+//! (`DynModel::solve_fastest`: `simulate` with an explicit tableau, W1): one lane, pausing and
+//! continuing bit for bit. `engine::stroboscopic` samples every member once per drive period
+//! (orbit diagrams; `crates/pendula/src/ensemble/driven.rs` is the driven pendulum's typed
+//! front): the run's time counted in periods, each lane's equations scaled to its own period,
+//! the run loop called period by period with the angles wrapped between.
 
 use rayon::prelude::*;
 
@@ -70,14 +67,16 @@ use super::{CHUNK, has_fma};
 /// latency (8 alone measured slower on the hand-written kernels this engine replaced: 1.14 s
 /// against 0.87 s on one core).
 pub use super::LANES;
+use crate::checkpoint::{Leg, Pause, Reader, RunState, Snapshot, Words};
 use crate::integrator::explicit_rk::{
     Plan, Row, StageRhs, Tableau, explicit_stages, explicit_update, fixed_stages, fixed_update, plan,
 };
 use crate::integrator::partitioned::{Accelerations, Partition, kick_drift};
+use crate::integrator::tao::{TaoScheme, tao_step};
 use crate::integrator::{Method, Stepper};
 use crate::num::{Lanes, Num, trig};
 use crate::observe::Observer;
-use crate::system::{Equations, Model, SystemInfo};
+use crate::system::{Canonical, Equations, Model, SystemInfo};
 use crate::{Error, Report, RunSpec, Simulation};
 
 /// The largest state the engine runs (the 8-link chain's 16 variables).
@@ -104,9 +103,36 @@ pub enum LaneMethod {
         /// Its scheme.
         scheme: Partition,
     },
+    /// Tao's extended-phase-space map ([`crate::integrator::tao::tao_step`]) on a
+    /// non-separable Hamiltonian system (the double pendulum, free or driven; the chain
+    /// while its state and the copy fit the lane record, up to [`TAO_MAX_DIM`] variables):
+    /// the lanes hold (q, p) and the copy (x, y), converted from and to (q, q') per member
+    /// with the model's own maps, so that each member's result is that of the scalar run's
+    /// arithmetic in the engine's numbers. `method` is its descriptor (what it requires of
+    /// each member: a Hamiltonian form, so no damping), `scheme` its weights and binding
+    /// constant.
+    Tao {
+        /// The method's descriptor.
+        method: &'static Method,
+        /// Its composition weights and binding constant ω.
+        scheme: TaoScheme,
+    },
 }
 
 impl LaneMethod {
+    /// The lane form of `method`, by its scheme alone (whether a system meets what it needs
+    /// is [`crate::model::lane_method`]'s question): an explicit tableau, a partitioned
+    /// scheme as kick–drift, Tao's map; `None` for the implicit and adaptive methods.
+    pub fn of(method: &'static Method) -> Option<LaneMethod> {
+        use crate::integrator::Scheme;
+        match method.scheme {
+            Scheme::ExplicitRk(tableau) => Some(LaneMethod::Rk(tableau)),
+            Scheme::Partitioned(scheme) => Some(LaneMethod::KickDrift { method, scheme }),
+            Scheme::Tao(scheme) => Some(LaneMethod::Tao { method, scheme }),
+            _ => None,
+        }
+    }
+
     /// Right-hand side evaluations of a run of `steps` steps (for Störmer–Verlet and the
     /// compositions, one per Verlet step and one at the start: the last of a step is the
     /// first of the next).
@@ -117,6 +143,8 @@ impl LaneMethod {
             LaneMethod::KickDrift { scheme: Partition::SymplecticEuler, .. } => steps,
             LaneMethod::KickDrift { scheme: Partition::StormerVerlet, .. } => steps + start,
             LaneMethod::KickDrift { scheme: Partition::Composition(w), .. } => w.len() as u64 * steps + start,
+            // Four gradients per second-order map (A, B, B, A), as the scalar stepper counts.
+            LaneMethod::Tao { scheme, .. } => 4 * scheme.weights.len() as u64 * steps,
         }
     }
 }
@@ -152,12 +180,24 @@ pub struct LaneOutcome {
 /// Whether the engine runs `method` on `info`'s states: a tableau of at most [`MAX_STAGES`]
 /// stages on at most [`MAX_DIM`] variables; kick–drift on states of [`KICK_DRIFT_DIM`]
 /// variables (the kernels compiled for it: every separable system catalogued has one degree of
-/// freedom).
+/// freedom); Tao's map on states of 4 to [`TAO_MAX_DIM`] variables (the non-separable systems
+/// catalogued have two degrees of freedom or more; the copy doubles the lane record).
 pub fn supports(info: &SystemInfo, method: &LaneMethod) -> bool {
     match method {
         LaneMethod::Rk(tableau) => (1..=MAX_STAGES).contains(&tableau.b.len()) && info.state.len() <= MAX_DIM,
         LaneMethod::KickDrift { .. } => info.state.len() == KICK_DRIFT_DIM,
+        LaneMethod::Tao { .. } => (4..=TAO_MAX_DIM).contains(&info.state.len()),
     }
+}
+
+/// The largest state Tao's map runs on lanes: with its copy, the lane record's
+/// [`MAX_DIM`] values (the chain up to 4 links).
+pub const TAO_MAX_DIM: usize = MAX_DIM / 2;
+
+/// The padded dimension of a Tao kernel for states of `dim` variables (its copy starts
+/// there).
+const fn tao_padded(dim: usize) -> usize {
+    if dim <= 4 { 4 } else { TAO_MAX_DIM }
 }
 
 /// The state dimension the kick–drift kernels are compiled for.
@@ -165,16 +205,23 @@ pub const KICK_DRIFT_DIM: usize = 2;
 
 /// Whether member `values` (parameters then state, as [`run`] takes them) meets what
 /// `method` requires of it ([`crate::simulate::check`]: for kick–drift, a separable
-/// Hamiltonian, so no damping), before any step.
+/// Hamiltonian, so no damping; for Tao's map a Hamiltonian form), before any step.
 fn check_member<M: Model>(
     info: &'static SystemInfo,
     method: &LaneMethod,
     values: &[f64],
 ) -> Result<(), Error> {
-    let LaneMethod::KickDrift { method, .. } = method else { return Ok(()) };
+    let (LaneMethod::KickDrift { method, .. } | LaneMethod::Tao { method, .. }) = method else {
+        return Ok(());
+    };
+    crate::simulate::check(method, &member_model::<M>(info, values)?)
+}
+
+/// The model of member `values` (parameters then state).
+fn member_model<M: Model>(info: &'static SystemInfo, values: &[f64]) -> Result<M, Error> {
     let settings: Vec<(String, f64)> =
         info.quantities().map(|q| q.name.to_owned()).zip(values.iter().copied()).collect();
-    crate::simulate::check(method, &M::from_values(&info.values(&settings)?))
+    Ok(M::from_values(&info.values(&settings)?))
 }
 
 /// Runs `count` members of the system `M` (the member entry `info`: for the chain, the
@@ -203,6 +250,9 @@ pub fn run<M: Model, T: Send>(
 ) -> Result<(), Error> {
     assert!(supports(info, &spec.method), "the engine does not run this method on {}", info.name);
     assert_eq!(out.len(), count * row_len, "one row per member");
+    if let LaneMethod::Tao { scheme, .. } = &spec.method {
+        crate::integrator::tao::check_binding_step(scheme, spec.h)?;
+    }
     let width = info.parameters.len() + info.state.len();
     let failures: Vec<(usize, Error)> = out
         .par_chunks_mut(CHUNK * row_len)
@@ -227,7 +277,7 @@ pub fn run<M: Model, T: Send>(
                     return Some((start + g * LANES, Error::Interrupted));
                 }
                 let members: Vec<&[f64]> = group.chunks(width).collect();
-                let (outcomes, failed) = run_group::<M>(info, &members, spec);
+                let (outcomes, failed) = run_group::<M>(info, &members, spec, None);
                 for (i, (o, row)) in outcomes.iter().zip(rows.chunks_mut(row_len)).enumerate() {
                     store(start + g * LANES + i, o, row);
                 }
@@ -239,6 +289,98 @@ pub fn run<M: Model, T: Send>(
             first
         })
         .collect();
+    match failures.into_iter().min_by_key(|(m, _)| *m) {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// A stroboscopic ensemble run ([`stroboscopic`]): every member sampled once per period of
+/// its drive, the Poincaré section of the extended phase space at phase 0.
+#[derive(Clone, Copy)]
+pub struct Strobe<'a> {
+    /// The explicit tableau (at most [`MAX_STAGES`] stages).
+    pub tableau: &'static Tableau,
+    /// Steps per drive period (at least 1): each member steps its own period / this.
+    pub steps_per_period: u32,
+    /// Samples per member, one per period after its transient.
+    pub samples: usize,
+    /// Member i's drive period, s (in the system's units when dimensionless), and the whole
+    /// periods run before its first sample.
+    pub periods: &'a (dyn Fn(usize) -> (f64, u64) + Sync),
+    /// As [`LaneSpec::cancel`].
+    pub cancel: Option<&'a std::sync::atomic::AtomicBool>,
+}
+
+/// A lane group's part of a [`Strobe`] run: its members' periods and transients, and their
+/// rows of samples.
+pub(crate) struct StrobeGroup<'a> {
+    periods: &'a [(f64, u64)],
+    samples: usize,
+    rows: &'a mut [f64],
+}
+
+/// Samples `count` members of the system `M` (values as [`run`] takes them) once per drive
+/// period: the engine's steps on each member's own step (its period / `steps_per_period`:
+/// the run's time is counted in periods, each lane's equations scaled to it), the samples
+/// taken between the periods, angles wrapped into [−π, π). Member i's samples go to
+/// `out[i · samples · dim ..]`, one state per sample. Lane groups are the work items, in
+/// parallel on rayon's pool; results do not depend on the pool's size.
+///
+/// # Errors
+/// [`Error::NonFiniteMember`] for the first member (in index order) whose state became
+/// non-finite, with the time; [`Error::Interrupted`] when `strobe.cancel` was set.
+///
+/// # Panics
+/// If `out` does not hold count × samples × dim values, or the tableau is not one the engine
+/// runs on `info`'s states.
+pub fn stroboscopic<M: Model>(
+    info: &'static SystemInfo,
+    count: usize,
+    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    strobe: &Strobe<'_>,
+    out: &mut [f64],
+) -> Result<(), Error> {
+    let dim = info.state.len();
+    let per_member = strobe.samples * dim;
+    assert_eq!(out.len(), count * per_member, "count × samples × dim values");
+    assert!(strobe.steps_per_period >= 1, "at least one step per period");
+    let spec = LaneSpec {
+        method: LaneMethod::Rk(strobe.tableau),
+        h: 1.0 / f64::from(strobe.steps_per_period),
+        steps: u64::from(strobe.steps_per_period),
+        stop_at_flip: false,
+        track_flips: false,
+        cancel: None,
+    };
+    assert!(supports(info, &spec.method), "the engine does not run this method on {}", info.name);
+    let width = info.parameters.len() + info.state.len();
+    if per_member == 0 {
+        return Ok(());
+    }
+    let failures: Vec<(usize, Error)> = out
+        .par_chunks_mut(LANES * per_member)
+        .enumerate()
+        .filter_map(|(g, rows)| {
+            let start = g * LANES;
+            if strobe.cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                return Some((start, Error::Interrupted));
+            }
+            let n = rows.len() / per_member;
+            let mut values = vec![0.0; n * width];
+            for (i, v) in values.chunks_mut(width).enumerate() {
+                member(start + i, v);
+            }
+            let periods: Vec<(f64, u64)> = (start..start + n).map(strobe.periods).collect();
+            let members: Vec<&[f64]> = values.chunks(width).collect();
+            let group = StrobeGroup { periods: &periods, samples: strobe.samples, rows };
+            let (_, failed) = run_group::<M>(info, &members, &spec, Some(group));
+            failed.map(|(i, t)| (start + i, Error::NonFiniteMember { member: start + i, t }))
+        })
+        .collect();
+    if failures.iter().any(|(_, e)| matches!(e, Error::Interrupted)) {
+        return Err(Error::Interrupted);
+    }
     match failures.into_iter().min_by_key(|(m, _)| *m) {
         Some((_, e)) => Err(e),
         None => Ok(()),
@@ -265,6 +407,7 @@ pub(crate) fn run_group<M: Model>(
     info: &'static SystemInfo,
     members: &[&[f64]],
     spec: &LaneSpec,
+    strobe: Option<StrobeGroup<'_>>,
 ) -> (Vec<LaneOutcome>, Option<(usize, f64)>) {
     let np = info.parameters.len();
     let dim = info.state.len();
@@ -275,9 +418,32 @@ pub(crate) fn run_group<M: Model>(
             .position(|q| q.name == name)
             .unwrap_or_else(|| panic!("{} has no {name}", info.name))
     };
-    let mut record = Record::new(std::array::from_fn(|k| {
-        if k < dim { std::array::from_fn(|i| pick(i)[np + k]) } else { [0.0; LANES] }
-    }));
+    // Tao's map runs on (q, p), its copy (x, y) after the padded state, each member's
+    // (q, q') converted by its own model (and back after the run).
+    let tao_models: Vec<M> = match spec.method {
+        LaneMethod::Tao { .. } => (0..LANES)
+            .map(|i| member_model::<M>(info, pick(i)).expect("a member checked before the run"))
+            .collect(),
+        _ => Vec::new(),
+    };
+    let mut start = [[0.0; LANES]; MAX_DIM];
+    #[allow(clippy::needless_range_loop)] // lane i of every variable
+    for i in 0..LANES {
+        let y = &pick(i)[np..np + dim];
+        if let Some(model) = tao_models.get(i) {
+            let mut z = [0.0; MAX_DIM];
+            model.to_momenta(y, &mut z[..dim]);
+            for (k, &v) in z[..dim].iter().enumerate() {
+                start[k][i] = v;
+                start[tao_padded(dim) + k][i] = v;
+            }
+        } else {
+            for (k, &v) in y.iter().enumerate() {
+                start[k][i] = v;
+            }
+        }
+    }
+    let mut record = Record::new(start);
     // The angles among the positions (the flips' variables); positions come first and their
     // rates are the velocities, dim/2 further on (every catalogued state is (q, q')).
     let angles: Vec<usize> = (0..dim / 2).filter(|&k| info.state[k].is_angle()).collect();
@@ -295,6 +461,9 @@ pub(crate) fn run_group<M: Model>(
     }
     let run =
         Run { dim, angles: &angles, h: spec.h, steps: spec.steps, stop_at_flip: spec.stop_at_flip, track };
+    // A stroboscopic run: each lane's time unit is its member's drive period.
+    let time_scale: Option<[f64; LANES]> =
+        strobe.as_ref().map(|s| std::array::from_fn(|i| s.periods[i.min(members.len() - 1)].0));
     macro_rules! equations {
         ($fma:tt, $wide:tt) => {
             [0, 1].map(|half| {
@@ -309,7 +478,7 @@ pub(crate) fn run_group<M: Model>(
         ($fma:tt, $wide:tt, $d:tt, $s:tt) => {{
             let LaneMethod::Rk(tableau) = spec.method else { unreachable!("a tableau") };
             let eq = equations!($fma, $wide);
-            let step = RkStep::<_, $d, $s, $fma, $wide>::new(tableau, spec.h);
+            let step = RkStep::<_, $d, $s, $fma, $wide>::new(tableau, spec.h, time_scale);
             call!($fma, $d, $wide, eq, step, run, record)
         }};
     }
@@ -317,6 +486,19 @@ pub(crate) fn run_group<M: Model>(
         ($fma:tt, $wide:tt) => {{
             match spec.method {
                 LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len()),
+                LaneMethod::Tao { scheme, .. } => {
+                    // Compiled only for the dimensions it runs on (`supports`).
+                    if const { M::DIM == 4 } {
+                        tao!($fma, $wide, 4, 8, scheme)
+                    } else if const { M::DIM > 4 } {
+                        match tao_padded(dim) {
+                            4 => tao!($fma, $wide, 4, 8, scheme),
+                            _ => tao!($fma, $wide, 8, 16, scheme),
+                        }
+                    } else {
+                        unreachable!("Tao's lanes on {} variables", M::DIM)
+                    }
+                }
                 LaneMethod::KickDrift { scheme, .. } => {
                     // Compiled only for the dimension it runs on (`supports`).
                     if const { M::DIM == KICK_DRIFT_DIM } {
@@ -332,6 +514,15 @@ pub(crate) fn run_group<M: Model>(
                     }
                 }
             }
+        }};
+    }
+    // Tao's map on states padded to D variables, the copy after them (W = 2 D).
+    macro_rules! tao {
+        ($fma:tt, $wide:tt, $d:tt, $w:tt, $scheme:expr) => {{
+            let eq = equations!($fma, $wide);
+            let step =
+                TaoLanes::<_, $d, $fma, $wide> { eqs: std::marker::PhantomData, scheme: $scheme, n: dim / 2 };
+            call!($fma, $w, $wide, eq, step, run, record)
         }};
     }
     // Kernels for every number of stages up to MAX_STAGES, each unrolled.
@@ -369,12 +560,62 @@ pub(crate) fn run_group<M: Model>(
     // The fast trigonometry alone; if some lane's arguments went beyond its range (the
     // record is then as it was), again with the exact reduction for those arguments.
     let fma = has_fma();
-    let done = if fma { go!(true, false) } else { go!(false, false) };
-    if !done {
-        if fma {
-            go!(true, true);
-        } else {
-            go!(false, true);
+    macro_rules! advance {
+        () => {{
+            let done = if fma { go!(true, false) } else { go!(false, false) };
+            if !done {
+                if fma {
+                    go!(true, true);
+                } else {
+                    go!(false, true);
+                }
+            }
+        }};
+    }
+    if let Some(StrobeGroup { periods, samples, rows }) = strobe {
+        // Period by period (each from the drive's phase 0: the equations are periodic in
+        // time), the angles wrapped into [−π, π) after each (the state's meaning is the same
+        // and the sine's arguments stay small), sampled after each member's transient.
+        let last = periods.iter().map(|p| p.1).max().unwrap_or(0) + samples as u64;
+        for period in 0..last {
+            advance!();
+            if let Some(i) = (0..members.len()).find(|&i| !record.failed_at[i].is_nan()) {
+                return (Vec::new(), Some((i, (period as f64 + record.failed_at[i]) * periods[i].0)));
+            }
+            for &a in &angles {
+                for v in &mut record.state[a] {
+                    *v = crate::system::wrap_angle(*v);
+                }
+            }
+            for (i, &(_, transient)) in periods.iter().enumerate() {
+                if let Some(s) = period.checked_sub(transient).map(|s| s as usize).filter(|&s| s < samples) {
+                    for k in 0..dim {
+                        rows[(i * samples + s) * dim + k] = record.state[k][i];
+                    }
+                }
+            }
+        }
+        return (Vec::new(), None);
+    }
+    advance!();
+    // Tao's lanes back to (q, q'): the final states, and the flipped lanes' ends of the
+    // flip's step (their rates are the velocities).
+    for (i, model) in tao_models.iter().enumerate().take(members.len()) {
+        let convert = |v: &mut [V; MAX_DIM]| {
+            let (mut z, mut y) = ([0.0; MAX_DIM], [0.0; MAX_DIM]);
+            for k in 0..dim {
+                z[k] = v[k][i];
+            }
+            model.to_velocities(&z[..dim], &mut y[..dim]);
+            for k in 0..dim {
+                v[k][i] = y[k];
+            }
+        };
+        convert(&mut record.state);
+        if record.flip_step[i] >= 0.0 {
+            let [before, after] = &mut record.ends;
+            convert(before);
+            convert(after);
         }
     }
     let outcomes = (0..members.len())
@@ -455,6 +696,8 @@ struct RkStep<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bo
     c: [f64; S],
     b: [f64; S],
     scale: f64,
+    /// Each lane's time unit ([`LaneRhs::time_scale`]).
+    time_scale: Option<[Lanes<HALF, FMA, WIDE>; 2]>,
     /// The stages' slopes (kept between steps only as storage: every step writes them
     /// before reading).
     k: [[Lanes<LANES, FMA, WIDE>; D]; S],
@@ -475,7 +718,7 @@ impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> Copy
 }
 
 impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> RkStep<E, D, S, FMA, WIDE> {
-    fn new(tab: &Tableau, h: f64) -> Self {
+    fn new(tab: &Tableau, h: f64, time_scale: Option<[f64; LANES]>) -> Self {
         let (mut a, mut c, mut b) = ([[0.0; S]; S], [0.0; S], [0.0; S]);
         for i in 0..S {
             a[i][..i].copy_from_slice(&tab.a[i][..i]);
@@ -493,6 +736,8 @@ impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> RkSte
             c,
             b,
             scale: h / tab.denominator,
+            time_scale: time_scale
+                .map(|s| [0, 1].map(|half| Lanes(std::array::from_fn(|i| s[half * HALF + i])))),
             k: [[Lanes::splat(0.0); D]; S],
         }
     }
@@ -515,7 +760,7 @@ where
         next: &mut [Lanes<LANES, FMA, WIDE>; D],
         reach: &mut [Lanes<HALF, FMA, WIDE>; 2],
     ) {
-        let mut f = LaneRhs::<_, D, FMA, WIDE> { eqs, reach: *reach };
+        let mut f = LaneRhs::<_, D, FMA, WIDE> { eqs, reach: *reach, time_scale: self.time_scale };
         fixed_stages::<_, _, D, _>(&self.a, &self.plan, &self.c, 0, &mut self.k, &mut f, t, h, y);
         *reach = f.reach;
         fixed_update::<_, D>(&self.b, &self.k, self.scale, y, next);
@@ -563,7 +808,7 @@ where
         let n = D / 2;
         *next = *y;
         let mut accel = LaneAccelerations::<_, D, FMA, WIDE> {
-            f: LaneRhs { eqs, reach: *reach },
+            f: LaneRhs { eqs, reach: *reach, time_scale: None },
             full: [Lanes::splat(0.0); D],
             rates: [Lanes::splat(0.0); D],
         };
@@ -572,6 +817,99 @@ where
         kick_drift(self.scheme, t, h, q, v, &mut kept[..n], self.primed, &mut accel);
         self.primed = true;
         *reach = accel.f.reach;
+    }
+}
+
+/// Tao's map ([`tao_step`]) on a lane group of states padded to D variables: (q, p) in the
+/// first 2n values, the copy (x, y) D values further on (W ≥ 2 D); the equations' own
+/// gradient ([`Canonical`]), half a group at a time as the Runge–Kutta stages are.
+struct TaoLanes<E, const D: usize, const FMA: bool, const WIDE: bool> {
+    eqs: std::marker::PhantomData<fn(&E)>,
+    scheme: TaoScheme,
+    /// Degrees of freedom of the members.
+    n: usize,
+}
+
+// By hand, as `RkStep`'s.
+impl<E, const D: usize, const FMA: bool, const WIDE: bool> Clone for TaoLanes<E, D, FMA, WIDE> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<E, const D: usize, const FMA: bool, const WIDE: bool> Copy for TaoLanes<E, D, FMA, WIDE> {}
+
+impl<E, const D: usize, const W: usize, const FMA: bool, const WIDE: bool> LaneStep<W, FMA, WIDE>
+    for TaoLanes<E, D, FMA, WIDE>
+where
+    E: Equations<Lanes<HALF, FMA, WIDE>> + Canonical<Lanes<HALF, FMA, WIDE>>,
+{
+    type Equations = [E; 2];
+
+    #[inline(always)]
+    fn step(
+        &mut self,
+        eqs: &[E; 2],
+        t: f64,
+        h: f64,
+        y: &[Lanes<LANES, FMA, WIDE>; W],
+        next: &mut [Lanes<LANES, FMA, WIDE>; W],
+        reach: &mut [Lanes<HALF, FMA, WIDE>; 2],
+    ) {
+        const { assert!(W >= 2 * D, "room for the copy") };
+        *next = *y;
+        // The halves written out, as the stages' (each half's equations stay values).
+        self.half::<0, W>(&eqs[0], t, h, next, &mut reach[0]);
+        self.half::<1, W>(&eqs[1], t, h, next, &mut reach[1]);
+    }
+}
+
+impl<E, const D: usize, const FMA: bool, const WIDE: bool> TaoLanes<E, D, FMA, WIDE>
+where
+    E: Equations<Lanes<HALF, FMA, WIDE>> + Canonical<Lanes<HALF, FMA, WIDE>>,
+{
+    #[inline(always)]
+    fn half<const H: usize, const W: usize>(
+        &self,
+        eq: &E,
+        t: f64,
+        h: f64,
+        state: &mut [Lanes<LANES, FMA, WIDE>; W],
+        reach: &mut Lanes<HALF, FMA, WIDE>,
+    ) {
+        type L<const FMA: bool, const WIDE: bool> = Lanes<HALF, FMA, WIDE>;
+        let n = self.n;
+        let zero = L::<FMA, WIDE>::splat(0.0);
+        let mut z = [zero; W];
+        for (v, w) in z.iter_mut().zip(state.iter()) {
+            v.0.copy_from_slice(&w.0[H * HALF..][..HALF]);
+        }
+        let (mut dq, mut dp) = ([zero; D], [zero; D]);
+        let mut r = *reach;
+        let mut gradient = |t: f64,
+                            a: &[L<FMA, WIDE>],
+                            b: &[L<FMA, WIDE>],
+                            dq: &mut [L<FMA, WIDE>],
+                            dp: &mut [L<FMA, WIDE>]| {
+            let t = Lanes::splat(t);
+            if !WIDE {
+                // The gradient's arguments laid out as a state (positions, then momenta in
+                // the velocities' place) for the equations' bound on their trigonometry.
+                let mut s = [zero; D];
+                s[..n].copy_from_slice(a);
+                s[n..2 * n].copy_from_slice(b);
+                r = eq.trig_reach(t, &s[..2 * n]).max(r);
+            }
+            eq.gradient(t, a, b, dq, dp);
+        };
+        let (own, copy) = z.split_at_mut(D);
+        let (q, p) = own[..2 * n].split_at_mut(n);
+        let (x, y) = copy[..2 * n].split_at_mut(n);
+        tao_step(&self.scheme, t, h, [q, p, x, y], &mut dq[..n], &mut dp[..n], &mut gradient);
+        *reach = r;
+        for (v, w) in state.iter_mut().zip(&z) {
+            v.0[H * HALF..][..HALF].copy_from_slice(&w.0);
+        }
     }
 }
 
@@ -656,6 +994,9 @@ const HALF: usize = LANES / 2;
 struct LaneRhs<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
     eqs: &'a [E; 2],
     reach: [Lanes<HALF, FMA, WIDE>; 2],
+    /// Each lane's time unit, s per unit of the run's time (see [`Strobe`]: a stroboscopic
+    /// run steps every member in fractions of its own drive period), or `None`: seconds.
+    time_scale: Option<[Lanes<HALF, FMA, WIDE>; 2]>,
 }
 
 impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, const WIDE: bool>
@@ -686,11 +1027,20 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
             v.0.copy_from_slice(&w.0[H * HALF..][..HALF]);
         }
         let eq = &self.eqs[H];
+        // In a lane's own time unit s: y' = s f(s t, y) (a branch on a value fixed for the
+        // run, always taken the same way).
+        let scale = self.time_scale.map(|s| s[H]);
+        let t = scale.map_or(t, |s| s * t);
         if !WIDE {
             self.reach[H] = eq.trig_reach(t, &yh).max(self.reach[H]);
         }
         let mut dh = [Lanes([0.0; HALF]); D];
         eq.rhs_sized(t, &yh, &mut dh);
+        if let Some(s) = scale {
+            for v in &mut dh {
+                *v = s * *v;
+            }
+        }
         for (v, w) in dydt.iter_mut().zip(&dh) {
             v.0[H * HALF..][..HALF].copy_from_slice(&w.0);
         }
@@ -972,6 +1322,68 @@ impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> f
     }
 }
 
+/// Tao's map on one lane, on (q, p): what a lane of [`run`] gives a member with
+/// [`LaneMethod::Tao`] (the copy kept from step to step, as the lanes keep it in their
+/// state; it starts equal to the state).
+struct OneLaneTao<E, const FMA: bool> {
+    scheme: TaoScheme,
+    eq: E,
+    /// (q, p), then the copy (x, y).
+    z: Vec<Lanes<1, FMA, true>>,
+    dq: Vec<Lanes<1, FMA, true>>,
+    dp: Vec<Lanes<1, FMA, true>>,
+    primed: bool,
+}
+
+impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>> + Canonical<Lanes<1, FMA, true>>, const FMA: bool>
+    Stepper<S> for OneLaneTao<E, FMA>
+{
+    fn step(&mut self, _: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
+        let (dim, n) = (y.len(), y.len() / 2);
+        for (k, v) in y.iter().enumerate() {
+            self.z[k] = Lanes([*v]);
+            if !self.primed {
+                self.z[dim + k] = Lanes([*v]);
+            }
+        }
+        self.primed = true;
+        let Self { eq, z, dq, dp, scheme, .. } = self;
+        let mut gradient =
+            |t: f64, a: &[Lanes<1, FMA, true>], b: &[Lanes<1, FMA, true>], dq: &mut [_], dp: &mut [_]| {
+                eq.gradient(Lanes([t]), a, b, dq, dp);
+            };
+        let (own, copy) = z.split_at_mut(dim);
+        let (q, p) = own.split_at_mut(n);
+        let (x, w) = copy.split_at_mut(n);
+        tao_step(scheme, t, h, [q, p, x, w], dq, dp, &mut gradient);
+        for (v, lane) in y.iter_mut().zip(&self.z) {
+            *v = lane.0[0];
+        }
+        Ok(())
+    }
+}
+
+/// Whether the one-lane Runge–Kutta stepper used fused multiply-adds: its whole state
+/// (stages are not kept across steps), so that a run paused on a CPU with them is refused on
+/// one without (it would round differently), and one paused without continues without.
+impl<E, const FMA: bool> Snapshot for OneLane<E, FMA> {
+    fn save(&self, out: &mut Words) {
+        out.bool(FMA);
+    }
+    fn restore(&mut self, from: &mut Reader<'_>) -> Result<(), Error> {
+        if from.bool()? != FMA {
+            return Err(Error::BadCheckpoint {
+                part: ONE_LANE,
+                reason: "it was computed with a different use of fused multiply-adds".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The checkpoint part of the one-lane stepper.
+const ONE_LANE: &str = "the engine's one-lane stepper";
+
 /// Runs `model` from `y0` with `method` in the engine arithmetic (see the one-lane steppers:
 /// polynomial sine and cosine, fused multiply-adds where the CPU has them), fixed steps as
 /// `spec` says, showing every state to `observer` (without an energy: observers that need one
@@ -988,34 +1400,79 @@ pub fn solve_one<M: Model>(
     spec: &RunSpec,
     observer: &mut dyn Observer,
 ) -> Result<Report, Error> {
+    match solve_one_resumable(model, method, y0, spec, observer, None, &Pause::NEVER)? {
+        Leg::Done(report) => Ok(report),
+        Leg::Paused(state) => unreachable!("a run that never pauses paused at step {}", state.steps),
+    }
+}
+
+/// [`solve_one`] that pauses when `pause` says so (after a step, never the last) and
+/// continues `from` a state it paused at, bit for bit, as
+/// [`crate::simulate::resume::solve_resumable`] does: the fast path of a single fixed-step
+/// run ([`crate::model::DynModel::solve_fastest`]). Explicit Runge–Kutta tableaus only may
+/// pause (their stepper keeps nothing between steps but whether it fuses multiply-adds);
+/// kick–drift and Tao's map run without pausing.
+///
+/// # Errors
+/// As [`solve_one`]; [`Error::BadCheckpoint`] when `from` does not fit.
+///
+/// # Panics
+/// When asked to pause or resume with another method than a tableau.
+pub fn solve_one_resumable<M: Model>(
+    model: &M,
+    method: LaneMethod,
+    y0: &[f64],
+    spec: &RunSpec,
+    observer: &mut dyn Observer,
+    from: Option<&RunState>,
+    pause: &Pause<'_>,
+) -> Result<Leg<Report>, Error> {
     fn go<M: Model, const FMA: bool>(
         model: &M,
         method: LaneMethod,
         y0: &[f64],
         spec: &RunSpec,
         observer: &mut dyn Observer,
-    ) -> Result<Report, Error> {
+        from: Option<&RunState>,
+        pause: &Pause<'_>,
+    ) -> Result<Leg<Report>, Error> {
         let n = y0.len();
         let zero = Lanes([0.0]);
         let eq = model.convert(&|x| Lanes::<1, FMA, true>([x]));
         let mut y = y0.to_vec();
         let simulation = Simulation { system: &(), spec: *spec };
-        let outcome = match method {
-            LaneMethod::Rk(tableau) => simulation.run(
-                &mut OneLane::<_, FMA> {
+        let leg = match method {
+            LaneMethod::Rk(tableau) => {
+                let mut stepper = OneLane::<_, FMA> {
                     tableau,
                     plan: plan(tableau.a),
                     eq,
                     k: vec![zero; tableau.b.len() * n],
                     stage: vec![zero; n],
                     y: vec![zero; n],
-                },
-                &mut y,
-                observer,
-            )?,
+                };
+                let done = match from {
+                    None => 0,
+                    Some(state) => {
+                        state.check(n)?;
+                        stepper.restore_all(&state.stepper, ONE_LANE)?;
+                        y.copy_from_slice(&state.y);
+                        state.steps
+                    }
+                };
+                match simulation.run_from(&mut stepper, &mut y, observer, done, pause)? {
+                    Leg::Done(outcome) => Leg::Done(outcome),
+                    Leg::Paused(mut state) => {
+                        state.stepper = stepper.snapshot();
+                        state.evaluations = [method.evaluations(state.steps), 0, 0];
+                        return Ok(Leg::Paused(state));
+                    }
+                }
+            }
             LaneMethod::KickDrift { method, scheme } => {
+                assert!(from.is_none() && pause.never(), "kick-drift on one lane does not pause");
                 crate::simulate::check(method, model)?;
-                simulation.run(
+                Leg::Done(simulation.run(
                     &mut OneLaneKickDrift::<_, FMA> {
                         scheme,
                         eq,
@@ -1027,20 +1484,59 @@ pub fn solve_one<M: Model>(
                     },
                     &mut y,
                     observer,
-                )?
+                )?)
+            }
+            LaneMethod::Tao { method, scheme } => {
+                assert!(from.is_none() && pause.never(), "Tao's map on one lane does not pause");
+                // On (q, p), converted by the model's own maps as the lanes convert; the
+                // observer shown (q, q').
+                crate::simulate::check(method, model)?;
+                crate::integrator::tao::check_binding_step(&scheme, spec.h)?;
+                let mut z = vec![0.0; n];
+                model.to_momenta(y0, &mut z);
+                let mut shown = crate::simulate::ToVelocities { model, y: vec![0.0; n], inner: observer };
+                let outcome = simulation.run(
+                    &mut OneLaneTao::<_, FMA> {
+                        scheme,
+                        eq,
+                        z: vec![zero; 2 * n],
+                        dq: vec![zero; n / 2],
+                        dp: vec![zero; n / 2],
+                        primed: false,
+                    },
+                    &mut z,
+                    &mut shown,
+                )?;
+                model.to_velocities(&z, &mut y);
+                Leg::Done(outcome)
             }
         };
-        Ok(Report {
+        let Leg::Done(outcome) = leg else { unreachable!("paused legs returned above") };
+        Ok(Leg::Done(Report {
             outcome,
             rhs_evals: method.evaluations(outcome.steps()),
             state: y,
             steps_rejected: 0,
             jacobian_evals: 0,
-        })
+        }))
     }
-    if has_fma() {
-        go::<M, true>(model, method, y0, spec, observer)
+    // A run continued from a checkpoint keeps the arithmetic it was saved with.
+    let fma = match from {
+        None => has_fma(),
+        Some(state) => {
+            let fma = Reader::new(&state.stepper.0, ONE_LANE).bool()?;
+            if fma && !has_fma() {
+                return Err(Error::BadCheckpoint {
+                    part: ONE_LANE,
+                    reason: "it was computed with fused multiply-adds, which this CPU lacks".into(),
+                });
+            }
+            fma
+        }
+    };
+    if fma {
+        go::<M, true>(model, method, y0, spec, observer, from, pause)
     } else {
-        go::<M, false>(model, method, y0, spec, observer)
+        go::<M, false>(model, method, y0, spec, observer, from, pause)
     }
 }

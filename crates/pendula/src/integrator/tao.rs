@@ -34,6 +34,7 @@ use super::{Method, Requirement, Scheme, Stepper};
 use crate::Error;
 use crate::checkpoint::{Reader, Snapshot, Words};
 use crate::error::Short;
+use crate::num::Num;
 use crate::system::Hamiltonian;
 
 /// The binding constant ω used unless another is given, 1/s.
@@ -136,7 +137,75 @@ impl Method {
     }
 }
 
-/// Steps a [`TaoScheme`] on a Hamiltonian form; owns the copy (x, y) and its buffers.
+/// One step of size `h` from time `t` of `scheme` on (q, p) and its copy (x, y) (each of
+/// length n), over any number type: Tao's three flows, written once, for the scalar stepper
+/// ([`TaoStepper`]), the ensemble engine's lanes and its one-lane reference. `gradient(t, q,
+/// p, dq, dp)` writes ∂H/∂q and ∂H/∂p at (t, q, p) (both are needed by each of the flows
+/// H_A = H(q, y) and H_B = H(x, p)); `dq` and `dp` are its scratch (length n). Every partial
+/// flow of a second-order map is taken at that map's midpoint time, which keeps a
+/// time-dependent H symmetric and of order 2.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // the scheme, the step, the four halves, the scratch, the gradient
+pub fn tao_step<T: Num, G: FnMut(f64, &[T], &[T], &mut [T], &mut [T])>(
+    scheme: &TaoScheme,
+    t: f64,
+    h: f64,
+    [q, p, x, y]: [&mut [T]; 4],
+    dq: &mut [T],
+    dp: &mut [T],
+    gradient: &mut G,
+) {
+    let mut ts = t;
+    for &w in scheme.weights {
+        let d = w * h;
+        let tm = ts + 0.5 * d;
+        let half = T::splat(0.5 * d);
+        // φ_A(δ/2) φ_B(δ/2) φ_C(δ) φ_B(δ/2) φ_A(δ/2), δ = w h.
+        for phase in 0..5 {
+            match phase {
+                // H_A = H(q, y): p −= δ ∂H/∂q(q, y), x += δ ∂H/∂p(q, y).
+                0 | 4 => {
+                    gradient(tm, q, y, dq, dp);
+                    for (p, &g) in p.iter_mut().zip(dq.iter()) {
+                        *p = *p - half * g;
+                    }
+                    for (x, &g) in x.iter_mut().zip(dp.iter()) {
+                        *x = *x + half * g;
+                    }
+                }
+                // H_B = H(x, p): q += δ ∂H/∂p(x, p), y −= δ ∂H/∂q(x, p).
+                1 | 3 => {
+                    gradient(tm, x, p, dq, dp);
+                    for (q, &g) in q.iter_mut().zip(dp.iter()) {
+                        *q = *q + half * g;
+                    }
+                    for (y, &g) in y.iter_mut().zip(dq.iter()) {
+                        *y = *y - half * g;
+                    }
+                }
+                // ω H_C = ω ½(|q − x|² + |p − y|²): the sums stay, the differences rotate by
+                // 2ωδ.
+                _ => {
+                    let (sin, cos) = (2.0 * scheme.binding * d).sin_cos();
+                    let (sin, cos, one_half) = (T::splat(sin), T::splat(cos), T::splat(0.5));
+                    for i in 0..q.len() {
+                        let (sq, sp) = (q[i] + x[i], p[i] + y[i]);
+                        let (dq, dp) = (q[i] - x[i], p[i] - y[i]);
+                        let (rq, rp) = (cos * dq + sin * dp, -sin * dq + cos * dp);
+                        q[i] = one_half * (sq + rq);
+                        x[i] = one_half * (sq - rq);
+                        p[i] = one_half * (sp + rp);
+                        y[i] = one_half * (sp - rp);
+                    }
+                }
+            }
+        }
+        ts += d;
+    }
+}
+
+/// Steps a [`TaoScheme`] on a Hamiltonian form ([`tao_step`]); owns the copy (x, y) and its
+/// buffers.
 #[derive(Debug, Clone)]
 pub struct TaoStepper {
     scheme: TaoScheme,
@@ -144,7 +213,9 @@ pub struct TaoStepper {
     /// The copy (x, y) of (q, p).
     x: Vec<f64>,
     y: Vec<f64>,
-    gradient: Vec<f64>,
+    /// The gradient's halves.
+    dq: Vec<f64>,
+    dp: Vec<f64>,
     /// The (q, p) this stepper returned last: a different state on entry restarts the copy.
     last: Vec<f64>,
 }
@@ -157,60 +228,9 @@ impl TaoStepper {
             n,
             x: vec![0.0; n],
             y: vec![0.0; n],
-            gradient: vec![0.0; n],
+            dq: vec![0.0; n],
+            dp: vec![0.0; n],
             last: vec![f64::NAN; 2 * n],
-        }
-    }
-
-    /// The second-order map of size d at time t (all partial flows at the midpoint time,
-    /// which keeps a time-dependent H symmetric and of order 2).
-    fn second_order<S: Hamiltonian + ?Sized>(&mut self, sys: &S, t: f64, d: f64, z: &mut [f64]) {
-        let tm = t + 0.5 * d;
-        self.flow_a(sys, tm, 0.5 * d, z);
-        self.flow_b(sys, tm, 0.5 * d, z);
-        self.flow_c(d, z);
-        self.flow_b(sys, tm, 0.5 * d, z);
-        self.flow_a(sys, tm, 0.5 * d, z);
-    }
-
-    /// H_A = H(q, y): p −= δ ∂H/∂q(q, y), x += δ ∂H/∂p(q, y).
-    fn flow_a<S: Hamiltonian + ?Sized>(&mut self, sys: &S, t: f64, d: f64, z: &mut [f64]) {
-        let (q, p) = z.split_at_mut(self.n);
-        sys.dh_dq(t, q, &self.y, &mut self.gradient);
-        for (p, g) in p.iter_mut().zip(&self.gradient) {
-            *p -= d * g;
-        }
-        sys.dh_dp(t, q, &self.y, &mut self.gradient);
-        for (x, g) in self.x.iter_mut().zip(&self.gradient) {
-            *x += d * g;
-        }
-    }
-
-    /// H_B = H(x, p): q += δ ∂H/∂p(x, p), y −= δ ∂H/∂q(x, p).
-    fn flow_b<S: Hamiltonian + ?Sized>(&mut self, sys: &S, t: f64, d: f64, z: &mut [f64]) {
-        let (q, p) = z.split_at_mut(self.n);
-        sys.dh_dp(t, &self.x, p, &mut self.gradient);
-        for (q, g) in q.iter_mut().zip(&self.gradient) {
-            *q += d * g;
-        }
-        sys.dh_dq(t, &self.x, p, &mut self.gradient);
-        for (y, g) in self.y.iter_mut().zip(&self.gradient) {
-            *y -= d * g;
-        }
-    }
-
-    /// ω H_C = ω ½(|q − x|² + |p − y|²): the sums stay, the differences rotate by 2ωδ.
-    fn flow_c(&mut self, d: f64, z: &mut [f64]) {
-        let (sin, cos) = (2.0 * self.scheme.binding * d).sin_cos();
-        let (q, p) = z.split_at_mut(self.n);
-        for i in 0..self.n {
-            let (sq, sp) = (q[i] + self.x[i], p[i] + self.y[i]);
-            let (dq, dp) = (q[i] - self.x[i], p[i] - self.y[i]);
-            let (rq, rp) = (cos * dq + sin * dp, -sin * dq + cos * dp);
-            q[i] = 0.5 * (sq + rq);
-            self.x[i] = 0.5 * (sq - rq);
-            p[i] = 0.5 * (sp + rp);
-            self.y[i] = 0.5 * (sp - rp);
         }
     }
 }
@@ -230,11 +250,20 @@ impl TaoStepper {
     }
 
     fn compose<S: Hamiltonian + ?Sized>(&mut self, system: &S, t: f64, h: f64, z: &mut [f64]) {
-        let mut ts = t;
-        for w in self.scheme.weights {
-            self.second_order(system, ts, w * h, z);
-            ts += w * h;
-        }
+        let (q, p) = z.split_at_mut(self.n);
+        let mut gradient = |t: f64, q: &[f64], p: &[f64], dq: &mut [f64], dp: &mut [f64]| {
+            system.dh_dq(t, q, p, dq);
+            system.dh_dp(t, q, p, dp);
+        };
+        tao_step(
+            &self.scheme,
+            t,
+            h,
+            [q, p, &mut self.x, &mut self.y],
+            &mut self.dq,
+            &mut self.dp,
+            &mut gradient,
+        );
     }
 }
 

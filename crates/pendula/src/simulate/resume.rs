@@ -4,7 +4,7 @@
 //! # How a run pauses
 //!
 //! `solve_resumable` (`crates/pendula/src/simulate/resume.rs`; `DynModel::solve_resumable`, and
-//! `ensemble::rk4_trajectory_resumable` for the fast path) pauses when a `Pause` says so — at a
+//! `engine::solve_one_resumable` for the fast path) pauses when a `Pause` says so — at a
 //! simulated time, or when an `AtomicBool` set by another thread is seen at a step boundary — and
 //! returns a `RunState` (step index, time, state in the stepper's coordinates, counters, the
 //! stepper's and the controller's words); started from it, the loops recompute times from the step

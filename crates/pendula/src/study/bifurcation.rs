@@ -92,7 +92,13 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
     };
     // What it costs, before the values are made: every value's transient and samples, at the
     // fastest drive along the axis (its most periods), and the samples' table.
-    let simd = crate::ensemble::driven::runs(info);
+    // Orbit diagrams run RK4 on the engine's lanes wherever the engine runs the system.
+    let simd = {
+        let crate::integrator::Scheme::ExplicitRk(rk4) = crate::integrator::explicit_rk::RK4.scheme else {
+            unreachable!("RK4 is explicit")
+        };
+        crate::ensemble::engine::supports(info, &crate::ensemble::engine::LaneMethod::Rk(rk4))
+    };
     let w = value(0)?.get("drive_frequency").max(value(axis.n - 1)?.get("drive_frequency"));
     let periods = (transient * w / (2.0 * std::f64::consts::PI)).ceil() + samples as f64;
     let n = axis.n as f64;

@@ -304,11 +304,16 @@ impl<T: Num> Chain<T> {
     /// ∂H/∂θ (see the module's formula).
     #[inline(always)]
     fn dh_dtheta(&self, theta: &[T], p: &[T], out: &mut [T]) {
+        self.dh_dtheta_and_velocities(theta, p, out, &mut [T::splat(0.0); MAX_LINKS]);
+    }
+
+    /// ∂H/∂θ into `out`, and on the way ω = M⁻¹ p (= ∂H/∂p) into `w`.
+    #[inline(always)]
+    fn dh_dtheta_and_velocities(&self, theta: &[T], p: &[T], out: &mut [T], w: &mut [T; MAX_LINKS]) {
         let n = self.n;
         let mu = self.hanging::<MAX_LINKS>();
         let mut a = self.pairs(theta, &mu);
-        let mut w = [T::splat(0.0); MAX_LINKS];
-        self.velocities_in(&mut a, p, &mut w);
+        self.velocities_in(&mut a, p, w);
         for k in 0..n {
             let mut d = theta[k].sin() * (mu[k] * self.g * self.l[k]);
             for j in 0..n {
@@ -466,6 +471,16 @@ impl Model for Chain {
     fn energy_scale(&self, y0: &[f64]) -> f64 {
         let above_min = Energy::energy(self, 0.0, y0) - self.potential(&[0.0; MAX_LINKS][..self.n]);
         self.well_depth().max(above_min)
+    }
+}
+
+/// ∂H/∂θ and ω = M⁻¹ p (the module's formulas), from one factorisation of M(θ).
+impl<T: Num> super::Canonical<T> for Chain<T> {
+    #[inline(always)]
+    fn gradient(&self, _t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        let mut w = [T::splat(0.0); MAX_LINKS];
+        self.dh_dtheta_and_velocities(q, p, dq, &mut w);
+        dp[..self.n].copy_from_slice(&w[..self.n]);
     }
 }
 

@@ -377,6 +377,16 @@ impl<T: Num> Equations<T> for DoublePendulum<T> {
     }
 }
 
+/// [`DoublePendulum::hamiltonian_gradient`].
+impl<T: Num> super::Canonical<T> for DoublePendulum<T> {
+    #[inline(always)]
+    fn gradient(&self, t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        let [g1, g2, w1, w2] = self.hamiltonian_gradient(t, [q[0], q[1]], [p[0], p[1]]);
+        dq[..2].copy_from_slice(&[g1, g2]);
+        dp[..2].copy_from_slice(&[w1, w2]);
+    }
+}
+
 impl Model for DoublePendulum {
     type Form = DoublePendulumForm;
     const INFO: &'static SystemInfo = &INFO;

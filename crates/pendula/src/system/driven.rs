@@ -167,6 +167,17 @@ impl<T: Num> Equations<T> for DrivenPendulum<T> {
     }
 }
 
+/// The gradient of the conservative part H = p²/2 − cos θ − g θ cos(ω_D t): the damping
+/// (1/q > 0 always) leaves the system without a Hamiltonian form
+/// ([`Model::hamiltonian_form`] says so), so nothing runs Tao's map on it.
+impl<T: Num> super::Canonical<T> for DrivenPendulum<T> {
+    #[inline(always)]
+    fn gradient(&self, t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        dq[0] = q[0].sin() - self.drive_amplitude * (self.drive_frequency * t).cos();
+        dp[0] = p[0];
+    }
+}
+
 impl Model for DrivenPendulum {
     /// Never built: the damped pendulum has no Hamiltonian form.
     type Form = PendulumForm;

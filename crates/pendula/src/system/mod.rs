@@ -88,6 +88,16 @@ pub trait Equations<T: Num>: Send + Sync {
     }
 }
 
+/// A system's Hamiltonian gradient over a number type `T`, written once: what Tao's map
+/// ([`crate::integrator::tao::tao_step`]) evaluates on its two copies, for the scalar stepper,
+/// the ensemble engine's lanes and the one-lane reference alike. It is the gradient of the
+/// system's Hamiltonian form ([`Model::hamiltonian_form`], which says whether the form exists:
+/// a damped system has none, and then nothing calls this), at (t, q, p).
+pub trait Canonical<T: Num> {
+    /// Writes ∂H/∂q into `dq` and ∂H/∂p into `dp` (each of length n = dim/2) at (t, q, p).
+    fn gradient(&self, t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]);
+}
+
 /// 2 maxᵢ |yᵢ|: a bound on every angle of `y` and every difference of two (see
 /// [`Equations::trig_reach`]).
 #[inline(always)]
@@ -333,7 +343,7 @@ pub trait Model: System + Energy + Sized + Send + Sync + 'static {
     /// ensemble engine's kernels are compiled for it, their loops unrolled.
     const DIM: usize;
     /// The same system over another number type ([`Equations`]); `Over<f64>` is `Self`.
-    type Over<T: Num>: Equations<T>;
+    type Over<T: Num>: Equations<T> + Canonical<T>;
     /// The system over `T`, each parameter `name` being `value(name)` (lanes: one member's
     /// value per lane), structural settings (the chain's `links`, the small-angle flag) read
     /// from `setting(name)` (the same for every lane).

@@ -202,6 +202,15 @@ impl<T: Num> Equations<T> for Oscillator<T> {
     }
 }
 
+/// ∂H/∂x = k x − F cos(Ω t), ∂H/∂p = p / m (the form exists undamped).
+impl<T: Num> super::Canonical<T> for Oscillator<T> {
+    #[inline(always)]
+    fn gradient(&self, t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        dq[0] = self.k * q[0] - self.drive_amplitude * (self.drive_frequency * t).cos();
+        dp[0] = p[0] / self.m;
+    }
+}
+
 impl Model for Oscillator {
     type Form = OscillatorForm;
     const INFO: &'static SystemInfo = &INFO;
@@ -317,12 +326,11 @@ impl System for OscillatorForm {
 }
 
 impl Hamiltonian for OscillatorForm {
-    fn dh_dq(&self, t: f64, q: &[f64], _p: &[f64], out: &mut [f64]) {
-        let o = &self.oscillator;
-        out[0] = o.k * q[0] - o.drive_amplitude * (o.drive_frequency * t).cos();
+    fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        super::Canonical::gradient(&self.oscillator, t, q, p, out, &mut [0.0]);
     }
-    fn dh_dp(&self, _t: f64, _q: &[f64], p: &[f64], out: &mut [f64]) {
-        out[0] = p[0] / self.oscillator.m;
+    fn dh_dp(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        super::Canonical::gradient(&self.oscillator, t, q, p, &mut [0.0], out);
     }
     fn separable(&self) -> bool {
         true

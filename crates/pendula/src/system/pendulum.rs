@@ -200,6 +200,16 @@ impl<T: Num> Equations<T> for Pendulum<T> {
     }
 }
 
+/// ∂H/∂θ = m l² ((g/l) sin θ − A cos(Ω t)), ∂H/∂p = p / (m l²) (the form exists undamped).
+impl<T: Num> super::Canonical<T> for Pendulum<T> {
+    #[inline(always)]
+    fn gradient(&self, t: T, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        let ml2 = self.m * self.l * self.l;
+        dq[0] = ml2 * (self.g / self.l * self.gravity_term(q[0]) - self.drive(t));
+        dp[0] = p[0] / ml2;
+    }
+}
+
 impl Model for Pendulum {
     type Form = PendulumForm;
     const INFO: &'static SystemInfo = &INFO;
@@ -325,14 +335,11 @@ impl System for PendulumForm {
 }
 
 impl Hamiltonian for PendulumForm {
-    fn dh_dq(&self, t: f64, q: &[f64], _p: &[f64], out: &mut [f64]) {
-        let s = &self.pendulum;
-        let ml2 = s.m * s.l * s.l;
-        out[0] = ml2 * (s.g / s.l * s.gravity_term(q[0]) - s.drive(t));
+    fn dh_dq(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        super::Canonical::gradient(&self.pendulum, t, q, p, out, &mut [0.0]);
     }
-    fn dh_dp(&self, _t: f64, _q: &[f64], p: &[f64], out: &mut [f64]) {
-        let s = &self.pendulum;
-        out[0] = p[0] / (s.m * s.l * s.l);
+    fn dh_dp(&self, t: f64, q: &[f64], p: &[f64], out: &mut [f64]) {
+        super::Canonical::gradient(&self.pendulum, t, q, p, &mut [0.0], out);
     }
     fn separable(&self) -> bool {
         true
