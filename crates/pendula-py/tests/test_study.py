@@ -103,7 +103,7 @@ def test_fractal_equals_the_cli_byte_for_byte_and_the_energy_forbids_flips(cli, 
     assert np.all(r.flip_time[np.isfinite(r.flip_time)] <= 10)
 
 
-def test_bifurcation_equals_the_cli_on_both_engines_and_settles_on_period_one(cli, tmp_path):
+def test_bifurcation_equals_the_cli_on_two_systems_and_settles_on_period_one(cli, tmp_path):
     cli(["bifurcation", "--param", "drive_amplitude=1.0:1.5:16", "--transient", "100", "--samples", "10",
          "--out-dir", "o", "--summary", "s.json"], tmp_path)
     s = summary(tmp_path / "s.json")
@@ -113,14 +113,14 @@ def test_bifurcation_equals_the_cli_on_both_engines_and_settles_on_period_one(cl
     assert header == ["drive_amplitude", "sample", "theta", "omega"]
     ours = np.column_stack([np.repeat(r.values, 10), np.tile(np.arange(10), 16), r.samples.reshape(-1, 2)])
     np.testing.assert_array_equal(floats(rows), ours)
-    # The scalar path: the pendulum, driven, with damping.
+    # Another system on the same lanes: the pendulum, driven, with damping.
     cli(["bifurcation", "pendulum", "--set", "drive_frequency=2", "--set", "damping=0.5", "--param",
          "drive_amplitude=0.5:2:6", "--transient", "30", "--samples", "5", "--out-dir", "p",
          "--summary", "p.json"], tmp_path)
     p = summary(tmp_path / "p.json")
     scalar = pendula.bifurcation(pendula.System("pendulum", drive_frequency=2, damping=0.5),
                                  param=("drive_amplitude", 0.5, 2, 6), transient=30, samples=5)
-    assert scalar.kernel == p["tables"]["run"][0]["kernel"] == "scalar, per value"
+    assert scalar.kernel == p["tables"]["run"][0]["kernel"] == "simd lanes (ensemble engine)"
     _, rows = read_csv(tmp_path / "p" / "bifurcation.csv")
     np.testing.assert_array_equal(floats(rows, [2, 3]), scalar.samples.reshape(-1, 2))
     # Baker–Gollub (q = 2, ω_D = 2/3): at weak drive the motion settles, at the decay rate

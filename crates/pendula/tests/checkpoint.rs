@@ -177,9 +177,10 @@ fn every_fixed_step_method_continues_bit_for_bit() {
     }
 }
 
-/// The fast path of fixed-step explicit methods (the ensemble engine's one lane) on the free,
-/// the damped and the driven double pendulum, the chain and the pendulum, and a damped run
-/// whose energy balance integrates the work.
+/// The fast paths of fixed-step explicit methods — the single-trajectory kernel (RK4 on the
+/// free double pendulum), the ensemble engine's one lane (the damped and the driven double
+/// pendulum, the chain, the pendulum) — and a damped run whose energy balance integrates the
+/// work.
 #[test]
 fn the_fast_path_and_the_energy_balance_continue_bit_for_bit() {
     let double = values("double", &[("theta1", 2.9), ("theta2", 2.0)]);

@@ -7,7 +7,6 @@ use std::ops::ControlFlow;
 
 use crate::ensemble::engine::Strobe;
 use crate::integrator::Method;
-use crate::integrator::explicit_rk::RK4;
 use crate::model::DynModel;
 use crate::observe::{Flow, Observer, Sample};
 use crate::system::Values;
@@ -113,9 +112,7 @@ pub fn orbit_diagram(values: &[Values], spec: &OrbitDiagramSpec) -> Result<Vec<f
             *slot = values[i].get(name);
         }
     };
-    let crate::integrator::Scheme::ExplicitRk(tableau) = RK4.scheme else { unreachable!("RK4 is explicit") };
     let strobe = Strobe {
-        tableau,
         steps_per_period: spec.steps_per_period,
         samples: spec.samples,
         periods: &|i| periods[i],

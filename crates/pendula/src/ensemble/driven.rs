@@ -36,9 +36,6 @@ pub struct StroboSpec {
 /// If `out` does not hold members × samples × 2 values or `steps_per_period < 4`.
 pub fn stroboscopic(members: &[DrivenMember], spec: &StroboSpec, out: &mut [f64]) -> Result<(), Error> {
     assert!(spec.steps_per_period >= 4, "at least 4 steps per period");
-    let crate::integrator::Scheme::ExplicitRk(tableau) = crate::integrator::explicit_rk::RK4.scheme else {
-        unreachable!("RK4 is explicit")
-    };
     let values = |i: usize, v: &mut [f64]| {
         let DrivenMember { pendulum: p, state, .. } = members[i];
         v.copy_from_slice(&[p.q, p.drive_amplitude, p.drive_frequency, state[0], state[1]]);
@@ -48,7 +45,6 @@ pub fn stroboscopic(members: &[DrivenMember], spec: &StroboSpec, out: &mut [f64]
         (2.0 * std::f64::consts::PI / m.pendulum.drive_frequency, m.transient_periods)
     };
     let strobe = super::engine::Strobe {
-        tableau,
         steps_per_period: spec.steps_per_period,
         samples: spec.samples,
         periods: &periods,

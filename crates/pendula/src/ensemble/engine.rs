@@ -51,9 +51,10 @@
 //! reduces such angles exactly, by Payne–Hanek, in `crates/pendula/src/num/trig/exact.rs`).
 //! `engine::solve_one` is one member in the same arithmetic, bit for bit a lane.
 //! `crates/pendula/src/ensemble/mod.rs` is the double pendulum's typed front (`Member`, `run`).
-//! `engine::solve_one_resumable` is the fast path of a single fixed-step run
-//! (`DynModel::solve_fastest`: `simulate` with an explicit tableau, W1): one lane, pausing and
-//! continuing bit for bit. `engine::stroboscopic` samples every member once per drive period
+//! `engine::solve_one_resumable` is the fast path of a single fixed-step run with an explicit
+//! tableau (`DynModel::solve_fastest`; RK4 on the free double pendulum, W1, takes
+//! `ensemble::rk4_trajectory` in `crates/pendula/src/ensemble/trajectory.rs` instead, whose
+//! energies come from the step's trigonometry): one lane, pausing and continuing bit for bit. `engine::stroboscopic` samples every member once per drive period
 //! (orbit diagrams; `crates/pendula/src/ensemble/driven.rs` is the driven pendulum's typed
 //! front): the run's time counted in periods, each lane's equations scaled to its own period,
 //! the run loop called period by period with the angles wrapped between.
@@ -259,6 +260,12 @@ pub fn run<M: Model, T: Send>(
         .enumerate()
         .filter_map(|(c, rows)| {
             let start = c * CHUNK;
+            // Before the chunk's members are made and checked: once cancelled, every chunk
+            // left ends at once (their checks, a model per member with Tao's map, summed to
+            // a second over a million members).
+            if spec.cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+                return Some((start, Error::Interrupted));
+            }
             let n = rows.len() / row_len;
             let mut values = vec![0.0; n * width];
             for (i, v) in values.chunks_mut(width).enumerate() {
@@ -296,11 +303,10 @@ pub fn run<M: Model, T: Send>(
 }
 
 /// A stroboscopic ensemble run ([`stroboscopic`]): every member sampled once per period of
-/// its drive, the Poincaré section of the extended phase space at phase 0.
+/// its drive by RK4 (kernels of their own, in each lane's time unit, compiled for RK4 alone),
+/// the Poincaré section of the extended phase space at phase 0.
 #[derive(Clone, Copy)]
 pub struct Strobe<'a> {
-    /// The explicit tableau (at most [`MAX_STAGES`] stages).
-    pub tableau: &'static Tableau,
     /// Steps per drive period (at least 1): each member steps its own period / this.
     pub steps_per_period: u32,
     /// Samples per member, one per period after its transient.
@@ -345,8 +351,11 @@ pub fn stroboscopic<M: Model>(
     let per_member = strobe.samples * dim;
     assert_eq!(out.len(), count * per_member, "count × samples × dim values");
     assert!(strobe.steps_per_period >= 1, "at least one step per period");
+    let crate::integrator::Scheme::ExplicitRk(rk4) = crate::integrator::explicit_rk::RK4.scheme else {
+        unreachable!("RK4 is explicit")
+    };
     let spec = LaneSpec {
-        method: LaneMethod::Rk(strobe.tableau),
+        method: LaneMethod::Rk(rk4),
         h: 1.0 / f64::from(strobe.steps_per_period),
         steps: u64::from(strobe.steps_per_period),
         stop_at_flip: false,
@@ -475,17 +484,20 @@ pub(crate) fn run_group<M: Model>(
         };
     }
     macro_rules! with {
-        ($fma:tt, $wide:tt, $d:tt, $s:tt) => {{
+        ($fma:tt, $wide:tt, $d:tt, $s:tt, $scaled:tt) => {{
             let LaneMethod::Rk(tableau) = spec.method else { unreachable!("a tableau") };
             let eq = equations!($fma, $wide);
-            let step = RkStep::<_, $d, $s, $fma, $wide>::new(tableau, spec.h, time_scale);
+            let step = RkStep::<_, $d, $s, $fma, $wide, $scaled>::new(tableau, spec.h, time_scale);
             call!($fma, $d, $wide, eq, step, run, record)
         }};
     }
     macro_rules! go {
         ($fma:tt, $wide:tt) => {{
             match spec.method {
-                LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len()),
+                // A stroboscopic run's steps in each lane's own time unit: RK4's kernels of
+                // their own (`Strobe`).
+                LaneMethod::Rk(_) if time_scale.is_some() => rk!($fma, $wide, 4, true),
+                LaneMethod::Rk(tableau) => rk!($fma, $wide, tableau.b.len(), false),
                 LaneMethod::Tao { scheme, .. } => {
                     // Compiled only for the dimensions it runs on (`supports`).
                     if const { M::DIM == 4 } {
@@ -527,32 +539,36 @@ pub(crate) fn run_group<M: Model>(
     }
     // Kernels for every number of stages up to MAX_STAGES, each unrolled.
     macro_rules! by_stages {
-        ($fma:tt, $wide:tt, $d:tt, $stages:expr) => {
+        ($fma:tt, $wide:tt, $d:tt, $stages:expr, false) => {
             match $stages {
-                1 => with!($fma, $wide, $d, 1),
-                2 => with!($fma, $wide, $d, 2),
-                3 => with!($fma, $wide, $d, 3),
-                _ => with!($fma, $wide, $d, 4),
+                1 => with!($fma, $wide, $d, 1, false),
+                2 => with!($fma, $wide, $d, 2, false),
+                3 => with!($fma, $wide, $d, 3, false),
+                _ => with!($fma, $wide, $d, 4, false),
             }
         };
+        ($fma:tt, $wide:tt, $d:tt, $stages:expr, true) => {{
+            debug_assert_eq!($stages, 4, "a stroboscopic run is RK4's");
+            with!($fma, $wide, $d, 4, true)
+        }};
     }
     macro_rules! rk {
-        ($fma:tt, $wide:tt, $stages:expr) => {{
+        ($fma:tt, $wide:tt, $stages:expr, $scaled:tt) => {{
             const { assert!(MAX_STAGES == 4, "a kernel for each number of stages") };
             let stages = $stages;
             // Only the dimensions this system has are compiled (`if const`).
             if const { M::DIM == 2 } {
-                by_stages!($fma, $wide, 2, stages)
+                by_stages!($fma, $wide, 2, stages, $scaled)
             } else if const { M::DIM == 4 } {
-                by_stages!($fma, $wide, 4, stages)
+                by_stages!($fma, $wide, 4, stages, $scaled)
             } else {
                 // A family (the chain): its members' dimensions, padded to 4, 8 or 16
                 // variables (the padding stays zero: the chain's equations read and write its
                 // first 2n).
                 match dim {
-                    ..=4 => by_stages!($fma, $wide, 4, stages),
-                    ..=8 => by_stages!($fma, $wide, 8, stages),
-                    _ => by_stages!($fma, $wide, 16, stages),
+                    ..=4 => by_stages!($fma, $wide, 4, stages, $scaled),
+                    ..=8 => by_stages!($fma, $wide, 8, stages, $scaled),
+                    _ => by_stages!($fma, $wide, 16, stages, $scaled),
                 }
             }
         }};
@@ -689,14 +705,15 @@ pub(crate) trait LaneStep<const W: usize, const FMA: bool, const WIDE: bool>: Co
 /// stages ([`fixed_stages`], [`fixed_update`]) over the system's equations, half a group at
 /// a time. The tableau is copied into fixed-size arrays, so that its loops unroll and its
 /// zero coefficients are known once per group.
-struct RkStep<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> {
+struct RkStep<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const SCALED: bool> {
     eqs: std::marker::PhantomData<fn(&E)>,
     a: [[f64; S]; S],
     plan: [Row; S],
     c: [f64; S],
     b: [f64; S],
     scale: f64,
-    /// Each lane's time unit ([`LaneRhs::time_scale`]).
+    /// Each lane's time unit ([`LaneRhs::time_scale`]), read only when `SCALED` (a kernel
+    /// of its own: a run-time choice in the stages measured W3 1.5 times slower).
     time_scale: Option<[Lanes<HALF, FMA, WIDE>; 2]>,
     /// The stages' slopes (kept between steps only as storage: every step writes them
     /// before reading).
@@ -704,20 +721,22 @@ struct RkStep<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bo
 }
 
 // By hand: derived, they would ask the equations to be `Copy`, which a reference to them is.
-impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> Clone
-    for RkStep<E, D, S, FMA, WIDE>
+impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const SCALED: bool> Clone
+    for RkStep<E, D, S, FMA, WIDE, SCALED>
 {
     fn clone(&self) -> Self {
         *self
     }
 }
 
-impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> Copy
-    for RkStep<E, D, S, FMA, WIDE>
+impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const SCALED: bool> Copy
+    for RkStep<E, D, S, FMA, WIDE, SCALED>
 {
 }
 
-impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> RkStep<E, D, S, FMA, WIDE> {
+impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const SCALED: bool>
+    RkStep<E, D, S, FMA, WIDE, SCALED>
+{
     fn new(tab: &Tableau, h: f64, time_scale: Option<[f64; LANES]>) -> Self {
         let (mut a, mut c, mut b) = ([[0.0; S]; S], [0.0; S], [0.0; S]);
         for i in 0..S {
@@ -743,8 +762,8 @@ impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> RkSte
     }
 }
 
-impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool> LaneStep<D, FMA, WIDE>
-    for RkStep<E, D, S, FMA, WIDE>
+impl<E, const D: usize, const S: usize, const FMA: bool, const WIDE: bool, const SCALED: bool>
+    LaneStep<D, FMA, WIDE> for RkStep<E, D, S, FMA, WIDE, SCALED>
 where
     E: Equations<Lanes<HALF, FMA, WIDE>>,
 {
@@ -760,7 +779,7 @@ where
         next: &mut [Lanes<LANES, FMA, WIDE>; D],
         reach: &mut [Lanes<HALF, FMA, WIDE>; 2],
     ) {
-        let mut f = LaneRhs::<_, D, FMA, WIDE> { eqs, reach: *reach, time_scale: self.time_scale };
+        let mut f = LaneRhs::<_, D, FMA, WIDE, SCALED> { eqs, reach: *reach, time_scale: self.time_scale };
         fixed_stages::<_, _, D, _>(&self.a, &self.plan, &self.c, 0, &mut self.k, &mut f, t, h, y);
         *reach = f.reach;
         fixed_update::<_, D>(&self.b, &self.k, self.scale, y, next);
@@ -808,7 +827,7 @@ where
         let n = D / 2;
         *next = *y;
         let mut accel = LaneAccelerations::<_, D, FMA, WIDE> {
-            f: LaneRhs { eqs, reach: *reach, time_scale: None },
+            f: LaneRhs::<_, D, FMA, WIDE, false> { eqs, reach: *reach, time_scale: None },
             full: [Lanes::splat(0.0); D],
             rates: [Lanes::splat(0.0); D],
         };
@@ -885,38 +904,59 @@ where
             v.0.copy_from_slice(&w.0[H * HALF..][..HALF]);
         }
         let (mut dq, mut dp) = ([zero; D], [zero; D]);
-        let mut r = *reach;
-        let mut gradient = |t: f64,
-                            a: &[L<FMA, WIDE>],
-                            b: &[L<FMA, WIDE>],
-                            dq: &mut [L<FMA, WIDE>],
-                            dp: &mut [L<FMA, WIDE>]| {
-            let t = Lanes::splat(t);
-            if !WIDE {
-                // The gradient's arguments laid out as a state (positions, then momenta in
-                // the velocities' place) for the equations' bound on their trigonometry.
-                let mut s = [zero; D];
-                s[..n].copy_from_slice(a);
-                s[n..2 * n].copy_from_slice(b);
-                r = eq.trig_reach(t, &s[..2 * n]).max(r);
-            }
-            eq.gradient(t, a, b, dq, dp);
-        };
+        let mut gradient = LaneGradient::<_, D, FMA, WIDE> { eq, n, reach: *reach };
         let (own, copy) = z.split_at_mut(D);
         let (q, p) = own[..2 * n].split_at_mut(n);
         let (x, y) = copy[..2 * n].split_at_mut(n);
         tao_step(&self.scheme, t, h, [q, p, x, y], &mut dq[..n], &mut dp[..n], &mut gradient);
-        *reach = r;
+        *reach = gradient.reach;
         for (v, w) in state.iter_mut().zip(&z) {
             v.0[H * HALF..][..HALF].copy_from_slice(&w.0);
         }
     }
 }
 
+/// Half a lane group's Hamiltonian gradient for [`tao_step`], from the equations' own
+/// ([`Canonical`]), tracking (when not `WIDE`) how far the sine and cosine arguments reach (not
+/// a closure: its method is kept in line, with the kernel's instruction set).
+struct LaneGradient<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
+    eq: &'a E,
+    n: usize,
+    reach: Lanes<HALF, FMA, WIDE>,
+}
+
+impl<E, const D: usize, const FMA: bool, const WIDE: bool>
+    crate::integrator::tao::Gradient<Lanes<HALF, FMA, WIDE>> for LaneGradient<'_, E, D, FMA, WIDE>
+where
+    E: Equations<Lanes<HALF, FMA, WIDE>> + Canonical<Lanes<HALF, FMA, WIDE>>,
+{
+    #[inline(always)]
+    fn gradient(
+        &mut self,
+        t: f64,
+        q: &[Lanes<HALF, FMA, WIDE>],
+        p: &[Lanes<HALF, FMA, WIDE>],
+        dq: &mut [Lanes<HALF, FMA, WIDE>],
+        dp: &mut [Lanes<HALF, FMA, WIDE>],
+    ) {
+        let t = Lanes::splat(t);
+        if !WIDE {
+            // The gradient's arguments laid out as a state (positions, then momenta in the
+            // velocities' place) for the equations' bound on their trigonometry.
+            let n = self.n;
+            let mut s = [Lanes::splat(0.0); D];
+            s[..n].copy_from_slice(q);
+            s[n..2 * n].copy_from_slice(p);
+            self.reach = self.eq.trig_reach(t, &s[..2 * n]).max(self.reach);
+        }
+        self.eq.gradient(t, q, p, dq, dp);
+    }
+}
+
 /// A lane group's accelerations for [`kick_drift`], from the equations' right-hand side (not
 /// a closure: its method is kept in line, with the kernel's instruction set).
 struct LaneAccelerations<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
-    f: LaneRhs<'a, E, D, FMA, WIDE>,
+    f: LaneRhs<'a, E, D, FMA, WIDE, false>,
     /// The equations' state: the positions, and velocities left at zero (the accelerations
     /// of a separable system do not depend on them).
     full: [Lanes<LANES, FMA, WIDE>; D],
@@ -991,7 +1031,7 @@ const HALF: usize = LANES / 2;
 
 /// The right-hand side of a lane group's stages, evaluated half a group at a time, tracking
 /// (when not `WIDE`) how far the sine and cosine arguments reach.
-struct LaneRhs<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
+struct LaneRhs<'a, E, const D: usize, const FMA: bool, const WIDE: bool, const SCALED: bool> {
     eqs: &'a [E; 2],
     reach: [Lanes<HALF, FMA, WIDE>; 2],
     /// Each lane's time unit, s per unit of the run's time (see [`Strobe`]: a stroboscopic
@@ -999,8 +1039,13 @@ struct LaneRhs<'a, E, const D: usize, const FMA: bool, const WIDE: bool> {
     time_scale: Option<[Lanes<HALF, FMA, WIDE>; 2]>,
 }
 
-impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, const WIDE: bool>
-    StageRhs<Lanes<LANES, FMA, WIDE>> for LaneRhs<'_, E, D, FMA, WIDE>
+impl<
+    E: Equations<Lanes<HALF, FMA, WIDE>>,
+    const D: usize,
+    const FMA: bool,
+    const WIDE: bool,
+    const SCALED: bool,
+> StageRhs<Lanes<LANES, FMA, WIDE>> for LaneRhs<'_, E, D, FMA, WIDE, SCALED>
 {
     #[inline(always)]
     fn eval(&mut self, t: f64, y: &[Lanes<LANES, FMA, WIDE>], dydt: &mut [Lanes<LANES, FMA, WIDE>]) {
@@ -1012,8 +1057,13 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
     }
 }
 
-impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, const WIDE: bool>
-    LaneRhs<'_, E, D, FMA, WIDE>
+impl<
+    E: Equations<Lanes<HALF, FMA, WIDE>>,
+    const D: usize,
+    const FMA: bool,
+    const WIDE: bool,
+    const SCALED: bool,
+> LaneRhs<'_, E, D, FMA, WIDE, SCALED>
 {
     #[inline(always)]
     fn half<const H: usize>(
@@ -1029,7 +1079,7 @@ impl<E: Equations<Lanes<HALF, FMA, WIDE>>, const D: usize, const FMA: bool, cons
         let eq = &self.eqs[H];
         // In a lane's own time unit s: y' = s f(s t, y) (a branch on a value fixed for the
         // run, always taken the same way).
-        let scale = self.time_scale.map(|s| s[H]);
+        let scale = if SCALED { self.time_scale.map(|s| s[H]) } else { None };
         let t = scale.map_or(t, |s| s * t);
         if !WIDE {
             self.reach[H] = eq.trig_reach(t, &yh).max(self.reach[H]);
@@ -1268,20 +1318,89 @@ struct OneLane<E, const FMA: bool> {
 
 impl<S: ?Sized, E: Equations<Lanes<1, FMA, true>>, const FMA: bool> Stepper<S> for OneLane<E, FMA> {
     fn step(&mut self, _: &S, t: f64, h: f64, y: &mut [f64]) -> Result<(), Error> {
-        let tab = self.tableau;
-        for (lane, v) in self.y.iter_mut().zip(y.iter()) {
-            *lane = Lanes([*v]);
-        }
-        let eq = &self.eq;
-        let mut f = |t: f64, y: &[Lanes<1, FMA, true>], dydt: &mut [Lanes<1, FMA, true>]| {
-            eq.rhs(Lanes([t]), y, dydt);
-        };
-        explicit_stages(tab.a, &self.plan, tab.c, 0, &mut self.k, &mut self.stage, &mut f, t, h, &self.y);
-        explicit_update(tab.b, &self.k, h / tab.denominator, &mut self.y);
-        for (v, lane) in y.iter_mut().zip(&self.y) {
-            *v = lane.0[0];
+        // Compiled for the CPU's instruction set, as the lanes' kernels are (without, each
+        // fused multiply-add would be a call into libm).
+        if FMA {
+            one_lane_fused(self, t, h, y);
+        } else {
+            one_lane_plain(self, t, h, y);
         }
         Ok(())
+    }
+}
+
+/// [`one_lane_step`] for the instruction sets with fused multiply-adds (see [`kernel_fused`]).
+#[cfg_attr(
+    not(debug_assertions),
+    multiversion::multiversion(targets(
+        "x86_64+avx512f+avx512dq+avx2+fma",
+        "x86_64+avx2+fma",
+        "aarch64+neon"
+    ))
+)]
+#[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
+fn one_lane_fused<E: Equations<Lanes<1, FMA, true>>, const FMA: bool>(
+    stepper: &mut OneLane<E, FMA>,
+    t: f64,
+    h: f64,
+    y: &mut [f64],
+) {
+    one_lane_step(stepper, t, h, y);
+}
+
+/// [`one_lane_step`] without fused multiply-adds (see [`kernel_plain`]).
+#[cfg_attr(not(debug_assertions), multiversion::multiversion(targets("x86_64+avx")))]
+fn one_lane_plain<E: Equations<Lanes<1, FMA, true>>, const FMA: bool>(
+    stepper: &mut OneLane<E, FMA>,
+    t: f64,
+    h: f64,
+    y: &mut [f64],
+) {
+    one_lane_step(stepper, t, h, y);
+}
+
+/// One explicit Runge–Kutta step on one lane: the integrators' own stages over the model's
+/// equations.
+#[inline(always)]
+fn one_lane_step<E: Equations<Lanes<1, FMA, true>>, const FMA: bool>(
+    stepper: &mut OneLane<E, FMA>,
+    t: f64,
+    h: f64,
+    y: &mut [f64],
+) {
+    let tab = stepper.tableau;
+    for (lane, v) in stepper.y.iter_mut().zip(y.iter()) {
+        *lane = Lanes([*v]);
+    }
+    let mut f = OneLaneRhs { eq: &stepper.eq };
+    explicit_stages(
+        tab.a,
+        &stepper.plan,
+        tab.c,
+        0,
+        &mut stepper.k,
+        &mut stepper.stage,
+        &mut f,
+        t,
+        h,
+        &stepper.y,
+    );
+    explicit_update(tab.b, &stepper.k, h / tab.denominator, &mut stepper.y);
+    for (v, lane) in y.iter_mut().zip(&stepper.y) {
+        *v = lane.0[0];
+    }
+}
+
+/// One lane's right-hand side for [`explicit_stages`] (not a closure: its method is kept in
+/// line, with the step's instruction set).
+struct OneLaneRhs<'a, E> {
+    eq: &'a E,
+}
+
+impl<E: Equations<Lanes<1, FMA, true>>, const FMA: bool> StageRhs<Lanes<1, FMA, true>> for OneLaneRhs<'_, E> {
+    #[inline(always)]
+    fn eval(&mut self, t: f64, y: &[Lanes<1, FMA, true>], dydt: &mut [Lanes<1, FMA, true>]) {
+        self.eq.rhs(Lanes([t]), y, dydt);
     }
 }
 

@@ -2,7 +2,8 @@
 //! method, kick–drift on separable systems, Tao's map on the non-separable ones — from the
 //! systems' own equations ([`crate::num::Lanes`]) and the integrators' own steps. This module
 //! is the double pendulum's typed front to it ([`Member`], [`run`]: the benchmarks' and the
-//! tests' form).
+//! tests' form), and [`rk4_trajectory`], one free double pendulum with RK4 in the engine's
+//! arithmetic and its energy from the step's trigonometry (the fast path of `simulate`, W1).
 //!
 //! Many members advance together, in lanes of [`LANES`] structure-of-arrays values that the
 //! compiler turns into SIMD (8 f64 per AVX-512 vector, 4 per AVX2), with branch-free sine and
@@ -19,10 +20,35 @@
 //! (branch-free) but its state stays at the step where the flip was seen. A non-finite state
 //! is an error naming the member and the time.
 
+/// `item`, a kernel function, compiled for every instruction set the single-trajectory kernel
+/// runs on and chosen at run time (`multiversion`); debug builds (the tests) for AVX2 with FMA
+/// and the portable fallback only: the same arithmetic, a fraction of the build time. (The
+/// engine's kernels split their targets by whether they fuse multiply-adds instead.)
+macro_rules! dispatched {
+    ($item:item) => {
+        #[cfg_attr(
+            not(debug_assertions),
+            multiversion::multiversion(targets(
+                "x86_64+avx512f+avx512dq+avx2+fma",
+                "x86_64+avx2+fma",
+                "x86_64+avx+fma",
+                "x86_64+avx",
+                "x86_64+sse4.1",
+                "aarch64+neon",
+            ))
+        )]
+        #[cfg_attr(debug_assertions, multiversion::multiversion(targets("x86_64+avx2+fma", "aarch64+neon")))]
+        $item
+    };
+}
+
 pub mod driven;
 pub mod engine;
+mod trajectory;
 
 pub use crate::num::trig;
+
+pub use trajectory::{rk4_trajectory, rk4_trajectory_resumable};
 
 use crate::Error;
 use crate::system::double::DoublePendulum;

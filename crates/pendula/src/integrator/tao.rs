@@ -146,7 +146,7 @@ impl Method {
 /// time-dependent H symmetric and of order 2.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the scheme, the step, the four halves, the scratch, the gradient
-pub fn tao_step<T: Num, G: FnMut(f64, &[T], &[T], &mut [T], &mut [T])>(
+pub fn tao_step<T: Num, G: Gradient<T>>(
     scheme: &TaoScheme,
     t: f64,
     h: f64,
@@ -165,7 +165,7 @@ pub fn tao_step<T: Num, G: FnMut(f64, &[T], &[T], &mut [T], &mut [T])>(
             match phase {
                 // H_A = H(q, y): p −= δ ∂H/∂q(q, y), x += δ ∂H/∂p(q, y).
                 0 | 4 => {
-                    gradient(tm, q, y, dq, dp);
+                    gradient.gradient(tm, q, y, dq, dp);
                     for (p, &g) in p.iter_mut().zip(dq.iter()) {
                         *p = *p - half * g;
                     }
@@ -175,7 +175,7 @@ pub fn tao_step<T: Num, G: FnMut(f64, &[T], &[T], &mut [T], &mut [T])>(
                 }
                 // H_B = H(x, p): q += δ ∂H/∂p(x, p), y −= δ ∂H/∂q(x, p).
                 1 | 3 => {
-                    gradient(tm, x, p, dq, dp);
+                    gradient.gradient(tm, x, p, dq, dp);
                     for (q, &g) in q.iter_mut().zip(dp.iter()) {
                         *q = *q + half * g;
                     }
@@ -201,6 +201,22 @@ pub fn tao_step<T: Num, G: FnMut(f64, &[T], &[T], &mut [T], &mut [T])>(
             }
         }
         ts += d;
+    }
+}
+
+/// The gradient [`tao_step`] evaluates: ∂H/∂q into `dq` and ∂H/∂p into `dp` at (t, q, p).
+/// Closures are gradients; a kernel compiled for an instruction set passes a type whose
+/// method is kept in line (a closure's body, compiled out of line, loses the kernel's target
+/// features: its fused multiply-adds become calls into libm).
+pub trait Gradient<T> {
+    /// Writes ∂H/∂q and ∂H/∂p at (t, q, p).
+    fn gradient(&mut self, t: f64, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]);
+}
+
+impl<T, F: FnMut(f64, &[T], &[T], &mut [T], &mut [T])> Gradient<T> for F {
+    #[inline(always)]
+    fn gradient(&mut self, t: f64, q: &[T], p: &[T], dq: &mut [T], dp: &mut [T]) {
+        self(t, q, p, dq, dp);
     }
 }
 
