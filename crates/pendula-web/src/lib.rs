@@ -508,7 +508,10 @@ pub(crate) fn hello(limits: &Limits) -> Value {
         .iter()
         .map(|m| json!({"name": m.name, "title": m.title, "order": m.order}))
         .collect();
-    let fractal_methods = pendula::analysis::fractal::methods();
+    // The fractal's default method first: the page's selector starts on it.
+    let default = pendula::study::defaults::FRACTAL.method.unwrap_or("rk4");
+    let mut fractal_methods = pendula::analysis::fractal::methods();
+    fractal_methods.sort_by_key(|m| *m != default);
     json!({
         "type": "hello",
         "version": env!("CARGO_PKG_VERSION"),

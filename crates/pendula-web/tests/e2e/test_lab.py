@@ -89,8 +89,9 @@ def test_the_race_shows_rk4_drifting_and_gauss_legendre_bounded_over_1000_s(lab,
     print(f"medians: rk4 {rk_early:.2e} -> {rk_late:.2e}; gauss-legendre-4 {gl_early:.2e} -> {gl_late:.2e}")
     assert rk_late > 2.5 * rk_early, "RK4's energy error grows"
     # A bounded error's medians move either way by a factor on the chaotic orbit, depending on
-    # the instants the frames sampled (a fresh-clone CI run measured 0.46); a drift's triple.
-    assert 0.2 < gl_late / gl_early < 2, "Gauss-Legendre's stays bounded"
+    # the instants the frames sampled (fresh-clone CI runs measured 0.46 and 2.17); a linear
+    # drift's ratio is 5 (the median of [500, 2000) against that of [0, 500)).
+    assert 0.2 < gl_late / gl_early < 3, "Gauss-Legendre's stays bounded"
     assert gl_late < rk_late / 100 < eu_late / 100, "and the order: Gauss-Legendre, RK4, Euler"
     lab.screenshot(path=str(shots / "race.png"))
 
