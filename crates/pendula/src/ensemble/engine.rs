@@ -195,10 +195,11 @@ pub fn supports(info: &SystemInfo, method: &LaneMethod) -> bool {
 /// [`MAX_DIM`] values (the chain up to 4 links).
 pub const TAO_MAX_DIM: usize = MAX_DIM / 2;
 
-/// The padded dimension of a Tao kernel for states of `dim` variables (its copy starts
-/// there).
-const fn tao_padded(dim: usize) -> usize {
-    if dim <= 4 { 4 } else { TAO_MAX_DIM }
+/// The padded dimension of the Tao kernel of a system whose [`Model::DIM`] is `model_dim`
+/// (its copy starts there): 4 for the double pendulum, the largest, [`TAO_MAX_DIM`], for a
+/// family's members (the chain's: one kernel for every link count that fits).
+const fn tao_padded(model_dim: usize) -> usize {
+    if model_dim <= 4 { 4 } else { TAO_MAX_DIM }
 }
 
 /// The state dimension the kick–drift kernels are compiled for.
@@ -334,8 +335,10 @@ pub(crate) struct StrobeGroup<'a> {
 /// parallel on rayon's pool; results do not depend on the pool's size.
 ///
 /// # Errors
-/// [`Error::NonFiniteMember`] for the first member (in index order) whose state became
-/// non-finite, with the time; [`Error::Interrupted`] when `strobe.cancel` was set.
+/// [`Error::UnmetRequirement`] for a system with no drive of more than two degrees of
+/// freedom (a family: the chain); [`Error::NonFiniteMember`] for the first member (in index
+/// order) whose state became non-finite, with the time; [`Error::Interrupted`] when
+/// `strobe.cancel` was set.
 ///
 /// # Panics
 /// If `out` does not hold count × samples × dim values, or the tableau is not one the engine
@@ -347,6 +350,16 @@ pub fn stroboscopic<M: Model>(
     strobe: &Strobe<'_>,
     out: &mut [f64],
 ) -> Result<(), Error> {
+    // Stroboscopic kernels are compiled for the driven systems' states alone (the build
+    // time): no family (the chain) has a drive.
+    if M::DIM > 4 {
+        return Err(Error::UnmetRequirement {
+            method: "stroboscopic",
+            needs: "a driven system",
+            reason: format!("{} has no drive", info.name),
+            suggestion: "a driven system: the driven pendulum, oscillator or double pendulum".into(),
+        });
+    }
     let dim = info.state.len();
     let per_member = strobe.samples * dim;
     assert_eq!(out.len(), count * per_member, "count × samples × dim values");
@@ -444,7 +457,7 @@ pub(crate) fn run_group<M: Model>(
             model.to_momenta(y, &mut z[..dim]);
             for (k, &v) in z[..dim].iter().enumerate() {
                 start[k][i] = v;
-                start[tao_padded(dim) + k][i] = v;
+                start[tao_padded(M::DIM) + k][i] = v;
             }
         } else {
             for (k, &v) in y.iter().enumerate() {
@@ -503,10 +516,9 @@ pub(crate) fn run_group<M: Model>(
                     if const { M::DIM == 4 } {
                         tao!($fma, $wide, 4, 8, scheme)
                     } else if const { M::DIM > 4 } {
-                        match tao_padded(dim) {
-                            4 => tao!($fma, $wide, 4, 8, scheme),
-                            _ => tao!($fma, $wide, 8, 16, scheme),
-                        }
+                        // A family's members padded to the largest (one kernel, not one per
+                        // padded size: the build time).
+                        tao!($fma, $wide, TAO_MAX_DIM, MAX_DIM, scheme)
                     } else {
                         unreachable!("Tao's lanes on {} variables", M::DIM)
                     }
@@ -562,28 +574,36 @@ pub(crate) fn run_group<M: Model>(
             } else if const { M::DIM == 4 } {
                 by_stages!($fma, $wide, 4, stages, $scaled)
             } else {
-                // A family (the chain): its members' dimensions, padded to 4, 8 or 16
-                // variables (the padding stays zero: the chain's equations read and write its
-                // first 2n).
-                match dim {
-                    ..=4 => by_stages!($fma, $wide, 4, stages, $scaled),
-                    ..=8 => by_stages!($fma, $wide, 8, stages, $scaled),
-                    _ => by_stages!($fma, $wide, 16, stages, $scaled),
-                }
+                family!($fma, $wide, stages, $scaled)
             }
         }};
+    }
+    // A family (the chain): its members' dimensions, padded to 4, 8 or 16 variables (the
+    // padding stays zero: the chain's equations read and write its first 2n). No family is
+    // driven, so none has stroboscopic kernels (`stroboscopic` refuses it first).
+    macro_rules! family {
+        ($fma:tt, $wide:tt, $stages:expr, false) => {
+            match dim {
+                ..=4 => by_stages!($fma, $wide, 4, $stages, false),
+                ..=8 => by_stages!($fma, $wide, 8, $stages, false),
+                _ => by_stages!($fma, $wide, 16, $stages, false),
+            }
+        };
+        ($fma:tt, $wide:tt, $stages:expr, true) => {
+            unreachable!("stroboscopic lanes on {}", info.name)
+        };
     }
     // The fast trigonometry alone; if some lane's arguments went beyond its range (the
     // record is then as it was), again with the exact reduction for those arguments.
     let fma = has_fma();
     macro_rules! advance {
         () => {{
-            let done = if fma { go!(true, false) } else { go!(false, false) };
+            let done = if fma { go!(true, false) } else { super::plain!(go!(false, false)) };
             if !done {
                 if fma {
                     go!(true, true);
                 } else {
-                    go!(false, true);
+                    super::plain!(go!(false, true));
                 }
             }
         }};
@@ -1125,6 +1145,7 @@ where
 /// [`kernel`] without fused multiply-adds, for CPUs without them (AVX, or the portable
 /// fallback).
 #[cfg_attr(not(debug_assertions), multiversion::multiversion(targets("x86_64+avx")))]
+#[cfg_attr(debug_assertions, allow(dead_code))] // debug builds fuse (`has_fma`)
 pub(crate) fn kernel_plain<St, const W: usize, const WIDE: bool>(
     eqs: &St::Equations,
     step: &St,
@@ -1656,6 +1677,6 @@ pub fn solve_one_resumable<M: Model>(
     if fma {
         go::<M, true>(model, method, y0, spec, observer, from, pause)
     } else {
-        go::<M, false>(model, method, y0, spec, observer, from, pause)
+        super::plain!(go::<M, false>(model, method, y0, spec, observer, from, pause))
     }
 }

@@ -107,11 +107,16 @@ pub fn run(members: &[Member], spec: &LaneSpec<'_>, out: &mut [MemberResult]) ->
     engine::run::<DoublePendulum, _>(DoublePendulum::INFO, members.len(), &values, spec, out, 1, &store)
 }
 
-/// Whether this CPU has fused multiply-add instructions (then the trigonometric polynomials
-/// use them: faster, and as accurate, but rounded differently from the plain kernel), so
-/// that results computed in parts — a checkpoint continued later — are bit-identical only
-/// on CPUs that answer the same.
+/// Whether the engine's arithmetic fuses multiply-adds (then the trigonometric polynomials
+/// use them: faster, and as accurate, but rounded differently from the plain kernels): where
+/// the CPU has fused multiply-add instructions, and always in debug builds (the tests), which
+/// compile the fused kernels alone — on a CPU without the instructions they run
+/// `f64::mul_add` in software, correctly rounded, so with the same bits. Results computed in
+/// parts (a checkpoint continued later) are bit-identical only where this answers the same.
 pub fn has_fma() -> bool {
+    if cfg!(debug_assertions) {
+        return true;
+    }
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("fma")
@@ -125,3 +130,20 @@ pub fn has_fma() -> bool {
         false
     }
 }
+
+/// `$e`, a run of the plain (unfused) kernels, in release builds; unreachable in debug builds,
+/// which fuse multiply-adds everywhere ([`has_fma`]) and so do not compile the plain kernels
+/// (a third of the library's build time in the tests).
+#[cfg(not(debug_assertions))]
+macro_rules! plain {
+    ($e:expr) => {
+        $e
+    };
+}
+#[cfg(debug_assertions)]
+macro_rules! plain {
+    ($e:expr) => {
+        unreachable!("debug builds fuse multiply-adds (ensemble::has_fma)")
+    };
+}
+pub(crate) use plain;

@@ -100,9 +100,13 @@ pub fn rk4_trajectory_resumable(
     let mut pausing = Pausing::new(observer, pause);
     let (steps, outcome) = match (fma, pause.never()) {
         (true, true) => trajectory_kernel::<true, _>(p, &mut y, spec, &schedule, done, pausing.inner())?,
-        (false, true) => trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, pausing.inner())?,
+        (false, true) => {
+            super::plain!(trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, pausing.inner())?)
+        }
         (true, false) => trajectory_kernel::<true, _>(p, &mut y, spec, &schedule, done, &mut pausing)?,
-        (false, false) => trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, &mut pausing)?,
+        (false, false) => {
+            super::plain!(trajectory_kernel::<false, _>(p, &mut y, spec, &schedule, done, &mut pausing)?)
+        }
     };
     Ok(match (!pausing.paused).then_some(outcome) {
         Some(outcome) => Leg::Done(Report {
