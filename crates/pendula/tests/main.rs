@@ -36,6 +36,7 @@ mod poincare;
 mod scales;
 mod schedule;
 mod special;
+mod study;
 mod support;
 mod symplectic;
 mod trig;

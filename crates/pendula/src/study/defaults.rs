@@ -210,22 +210,3 @@ pub const ANIMATE: Defaults = Defaults {
 
 /// Every study's defaults, in the CLI's order.
 pub static ALL: &[&Defaults] = &[&SIMULATE, &COMPARE, &ANIMATE, &FRACTAL, &SWEEP];
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn each_study_names_each_default_once_and_a_known_system_and_method() {
-        for d in ALL {
-            crate::model::find(d.system).unwrap();
-            if let Some(m) = d.method {
-                crate::integrator::find(m).unwrap();
-            }
-            for (i, v) in d.values.iter().enumerate() {
-                assert!(!d.values[..i].iter().any(|w| w.name == v.name), "{}: {} twice", d.study, v.name);
-            }
-        }
-        assert_eq!(Value::Number(1e-9).to_string(), "1e-9");
-    }
-}

@@ -199,33 +199,3 @@ fn run(inputs: &Inputs, budget: &Budget) -> Result<Report, Error> {
         plots: vec![plot],
     })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The damped oscillator is linear: the separation of two solutions is itself a solution,
-    /// whose envelope decays as e^(−c t / 2m), a fitted rate of −c/2m = −0.1 /s (closed form).
-    #[test]
-    fn a_linear_separation_decays_at_the_damping_rate() {
-        let inputs = Inputs::default()
-            .name("system", "oscillator")
-            .set("c", 0.2)
-            .number("delta", 1e-3)
-            .number("t_end", 60.0)
-            .number("saturation", 1.0);
-        let report = (STUDY.run)(&inputs, &Budget::UNLIMITED).unwrap();
-        let rate = report.number("growth_rate").unwrap();
-        assert!((rate + 0.1).abs() < 0.005, "{rate}");
-    }
-
-    #[test]
-    fn bad_inputs_name_the_value() {
-        let run = |inputs: Inputs| (STUDY.run)(&inputs, &Budget::UNLIMITED).unwrap_err().to_string();
-        assert!(run(Inputs::default().number("delta", 0.0)).contains("`delta`: a finite separation, not 0"));
-        assert!(run(Inputs::default().number("saturation", 1e-12)).contains("`saturation`"));
-        assert!(run(Inputs::default().name("variable", "phi")).contains("phi"));
-        assert!(run(Inputs::default().number("fit_from", 0.1)).contains("smaller than saturation"));
-        assert!(run(Inputs::default().set("theta1", 1e12)).contains("lost in rounding"));
-    }
-}

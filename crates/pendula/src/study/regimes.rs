@@ -334,36 +334,3 @@ impl HarmonicFit {
         ((xc * ss - xs * cs) / det, (xs * cc - xc * cs) / det)
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The resonance peak is where d/dΩ of 1/√((1 − r²)² + (2ζr)²) vanishes: r = √(1 − 2ζ²),
-    /// with X k/F = 1/(2ζ√(1 − ζ²)) (closed forms, independent of the code).
-    #[test]
-    fn peaks_are_the_closed_form_and_the_simulation_agrees() {
-        let report = (STUDY.run)(&Inputs::default(), &Budget::UNLIMITED).unwrap();
-        let peaks = report.table("peaks").unwrap();
-        for i in 0..peaks.rows() {
-            let zeta = peaks.column("zeta").unwrap().as_numbers()[i];
-            let ratio = peaks.column("drive_ratio").unwrap().as_numbers()[i];
-            assert!((ratio - (1.0 - 2.0 * zeta * zeta).sqrt()).abs() < 1e-12, "{zeta}");
-            let amplitude = 1.0 / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
-            let exact = peaks.column("amplitude_exact").unwrap().as_numbers()[i];
-            let simulated = peaks.column("amplitude_simulated").unwrap().as_numbers()[i];
-            assert!((exact / amplitude - 1.0).abs() < 1e-12 && (simulated / amplitude - 1.0).abs() < 1e-6);
-        }
-        assert!(report.number("max_rel_amplitude_error").unwrap() < 1e-6);
-        assert!(report.number("max_decay_error").unwrap() < 1e-6);
-    }
-
-    #[test]
-    fn its_own_settings_and_unresolved_oscillators_are_refused() {
-        let run = |inputs: Inputs| (STUDY.run)(&inputs, &Budget::UNLIMITED).unwrap_err().to_string();
-        let e = run(Inputs::default().set("c", 1.0));
-        assert!(e.contains("`c`") && e.contains("set k and m only"), "{e}");
-        let e = run(Inputs::default().set("m", 1e-6));
-        assert!(e.contains("w0 = sqrt(k/m) = 1000 rad/s") && e.contains("meaningless"), "{e}");
-    }
-}
