@@ -45,7 +45,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pendula::checkpoint::{Leg, Pause};
 use pendula::control::Tolerances;
-use pendula::ensemble::engine::{LaneOutcome, LaneSpec};
+use pendula::ensemble::engine::{self, LaneOutcome, LaneSpec, Members};
 use pendula::events::{EndAtEvent, EventLocator, EventSpec};
 use pendula::integrator::{self, Method};
 use pendula::model::{CATALOGUE, DynModel, EnsemblePath, ensemble_path};
@@ -887,6 +887,7 @@ fn ensemble<'py>(
                 }
                 done.fetch_add(1, Ordering::Relaxed);
             };
+            let members = Members { info, count: m, values: &member };
             match path {
                 EnsemblePath::Engine(lanes) => {
                     let spec = LaneSpec {
@@ -899,7 +900,7 @@ fn ensemble<'py>(
                     };
                     let store =
                         |i: usize, o: &LaneOutcome, row: &mut [f64]| write(i, &o.state, o.flip_time, row);
-                    model.ensemble(info, m, &member, &spec, &mut data, cols, &store)
+                    model.ensemble(&members, &spec, engine::Rows { out: &mut data, len: cols, store: &store })
                 }
                 EnsemblePath::Scalar => {
                     // One scalar run per member, as a sweep's scalar cells run.
@@ -910,14 +911,12 @@ fn ensemble<'py>(
                         stop_at_flip: until_flip,
                         cancel: Some(flag),
                     };
+                    let store =
+                        |i: usize, state: &[f64], flip: f64, row: &mut [f64]| write(i, state, flip, row);
                     pendula::sweep::run_scalar(
-                        info,
-                        m,
-                        &member,
+                        &members,
                         &spec,
-                        &mut data,
-                        cols,
-                        &|i, state, flip, row: &mut [f64]| write(i, state, flip, row),
+                        engine::Rows { out: &mut data, len: cols, store: &store },
                     )
                     .map_err(|e| e.into_error())
                 }

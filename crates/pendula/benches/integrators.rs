@@ -17,7 +17,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use ode_solvers::dop_shared::OutputType;
 use ode_solvers::{Dop853, Rk4, System as OdeSystem, Vector4};
 use pendula::control::Tolerances;
-use pendula::ensemble::engine::{LaneMethod, LaneSpec};
+use pendula::ensemble::engine::{LaneMethod, LaneOutcome, LaneSpec, Members, Rows};
 use pendula::ensemble::{self, Member, MemberResult};
 use pendula::integrator::embedded::DOP853;
 use pendula::integrator::explicit_rk::RK4;
@@ -182,11 +182,10 @@ fn benches(c: &mut Criterion) {
         group.bench_function("lanes", |b| {
             b.iter(|| {
                 pool.install(|| {
-                    model
-                        .ensemble(info, count, &member, &lanes, &mut out, dim, &|_, o, row: &mut [f64]| {
-                            row.copy_from_slice(&o.state[..dim])
-                        })
-                        .unwrap()
+                    let store =
+                        |_: usize, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..dim]);
+                    let members = Members { info, count, values: &member };
+                    model.ensemble(&members, &lanes, Rows { out: &mut out, len: dim, store: &store }).unwrap()
                 })
             })
         });

@@ -21,7 +21,7 @@ use std::ops::Deref;
 use crate::Error;
 use crate::checkpoint::{Leg, Pause, RunState};
 use crate::control::Tolerances;
-use crate::ensemble::engine::{self, LaneMethod, LaneOutcome, LaneSpec};
+use crate::ensemble::engine::{self, LaneMethod, LaneSpec, Members, Rows, StoreLane};
 use crate::integrator::{Method, Scheme};
 use crate::observe::Observer;
 use crate::simulate::{Report, RunSpec, Stepping};
@@ -238,33 +238,25 @@ pub trait DynModel: DynSystem {
     /// # Errors
     /// As [`crate::simulate::check`].
     fn check(&self, method: &Method) -> Result<(), Error>;
-    /// Runs `count` members of this system (built from the entry `info`, for the chain with
-    /// its links) on the ensemble engine: see [`crate::ensemble::engine::run`]. `out` holds
-    /// `row_len` values per member.
+    /// Runs `members` of this system (of its entry, for the chain with its links) on the
+    /// ensemble engine into `rows`: see [`crate::ensemble::engine::run`].
     ///
     /// # Errors
     /// As [`crate::ensemble::engine::run`].
-    #[allow(clippy::too_many_arguments)] // the run, its members and where the results go
     fn ensemble(
         &self,
-        info: &'static SystemInfo,
-        count: usize,
-        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        members: &Members<'_>,
         spec: &LaneSpec,
-        out: &mut [f64],
-        row_len: usize,
-        store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
+        rows: Rows<'_, f64, StoreLane<'_, f64>>,
     ) -> Result<(), Error>;
-    /// Samples `count` members of this system (built from the entry `info`) once per drive
-    /// period on the ensemble engine: see [`crate::ensemble::engine::stroboscopic`].
+    /// Samples `members` of this system once per drive period on the ensemble engine: see
+    /// [`crate::ensemble::engine::stroboscopic`].
     ///
     /// # Errors
     /// As [`crate::ensemble::engine::stroboscopic`].
     fn stroboscopic(
         &self,
-        info: &'static SystemInfo,
-        count: usize,
-        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        members: &Members<'_>,
         strobe: &engine::Strobe<'_>,
         out: &mut [f64],
     ) -> Result<(), Error>;
@@ -368,25 +360,19 @@ impl<M: Model> DynModel for M {
     }
     fn ensemble(
         &self,
-        info: &'static SystemInfo,
-        count: usize,
-        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        members: &Members<'_>,
         spec: &LaneSpec,
-        out: &mut [f64],
-        row_len: usize,
-        store: &(dyn Fn(usize, &LaneOutcome, &mut [f64]) + Sync),
+        rows: Rows<'_, f64, StoreLane<'_, f64>>,
     ) -> Result<(), Error> {
-        engine::run::<M, f64>(info, count, member, spec, out, row_len, store)
+        engine::run::<M, f64>(members, spec, rows)
     }
     fn stroboscopic(
         &self,
-        info: &'static SystemInfo,
-        count: usize,
-        member: &(dyn Fn(usize, &mut [f64]) + Sync),
+        members: &Members<'_>,
         strobe: &engine::Strobe<'_>,
         out: &mut [f64],
     ) -> Result<(), Error> {
-        engine::stroboscopic::<M>(info, count, member, strobe, out)
+        engine::stroboscopic::<M>(members, strobe, out)
     }
     fn solve_lane(
         &self,

@@ -26,7 +26,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
-use crate::ensemble::engine::{LaneOutcome, LaneSpec};
+use crate::ensemble::engine::{LaneOutcome, LaneSpec, Members, Rows};
 use crate::integrator::{Method, Scheme};
 use crate::model::EnsemblePath;
 use crate::observe::{Flow, Observer, Sample, Stop};
@@ -449,18 +449,22 @@ impl Sweep {
         };
         let (h, steps, until_flip) = (self.spec.h, self.spec.steps, self.spec.until_flip);
         let track_flips = self.spec.records.contains(&Record::FlipTime);
+        let members = Members { info, count, values: &fill };
         match self.path() {
             EnsemblePath::Engine(method) => {
                 let spec = LaneSpec { method, h, steps, stop_at_flip: until_flip, track_flips, cancel };
                 let store = |i: usize, o: &LaneOutcome, row: &mut [f64]| {
                     store_row(i, &o.state[..info.state.len()], o.flip_time, row)
                 };
-                first.build().ensemble(info, count, &fill, &spec, out, cols, &store).map_err(lanes_error)
+                first
+                    .build()
+                    .ensemble(&members, &spec, Rows { out, len: cols, store: &store })
+                    .map_err(lanes_error)
             }
             EnsemblePath::Scalar => {
                 let spec =
                     ScalarSpec { method: self.spec.method, h, steps, stop_at_flip: until_flip, cancel };
-                run_scalar(info, count, &fill, &spec, out, cols, &store_row)
+                run_scalar(&members, &spec, Rows { out, len: cols, store: &store_row })
                     .map_err(|e| CellError { cell: e.cell.map(|c| start + c), error: e.error })
             }
         }
@@ -515,25 +519,22 @@ pub struct ScalarSpec<'a> {
     pub cancel: Option<&'a AtomicBool>,
 }
 
-/// Runs `count` members of `info` one scalar run each, in parallel on rayon's current
-/// pool: member i's values (every quantity, in the catalogue's order) written by
-/// `member(i, values)`, its final state and first flip time (s, NaN if none: where the cubic
-/// Hermite interpolant of an angle passes ±π within the step, as on the lanes) stored by `store(i, state, flip_time, row)` into
-/// row i of `out` (rows of `row_len`). The ensemble's scalar path, for methods without lanes.
+/// Runs the `members` one scalar run each, in parallel on rayon's current pool: member i's
+/// final state and first flip time (s, NaN if none: where the cubic Hermite interpolant of
+/// an angle passes ±π within the step, as on the lanes) stored by `rows.store(i, state,
+/// flip_time, row)` into its row. The ensemble's scalar path, for methods without lanes.
 ///
 /// # Errors
 /// A failing member's (the first to fail, not always the lowest index): its values out of their
 /// domains, the method's requirement unmet, a non-finite state ([`Error::NonFinite`]), an
 /// implicit step that did not converge; [`Error::Interrupted`].
 pub fn run_scalar(
-    info: &'static SystemInfo,
-    count: usize,
-    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    members: &Members<'_>,
     spec: &ScalarSpec<'_>,
-    out: &mut [f64],
-    row_len: usize,
-    store: &StoreValues<'_, f64>,
+    rows: Rows<'_, f64, StoreValues<'_, f64>>,
 ) -> Result<(), CellError> {
+    let Members { info, count, values: member } = *members;
+    let Rows { out, len: row_len, store } = rows;
     let angles: Vec<usize> =
         info.state.iter().enumerate().filter(|(_, q)| q.is_angle()).map(|(i, _)| i).collect();
     let run = RunSpec { t0: 0.0, h: spec.h, end: End::Steps(spec.steps) };

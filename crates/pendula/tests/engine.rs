@@ -5,10 +5,10 @@
 //! and agree with the reference arithmetic (`solve`: glibc's sine and cosine, no fused
 //! operations; for the partitioned methods the (q, p) steppers) to rounding.
 
-use pendula::ensemble::engine::{LaneMethod, LaneOutcome, LaneSpec};
+use pendula::ensemble::engine::{LaneMethod, LaneOutcome, LaneSpec, Members, Rows};
 use pendula::integrator::explicit_rk::Tableau;
 use pendula::integrator::{self, Method, Requirement, Scheme};
-use pendula::model::{CATALOGUE, lane_method};
+use pendula::model::{CATALOGUE, DynModel, lane_method};
 use pendula::observe::Ignore;
 use pendula::system::Values;
 use pendula::{End, RunSpec};
@@ -57,6 +57,60 @@ fn variants() -> Vec<Values> {
     all
 }
 
+/// Runs the members `all` (each one's values: parameters, then state) of `model`'s system on
+/// the lanes: their final states, one row of the state's size each.
+fn run_members(model: &dyn DynModel, all: &[Vec<f64>], spec: &LaneSpec) -> Result<Vec<f64>, pendula::Error> {
+    let info = model.info();
+    let dim = info.state.len();
+    let mut out = vec![0.0; all.len() * dim];
+    let values = |i: usize, v: &mut [f64]| v.copy_from_slice(&all[i]);
+    let store = |_: usize, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..dim]);
+    let members = Members { info, count: all.len(), values: &values };
+    model.ensemble(&members, spec, Rows { out: &mut out, len: dim, store: &store })?;
+    Ok(out)
+}
+
+/// Checks that each member's row of `out` (`all` run on the lanes by `spec`) is, bit for bit,
+/// what the member gets alone in one lane (`solve_lane`, through the scalar run loop, with as
+/// many evaluations), and within `tol` (relative to the state's largest value) of `method` in
+/// the reference arithmetic (`solve`: glibc's sine and cosine, no fused operations; for the
+/// partitioned methods and Tao's map, the (q, p) steppers).
+fn assert_each_lane_is_one_lane(
+    info: &'static pendula::system::SystemInfo,
+    all: &[Vec<f64>],
+    out: &[f64],
+    spec: &LaneSpec,
+    method: &Method,
+    tol: f64,
+) {
+    let (dim, np) = (info.state.len(), info.parameters.len());
+    for (i, m) in all.iter().enumerate() {
+        let settings: Vec<(String, f64)> =
+            info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
+        let one = info.values(&settings).unwrap().build();
+        let run = RunSpec { t0: 0.0, h: spec.h, end: End::Steps(spec.steps) };
+        let alone = one.solve_lane(spec.method, &m[np..], &run, &mut Ignore).unwrap();
+        let lane = &out[i * dim..(i + 1) * dim];
+        assert!(
+            lane.iter().zip(&alone.state).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{} {} member {i}: lane {lane:?}, alone {:?}",
+            info.name,
+            method.name,
+            alone.state
+        );
+        let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap();
+        let scale = reference.state.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+        let diff = max_diff(lane, &reference.state);
+        assert!(
+            diff <= tol * scale,
+            "{} {} member {i}: {diff} from the reference arithmetic",
+            info.name,
+            method.name
+        );
+        assert_eq!(alone.rhs_evals, reference.rhs_evals, "{} {}", info.name, method.name);
+    }
+}
+
 /// `count` members around `base`: every state variable and every real parameter moved a
 /// little, differently per member (so that lanes differ in every input); with `keep_zeros`,
 /// quantities that are zero in `base` (a damping, a drive left off) stay zero.
@@ -90,8 +144,6 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
     let mut checked = Vec::new();
     for base in variants() {
         let info = base.info();
-        let dim = info.state.len();
-        let np = info.parameters.len();
         // 37 members: two full lane groups and a padded one.
         let all = members(&base, 37, false);
         // The catalogue's explicit methods (1 and 4 stages) and the test tableaus of 2 and 3:
@@ -104,44 +156,8 @@ fn a_sweep_of_every_system_is_each_member_alone_bit_for_bit() {
             let (h, steps) = if info.dimensionless { (0.05, 400) } else { (2e-3, 400) };
             let spec =
                 LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
-            let mut out = vec![0.0; all.len() * dim];
-            model
-                .ensemble(
-                    info,
-                    all.len(),
-                    &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
-                    &spec,
-                    &mut out,
-                    dim,
-                    &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..row.len()]),
-                )
-                .unwrap();
-            for (i, m) in all.iter().enumerate() {
-                let settings: Vec<(String, f64)> =
-                    info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
-                let member = info.values(&settings).unwrap();
-                let one = member.build();
-                let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
-                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap().state;
-                let lane = &out[i * dim..(i + 1) * dim];
-                assert!(
-                    lane.iter().zip(&alone).all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "{} {} member {i}: lane {lane:?}, alone {alone:?}",
-                    info.name,
-                    method.name
-                );
-                // The reference arithmetic: the same method, rounding apart (the polynomial
-                // sine and cosine are within 2 ulp of glibc's; fused multiply-adds round once).
-                let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap().state;
-                let scale = reference.iter().fold(1.0f64, |s, v| s.max(v.abs()));
-                assert!(
-                    max_diff(lane, &reference) <= 1e-9 * scale,
-                    "{} {} member {i}: {} from the reference arithmetic",
-                    info.name,
-                    method.name,
-                    max_diff(lane, &reference)
-                );
-            }
+            let out = run_members(&*model, &all, &spec).unwrap();
+            assert_each_lane_is_one_lane(info, &all, &out, &spec, method, 1e-9);
             checked.push(format!("{} {}", info.name, method.name));
         }
     }
@@ -176,19 +192,7 @@ fn a_member_that_blows_up_is_named() {
         track_flips: false,
         cancel: None,
     };
-    let mut out = vec![0.0; all.len() * 2];
-    let err = base
-        .build()
-        .ensemble(
-            info,
-            all.len(),
-            &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
-            &spec,
-            &mut out,
-            2,
-            &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..2]),
-        )
-        .unwrap_err();
+    let err = run_members(&*base.build(), &all, &spec).unwrap_err();
     match err {
         pendula::Error::NonFiniteMember { member, t } => {
             assert_eq!(member, 13);
@@ -218,8 +222,6 @@ fn kick_drift_lanes_run_every_separable_system_bit_for_bit() {
     let mut checked = Vec::new();
     for base in &separable {
         let info = base.info();
-        let dim = info.state.len();
-        let np = info.parameters.len();
         let all = members(base, 37, true);
         let model = base.build();
         for &method in &partitioned {
@@ -228,45 +230,8 @@ fn kick_drift_lanes_run_every_separable_system_bit_for_bit() {
             let (h, steps) = (2e-3, 400);
             let spec =
                 LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
-            let mut out = vec![0.0; all.len() * dim];
-            model
-                .ensemble(
-                    info,
-                    all.len(),
-                    &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
-                    &spec,
-                    &mut out,
-                    dim,
-                    &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..row.len()]),
-                )
-                .unwrap();
-            for (i, m) in all.iter().enumerate() {
-                let settings: Vec<(String, f64)> =
-                    info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
-                let one = info.values(&settings).unwrap().build();
-                let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
-                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap();
-                let lane = &out[i * dim..(i + 1) * dim];
-                assert!(
-                    lane.iter().zip(&alone.state).all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "{} {} member {i}: lane {lane:?}, alone {:?}",
-                    info.name,
-                    method.name,
-                    alone.state
-                );
-                // The (q, p) stepper: the same map in momenta, glibc's sine, no fused
-                // operations, and as many evaluations of the forces.
-                let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap();
-                let scale = reference.state.iter().fold(1.0f64, |s, v| s.max(v.abs()));
-                let diff = max_diff(lane, &reference.state);
-                assert!(
-                    diff <= 1e-10 * scale,
-                    "{} {} member {i}: {diff} from the (q, p) stepper",
-                    info.name,
-                    method.name
-                );
-                assert_eq!(alone.rhs_evals, reference.rhs_evals, "{} {}", info.name, method.name);
-            }
+            let out = run_members(&*model, &all, &spec).unwrap();
+            assert_each_lane_is_one_lane(info, &all, &out, &spec, method, 1e-10);
             checked.push(method.name);
         }
     }
@@ -305,19 +270,7 @@ fn a_damped_member_of_a_kick_drift_ensemble_is_named() {
         track_flips: false,
         cancel: None,
     };
-    let mut out = vec![f64::NAN; all.len() * 2];
-    let err = base
-        .build()
-        .ensemble(
-            info,
-            all.len(),
-            &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
-            &spec,
-            &mut out,
-            2,
-            &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..2]),
-        )
-        .unwrap_err();
+    let err = run_members(&*base.build(), &all, &spec).unwrap_err();
     match &err {
         pendula::Error::UnmetRequirement { method, reason, .. } => {
             assert_eq!(*method, "verlet");
@@ -376,7 +329,9 @@ fn a_sweeps_flip_times_are_the_same_on_lanes_and_on_the_scalar_path() {
             cancel: None,
         };
         let mut scalar = vec![0.0; cells];
-        run_scalar(info, cells, &fill, &spec, &mut scalar, 1, &|_, _, flip, row| row[0] = flip).unwrap();
+        let store = |_: usize, _: &[f64], flip: f64, row: &mut [f64]| row[0] = flip;
+        let members = Members { info, count: cells, values: &fill };
+        run_scalar(&members, &spec, Rows { out: &mut scalar, len: 1, store: &store }).unwrap();
         let mut flips = 0;
         for (i, (a, b)) in lanes.iter().zip(&scalar).enumerate() {
             assert_eq!(a.is_nan(), b.is_nan(), "{system} cell {i}: lanes {a}, scalar {b}");
@@ -410,8 +365,6 @@ fn tao_lanes_run_every_non_separable_system_bit_for_bit() {
     let mut checked = 0;
     for base in &systems {
         let info = base.info();
-        let dim = info.state.len();
-        let np = info.parameters.len();
         let all = members(base, 37, true);
         let model = base.build();
         for &method in &tao {
@@ -420,43 +373,8 @@ fn tao_lanes_run_every_non_separable_system_bit_for_bit() {
             let (h, steps) = (2e-3, 400);
             let spec =
                 LaneSpec { method: lanes, h, steps, stop_at_flip: false, track_flips: false, cancel: None };
-            let mut out = vec![0.0; all.len() * dim];
-            model
-                .ensemble(
-                    info,
-                    all.len(),
-                    &|i, v: &mut [f64]| v.copy_from_slice(&all[i]),
-                    &spec,
-                    &mut out,
-                    dim,
-                    &|_, o: &LaneOutcome, row: &mut [f64]| row.copy_from_slice(&o.state[..row.len()]),
-                )
-                .unwrap();
-            for (i, m) in all.iter().enumerate() {
-                let settings: Vec<(String, f64)> =
-                    info.quantities().map(|q| q.name.to_owned()).zip(m.iter().copied()).collect();
-                let one = info.values(&settings).unwrap().build();
-                let run = RunSpec { t0: 0.0, h, end: End::Steps(steps) };
-                let alone = one.solve_lane(lanes, &m[np..], &run, &mut Ignore).unwrap();
-                let lane = &out[i * dim..(i + 1) * dim];
-                assert!(
-                    lane.iter().zip(&alone.state).all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "{} {} member {i}: lane {lane:?}, alone {:?}",
-                    info.name,
-                    method.name,
-                    alone.state
-                );
-                let reference = one.solve(method, &m[np..], &run, &mut Ignore).unwrap();
-                let scale = reference.state.iter().fold(1.0f64, |s, v| s.max(v.abs()));
-                let diff = max_diff(lane, &reference.state);
-                assert!(
-                    diff <= 1e-9 * scale,
-                    "{} {} member {i}: {diff} from the scalar stepper",
-                    info.name,
-                    method.name
-                );
-                assert_eq!(alone.rhs_evals, reference.rhs_evals, "{} {}", info.name, method.name);
-            }
+            let out = run_members(&*model, &all, &spec).unwrap();
+            assert_each_lane_is_one_lane(info, &all, &out, &spec, method, 1e-9);
             checked += 1;
         }
     }

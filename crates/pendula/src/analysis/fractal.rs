@@ -304,14 +304,11 @@ pub fn flip_times_at(
         row[0] = if r.flip_time <= spec.t_max { r.flip_time } else { f64::NAN };
         tick(1);
     };
+    let members = engine::Members { info: DoublePendulum::INFO, count: allowed.len(), values: &member };
     engine::run::<DoublePendulum, _>(
-        DoublePendulum::INFO,
-        allowed.len(),
-        &member,
+        &members,
         &lanes,
-        &mut times,
-        1,
-        &store,
+        engine::Rows { out: &mut times, len: 1, store: &store },
     )
     .map_err(|e| match e {
         Error::NonFiniteMember { member, t } => Error::NonFiniteMember { member: allowed[member], t },

@@ -119,6 +119,7 @@ pub fn orbit_diagram(values: &[Values], spec: &OrbitDiagramSpec) -> Result<Vec<f
         cancel: None,
     };
     let mut data = vec![0.0; values.len() * spec.samples * info.state.len()];
-    first.build().stroboscopic(info, values.len(), &member, &strobe, &mut data)?;
+    let members = crate::ensemble::engine::Members { info, count: values.len(), values: &member };
+    first.build().stroboscopic(&members, &strobe, &mut data)?;
     Ok(data)
 }

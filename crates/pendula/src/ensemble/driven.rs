@@ -50,5 +50,7 @@ pub fn stroboscopic(members: &[DrivenMember], spec: &StroboSpec, out: &mut [f64]
         periods: &periods,
         cancel: None,
     };
-    super::engine::stroboscopic::<DrivenPendulum>(DrivenPendulum::INFO, members.len(), &values, &strobe, out)
+    let members =
+        super::engine::Members { info: DrivenPendulum::INFO, count: members.len(), values: &values };
+    super::engine::stroboscopic::<DrivenPendulum>(&members, &strobe, out)
 }

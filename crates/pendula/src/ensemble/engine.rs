@@ -168,6 +168,36 @@ pub struct LaneSpec<'a> {
     pub cancel: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
+/// The members of an ensemble run, as every ensemble entry point takes them: `count`
+/// members of the system entry `info` (for the chain, the member with its number of links),
+/// member i's values — every parameter, then every state variable, in the order of `info`'s
+/// quantities — written by `values(i, slots)`. Members are made when their lane group runs,
+/// so a run over a million members holds no million-row table of them.
+#[derive(Clone, Copy)]
+pub struct Members<'a> {
+    /// The system entry the members belong to.
+    pub info: &'static SystemInfo,
+    /// How many members.
+    pub count: usize,
+    /// Writes member i's values into the slots handed to it (as many as `info` has quantities).
+    pub values: &'a (dyn Fn(usize, &mut [f64]) + Sync),
+}
+
+/// What the engine's lanes hand a result store: the member's index, its outcome, its row.
+pub type StoreLane<'a, T> = dyn Fn(usize, &LaneOutcome, &mut [T]) + Sync + 'a;
+
+/// Where an ensemble run's results go: one row of `len` values per member in `out` (so
+/// `out` holds count × `len`), each written by `store` from the member's result (`S`: for the
+/// lanes [`StoreLane`], for the scalar path [`crate::sweep::StoreValues`]).
+pub struct Rows<'a, T, S: ?Sized> {
+    /// count × `len` values.
+    pub out: &'a mut [T],
+    /// Values per member.
+    pub len: usize,
+    /// Writes member i's row from its result.
+    pub store: &'a S,
+}
+
 /// A member's results.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LaneOutcome {
@@ -226,11 +256,8 @@ fn member_model<M: Model>(info: &'static SystemInfo, values: &[f64]) -> Result<M
     Ok(M::from_values(&info.values(&settings)?))
 }
 
-/// Runs `count` members of the system `M` (the member entry `info`: for the chain, the
-/// member with its number of links), member i's values — every parameter then every state
-/// variable, in the order of `info`'s quantities — written by `member(i, values)`, in
-/// parallel on rayon's pool; each result is stored with `store(i, outcome, row)` into its row
-/// of `out` (rows of `row_len` values).
+/// Runs the `members` of the system `M` in parallel on rayon's pool, chunk by chunk and lane
+/// group by lane group; each member's result is stored into its row of `rows`.
 ///
 /// # Errors
 /// For kick–drift, [`Error::UnmetRequirement`] for the first member (in index order) that
@@ -240,16 +267,13 @@ fn member_model<M: Model>(info: &'static SystemInfo, values: &[f64]) -> Result<M
 ///
 /// # Panics
 /// If the engine does not run the method on the system ([`supports`]): a caller's error.
-#[allow(clippy::too_many_arguments)] // the run, its members and where the results go
 pub fn run<M: Model, T: Send>(
-    info: &'static SystemInfo,
-    count: usize,
-    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    members: &Members<'_>,
     spec: &LaneSpec,
-    out: &mut [T],
-    row_len: usize,
-    store: &(dyn Fn(usize, &LaneOutcome, &mut [T]) + Sync),
+    rows: Rows<'_, T, StoreLane<'_, T>>,
 ) -> Result<(), Error> {
+    let Members { info, count, values: member } = *members;
+    let Rows { out, len: row_len, store } = rows;
     assert!(supports(info, &spec.method), "the engine does not run this method on {}", info.name);
     assert_eq!(out.len(), count * row_len, "one row per member");
     if let LaneMethod::Tao { scheme, .. } = &spec.method {
@@ -327,7 +351,7 @@ pub(crate) struct StrobeGroup<'a> {
     rows: &'a mut [f64],
 }
 
-/// Samples `count` members of the system `M` (values as [`run`] takes them) once per drive
+/// Samples the `members` of the system `M` once per drive
 /// period: the engine's steps on each member's own step (its period / `steps_per_period`:
 /// the run's time is counted in periods, each lane's equations scaled to it), the samples
 /// taken between the periods, angles wrapped into [−π, π). Member i's samples go to
@@ -344,12 +368,11 @@ pub(crate) struct StrobeGroup<'a> {
 /// If `out` does not hold count × samples × dim values, or the tableau is not one the engine
 /// runs on `info`'s states.
 pub fn stroboscopic<M: Model>(
-    info: &'static SystemInfo,
-    count: usize,
-    member: &(dyn Fn(usize, &mut [f64]) + Sync),
+    members: &Members<'_>,
     strobe: &Strobe<'_>,
     out: &mut [f64],
 ) -> Result<(), Error> {
+    let Members { info, count, values: member } = *members;
     // Stroboscopic kernels are compiled for the driven systems' states alone (the build
     // time): no family (the chain) has a drive.
     if M::DIM > 4 {

@@ -104,7 +104,8 @@ pub fn run(members: &[Member], spec: &LaneSpec<'_>, out: &mut [MemberResult]) ->
     let store = |_: usize, o: &LaneOutcome, row: &mut [MemberResult]| {
         row[0] = MemberResult { state: std::array::from_fn(|k| o.state[k]), flip_time: o.flip_time };
     };
-    engine::run::<DoublePendulum, _>(DoublePendulum::INFO, members.len(), &values, spec, out, 1, &store)
+    let members = engine::Members { info: DoublePendulum::INFO, count: members.len(), values: &values };
+    engine::run::<DoublePendulum, _>(&members, spec, engine::Rows { out, len: 1, store: &store })
 }
 
 /// Whether the engine's arithmetic fuses multiply-adds (then the trigonometric polynomials
